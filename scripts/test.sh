@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Runs every test of the project: formatting, lints, Rust tests, C and Python tests.
+# Installs what it needs itself (Rust crates through cargo, a Python venv with fmpy).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+echo "== cargo fmt --check"
+cargo fmt --all -- --check
+
+echo "== cargo clippy"
+cargo clippy --all-targets --release -- -D warnings
+
+echo "== cargo test"
+cargo test --release
+
+if [ -d python/tests ] && ls python/tests/test_*.py >/dev/null 2>&1; then
+  echo "== python tests"
+  bash scripts/python-env.sh
+  .venv/bin/python -m pytest -q python/tests
+fi

@@ -1,0 +1,37 @@
+//! # breathing_torso
+//!
+//! A physically based model of the human torso that breathes: rib cage, sternum, spine,
+//! respiratory muscles as spring-damper elements, an incompressible abdominal cavity and a
+//! skin carrying a grid of surface markers. The model follows Maldonado's 2011 Cambridge
+//! thesis on breathing simulation for Structured Light Plethysmography (SLP); the mesh
+//! preparation follows Peeters & Pronost 2013.
+//!
+//! The crate is layered; a module may use the ones above it in this list, never below:
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`mesh`] | triangle meshes: volume, normals, adjacency, I/O, smoothing, repair |
+//! | [`anatomy`] | a [`anatomy::Subject`] turned into geometry and muscle layouts |
+//! | [`solver`] | embedded Runge-Kutta pairs, step control, dense output, generic over [`solver::Ode`] |
+//! | [`dynamics`] | the state vector and the right-hand side of the equations of motion |
+//! | [`observe`] | volumes, pressures and displacements read off a state |
+//! | [`model`] | the facade [`model::Torso`] |
+//! | [`fit`], [`stats`] | SLP recordings and fitting; validation statistics against spirometry |
+//! | [`fmi`], [`capi`] | the FMI 2.0 co-simulation layer and the native C ABI |
+//! | [`cli`] | the `torso` command-line tool |
+
+pub mod error;
+pub mod mesh;
+pub mod anatomy;
+pub mod solver;
+pub mod dynamics;
+pub mod observe;
+pub mod model;
+pub mod fit;
+pub mod stats;
+pub mod fmi;
+pub mod capi;
+pub mod cli;
+
+pub use error::{Error, Result};
+pub use model::{Config, Quantity, Torso};

@@ -1,0 +1,103 @@
+//! Configuration of a [`super::Torso`]: subject, scene, solver, drive and model constants.
+
+use super::drive::{check, Drive};
+use crate::anatomy::Subject;
+use crate::solver::Method;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// What the scene contains and how finely it is resolved.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scene {
+    /// Level of detail 0, 1 or 2: abdominal surface of about 160 / 640 / 2,560 vertices and
+    /// muscle element counts scaled by 1/4, 1/2 and 1 of the thesis's. Default 1.
+    pub level_of_detail: u32,
+    /// Marker grid rows (1-16, default 10).
+    pub grid_rows: usize,
+    /// Marker grid columns (1-16, default 6).
+    pub grid_cols: usize,
+    /// SLP recording whose first frame registers the marker grid; `None`: default grid.
+    pub slp_reference: Option<PathBuf>,
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Scene { level_of_detail: 1, grid_rows: 10, grid_cols: 6, slp_reference: None }
+    }
+}
+
+/// Integration settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolverConfig {
+    /// Method (default Dormand-Prince 5(4)).
+    pub method: Method,
+    /// Relative tolerance, in [1e-12, 1e-2] (default 1e-6).
+    pub rtol: f64,
+    /// Absolute tolerance on the state (m, rad, m/s, rad/s), in [1e-14, 1e-2] (default 1e-8).
+    pub atol: f64,
+    /// Largest internal step [s], in [1e-5, 1] (default 0.05).
+    pub max_step: f64,
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        SolverConfig { method: Method::Dopri5, rtol: 1e-6, atol: 1e-8, max_step: 0.05 }
+    }
+}
+
+/// Everything needed to build a [`super::Torso`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Config {
+    /// The subject.
+    pub subject: Subject,
+    /// Scene contents and resolution.
+    pub scene: Scene,
+    /// Integrator settings.
+    pub solver: SolverConfig,
+    /// Sinusoidal drive (tunable while running).
+    pub drive: Drive,
+    /// Lung volume as a fraction of the thoracic cavity volume (thesis 4.2: 0.75), in [0.3, 1].
+    pub lung_ratio: f64,
+    /// Activation gain of the subject's left side, in [0, 2] (1: healthy).
+    pub gain_left: f64,
+    /// Activation gain of the subject's right side, in [0, 2].
+    pub gain_right: f64,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            subject: Subject::default(),
+            scene: Scene::default(),
+            solver: SolverConfig::default(),
+            drive: Drive::default(),
+            lung_ratio: 0.75,
+            gain_left: 1.0,
+            gain_right: 1.0,
+        }
+    }
+}
+
+impl Config {
+    /// Checks every field; the error names the FMI variable and its allowed range.
+    pub fn validate(&self) -> Result<()> {
+        self.subject.validate()?;
+        self.drive.validate()?;
+        if self.scene.level_of_detail > 2 {
+            return Err(Error::invalid("scene.level_of_detail", self.scene.level_of_detail, "0, 1 or 2"));
+        }
+        for (name, v) in [("grid.rows", self.scene.grid_rows), ("grid.cols", self.scene.grid_cols)] {
+            if !(1..=16).contains(&v) {
+                return Err(Error::invalid(name, v, "1..16"));
+            }
+        }
+        check("solver.rtol", self.solver.rtol, (1e-12, 1e-2))?;
+        check("solver.atol", self.solver.atol, (1e-14, 1e-2))?;
+        check("solver.max_step", self.solver.max_step, (1e-5, 1.0))?;
+        check("lung.ratio", self.lung_ratio, (0.3, 1.0))?;
+        check("gain.left", self.gain_left, (0.0, 2.0))?;
+        check("gain.right", self.gain_right, (0.0, 2.0))?;
+        Ok(())
+    }
+}

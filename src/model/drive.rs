@@ -1,0 +1,120 @@
+//! The built-in sinusoidal drive (thesis eq. 2.4), so that a fit can run on parameters alone.
+//!
+//! Thesis eq. 2.4 modulates each element's rest-length ratio as
+//! r(t) = alpha - beta/2 (sin(2 pi f t + phi) + 1). Here the same wave is expressed as an
+//! activation a(t) = A/2 (sin(2 pi f t + phi) + 1) in [0, A], with A the fraction of the
+//! maximal reachable activation (the thesis's A_ribs, A_diaphragm, Table 4.3); the element
+//! then contracts as r = 1 - beta_max g a (see `dynamics`). The applied activation of a
+//! group is clamp(input + drive, 0, 1).
+
+use crate::anatomy::MuscleGroup;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// One sinusoidal wave: amplitude in [0, 1] (fraction of the maximal activation) and phase.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
+pub struct Wave {
+    /// Amplitude A in [0, 1].
+    pub amplitude: f64,
+    /// Phase phi [rad], in [-2 pi, 2 pi].
+    pub phase: f64,
+}
+
+/// The drive of the three muscle families: ribs (external intercostals and scalenes; the
+/// internal intercostals are driven in antiphase, thesis 2.4.1), diaphragm, abdominals (the
+/// four abdominal wall muscles, in antiphase with inspiration: they help expiration).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Drive {
+    /// Breathing frequency f_b [Hz], in [0.05, 2].
+    pub frequency: f64,
+    /// Rib-cage family.
+    pub ribs: Wave,
+    /// Diaphragm.
+    pub diaphragm: Wave,
+    /// Abdominal wall muscles.
+    pub abdominals: Wave,
+}
+
+impl Default for Drive {
+    fn default() -> Self {
+        Drive { frequency: 0.25, ribs: Wave::default(), diaphragm: Wave::default(), abdominals: Wave::default() }
+    }
+}
+
+/// Allowed range of the drive frequency [Hz].
+pub const FREQUENCY_RANGE: (f64, f64) = (0.05, 2.0);
+/// Allowed range of a phase [rad].
+pub const PHASE_RANGE: (f64, f64) = (-2.0 * PI, 2.0 * PI);
+
+impl Drive {
+    /// Quiet breathing (thesis Table 4.3, upright quiet averages: A_ribs about 0.2,
+    /// A_diaphragm about 0.25; 15 breaths/min; diaphragm fired slightly first).
+    pub fn quiet() -> Self {
+        Drive {
+            frequency: 0.25,
+            ribs: Wave { amplitude: 0.2, phase: 0.0 },
+            diaphragm: Wave { amplitude: 0.25, phase: 0.1 },
+            abdominals: Wave::default(),
+        }
+    }
+
+    /// Forced (deep) breathing (thesis Table 4.3, forced: amplitudes 0.35-0.5; rib cage fired first).
+    pub fn forced() -> Self {
+        Drive {
+            frequency: 0.2,
+            ribs: Wave { amplitude: 0.45, phase: 0.0 },
+            diaphragm: Wave { amplitude: 0.5, phase: -0.1 },
+            abdominals: Wave { amplitude: 0.15, phase: 0.0 },
+        }
+    }
+
+    /// A named scenario: `quiet`, `forced` or `rest` (no drive).
+    pub fn scenario(name: &str) -> Result<Self> {
+        match name {
+            "quiet" => Ok(Self::quiet()),
+            "forced" => Ok(Self::forced()),
+            "rest" => Ok(Self::default()),
+            _ => Err(Error::invalid("scenario", name, "quiet, forced or rest")),
+        }
+    }
+
+    /// Checks every field; the error names the FMI parameter.
+    pub fn validate(&self) -> Result<()> {
+        check("drive.frequency", self.frequency, FREQUENCY_RANGE)?;
+        for (family, w) in [("ribs", self.ribs), ("diaphragm", self.diaphragm), ("abdominals", self.abdominals)] {
+            check(&format!("drive.{family}.amplitude"), w.amplitude, (0.0, 1.0))?;
+            check(&format!("drive.{family}.phase"), w.phase, PHASE_RANGE)?;
+        }
+        Ok(())
+    }
+
+    /// Drive activation of `group` at time `t`: A/2 (sin(2 pi f t + phi) + 1) for the family's
+    /// wave, in antiphase (phi + pi) for the expiratory groups (internal intercostals,
+    /// abdominal wall muscles).
+    pub fn activation(&self, group: MuscleGroup, t: f64) -> f64 {
+        let (wave, antiphase) = match group {
+            MuscleGroup::ExternalIntercostals | MuscleGroup::Scalenes => (self.ribs, false),
+            MuscleGroup::InternalIntercostals => (self.ribs, true),
+            MuscleGroup::Diaphragm => (self.diaphragm, false),
+            MuscleGroup::TransversusAbdominis
+            | MuscleGroup::RectusAbdominis
+            | MuscleGroup::ExternalObliques
+            | MuscleGroup::InternalObliques => (self.abdominals, true),
+        };
+        if wave.amplitude == 0.0 {
+            return 0.0;
+        }
+        let shift = if antiphase { PI } else { 0.0 };
+        0.5 * wave.amplitude * ((2.0 * PI * self.frequency * t + wave.phase + shift).sin() + 1.0)
+    }
+}
+
+/// Range check with a message naming the variable.
+pub(crate) fn check(name: &str, v: f64, (lo, hi): (f64, f64)) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, v, format!("[{lo}, {hi}]")))
+    }
+}

@@ -1,0 +1,27 @@
+//! The facade: [`Torso`] owns a compiled model (immutable, shared behind an `Arc`) and its
+//! data (time, state, activations, drive, solver memory, cached observations). It is all that
+//! the FMI layer, the C ABI, the fitting loop and the CLI need.
+//!
+//! ```no_run
+//! use breathing_torso::{Config, Quantity, Torso};
+//! use breathing_torso::model::Drive;
+//! let mut config = Config::default();
+//! config.drive = Drive::quiet();
+//! let mut torso = Torso::new(config)?;
+//! torso.advance_to(4.0)?;
+//! let litres = torso.read(Quantity::LungVolume)?;
+//! # Ok::<(), breathing_torso::Error>(())
+//! ```
+
+mod config;
+mod drive;
+mod quantity;
+mod snapshot;
+mod torso;
+
+pub use config::{Config, Scene, SolverConfig};
+pub use drive::{Drive, Wave};
+pub use quantity::Quantity;
+pub use snapshot::Snapshot;
+pub use torso::{AdvanceStats, Torso};
+pub(crate) use drive::check;

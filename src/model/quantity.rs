@@ -1,0 +1,45 @@
+//! The quantities that can be read off a [`super::Torso`].
+
+use serde::{Deserialize, Serialize};
+
+/// A readable quantity. Volumes in litres, pressure in pascal, lengths in metres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Quantity {
+    /// Simulated time [s].
+    Time,
+    /// Lung volume = lung ratio x thoracic volume [L] (thesis 4.2).
+    LungVolume,
+    /// Thoracic cavity volume = trunk - abdomen [L].
+    ThoraxVolume,
+    /// Abdominal cavity volume [L].
+    AbdomenVolume,
+    /// Trunk cavity volume (rib-cage lining plus abdominal wall) [L].
+    TrunkVolume,
+    /// Volume displaced by the rib-cage wall since the start [L].
+    RibCageDisplaced,
+    /// Volume displaced by the abdominal wall since the start [L].
+    AbdomenDisplaced,
+    /// Abdominal pressure above rest [Pa] (thesis eq. 2.5).
+    AbdominalPressure,
+    /// Cranial displacement of the diaphragm dome since the start [m] (positive cranial).
+    DiaphragmDisplacement,
+    /// Sternum displacement since the start along axis 0 = x, 1 = y, 2 = z [m].
+    SternumDisplacement(u8),
+    /// Marker `index` (0-based, row-major from the top row, column 0 on the subject's right),
+    /// coordinate `axis` (0 = x, 1 = y, 2 = z) [m].
+    Marker {
+        /// 0-based marker index.
+        index: u16,
+        /// 0 = x, 1 = y, 2 = z.
+        axis: u8,
+    },
+    /// Applied activation (input + drive, clamped) of a muscle group, by index in
+    /// [`crate::anatomy::MuscleGroup::ALL`].
+    Activation(u8),
+    /// Accepted integration steps since the start.
+    SolverSteps,
+    /// Rejected integration steps since the start.
+    SolverRejectedSteps,
+    /// Right-hand-side evaluations since the start.
+    SolverRhsEvaluations,
+}
