@@ -506,7 +506,7 @@ impl Integrator {
                 &mut ytmp[..]
             };
             combine(dst, y, h, tab.a[i], k0, k, n);
-            if self.options.stiffness_check && i == tab.stiff_stage {
+            if self.options.stiffness_check && tab.stiff_stage == Some(i) {
                 ystiff.copy_from_slice(dst);
             }
             let ki = &mut k[(i - 1) * n..i * n];
@@ -576,9 +576,12 @@ impl Integrator {
     /// Hairer's stiffness test on an accepted step: |hλ| ≈ h ‖k_last - k_s‖ / ‖y1 - Y_s‖
     /// against the method's boundary. Only counts; never aborts.
     fn stiffness_test(&mut self, h: f64, tab: &Tableau) {
+        let Some(stage) = tab.stiff_stage else {
+            return;
+        };
         let n = self.dim;
         let s = tab.stages;
-        let ks = &self.work.k[(tab.stiff_stage - 1) * n..tab.stiff_stage * n];
+        let ks = &self.work.k[(stage - 1) * n..stage * n];
         let kl = &self.work.k[(s - 2) * n..(s - 1) * n];
         let mut num = 0.0;
         let mut den = 0.0;
