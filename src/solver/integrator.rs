@@ -689,26 +689,58 @@ impl Integrator {
     }
 }
 
+/// Length of the blocks in which stage sums are formed: the partial sums stay in L1 cache
+/// and registers while each stage is streamed once.
+const BLOCK: usize = 128;
+
 /// dst = y + h Σ_j a_j k_j, with k_0 = `k0` and k_j (j ≥ 1) at `k[(j-1)n..jn]`.
 /// The increments are summed first and added to y last, as in Hairer's codes, so that
 /// round-off does not accumulate in large components of y.
 fn combine(dst: &mut [f64], y: &[f64], h: f64, a: &[f64], k0: &[f64], k: &[f64], n: usize) {
-    stage_sum(dst, a, k0, k, n);
-    for (d, &yv) in dst.iter_mut().zip(y) {
-        *d = yv + h * *d;
-    }
+    blocked_sum(dst, a, k0, k, n, |i, acc| y[i] + h * acc);
 }
 
 /// dst = Σ_j w_j k_j over the stages (zero weights skipped).
 fn stage_sum(dst: &mut [f64], w: &[f64], k0: &[f64], k: &[f64], n: usize) {
-    dst.fill(0.0);
-    for (j, &wj) in w.iter().enumerate() {
-        if wj == 0.0 {
-            continue;
+    blocked_sum(dst, w, k0, k, n, |_, acc| acc);
+}
+
+/// dst_i = finish(i, Σ_j w_j k_j,i), formed block by block so that dst is written once.
+fn blocked_sum(
+    dst: &mut [f64],
+    w: &[f64],
+    k0: &[f64],
+    k: &[f64],
+    n: usize,
+    finish: impl Fn(usize, f64) -> f64,
+) {
+    let mut acc = [0.0; BLOCK];
+    let mut start = 0;
+    while start < n {
+        let len = BLOCK.min(n - start);
+        let acc = &mut acc[..len];
+        acc.fill(0.0);
+        for (j, &wj) in w.iter().enumerate() {
+            if wj == 0.0 {
+                continue;
+            }
+            let off = if j == 0 { 0 } else { (j - 1) * n };
+            let src = if j == 0 {
+                &k0[start..start + len]
+            } else {
+                &k[off + start..off + start + len]
+            };
+            for (a, &kv) in acc.iter_mut().zip(src) {
+                *a += wj * kv;
+            }
         }
-        let kj = if j == 0 { k0 } else { &k[(j - 1) * n..j * n] };
-        for (d, &kv) in dst.iter_mut().zip(kj) {
-            *d += wj * kv;
+        for (i, (d, &a)) in dst[start..start + len]
+            .iter_mut()
+            .zip(acc.iter())
+            .enumerate()
+        {
+            *d = finish(start + i, a);
         }
+        start += len;
     }
 }
