@@ -73,7 +73,10 @@ pub struct Tableau {
     /// The stiffness test fires when the estimated |hλ| exceeds this value (slightly
     /// inside the real stability boundary of the method).
     pub stiff_boundary: f64,
-    /// PI controller: h_new = h · safety · err^(-alpha) · err_old^(beta).
+    /// PI controller: h_new = h · safety · err^(-alpha) · err_old^(beta) (Gustafsson 1991;
+    /// Hairer, Norsett & Wanner, Sec. IV.2 of vol. II, in the form of the `dopri5` code).
+    /// With k = `error_order`, beta = 0.2/k and alpha = 1/k - 0.75 beta, which gives
+    /// Hairer's alpha = 0.17, beta = 0.04 for Dormand-Prince 5(4).
     pub pi_alpha: f64,
     /// PI controller memory exponent.
     pub pi_beta: f64,
