@@ -36,7 +36,7 @@ struct Work {
     /// Stages 1.. of the pair, then its extra dense stages, `n` values each (stage 0 is
     /// the FSAL vector kept in [`Integrator::fsal_k`]).
     k: Vec<f64>,
-    /// Argument of the stage being evaluated.
+    /// Argument of the stage being evaluated; then the error estimate Σ e_j k_j.
     ytmp: Vec<f64>,
     /// Candidate solution y1.
     ynew: Vec<f64>,
@@ -44,7 +44,8 @@ struct Work {
     ystiff: Vec<f64>,
     /// Dense-output vectors r1, r2, ... of the last accepted step.
     dense: Vec<f64>,
-    /// Interpolated state handed to the output callback.
+    /// Interpolated state handed to the output callback (also the second error estimate
+    /// of DOP853 while a step is being assessed).
     yout: Vec<f64>,
 }
 
@@ -268,7 +269,7 @@ impl Integrator {
         t_end: f64,
     ) -> Result<(), SolverError> {
         self.options.validate()?;
-        if ode.dim() != self.dim || y.len() != self.dim {
+        if self.dim == 0 || ode.dim() != self.dim || y.len() != self.dim {
             return Err(SolverError::InvalidArgument(format!(
                 "dimension mismatch: integrator {}, system {}, state vector {}",
                 self.dim,
@@ -506,7 +507,7 @@ impl Integrator {
                 &mut ytmp[..]
             };
             combine(dst, y, h, tab.a[i], k0, k, n);
-            if self.options.stiffness_check && i == tab.stiff_stage {
+            if self.options.stiffness_check && tab.stiff_stage == Some(i) {
                 ystiff.copy_from_slice(dst);
             }
             let ki = &mut k[(i - 1) * n..i * n];
@@ -528,43 +529,26 @@ impl Integrator {
     /// Weighted RMS norm of the local error estimate h Σ e_j k_j with
     /// sc_i = atol + rtol · max(|y0_i|, |y1_i|) (Hairer, Norsett & Wanner, eq. II.4.11).
     /// DOP853 combines its two estimators as err5² / sqrt(err5² + 0.01 err3²).
-    fn error_norm(&self, y: &[f64], h: f64) -> f64 {
+    fn error_norm(&mut self, y: &[f64], h: f64) -> f64 {
         let n = self.dim;
         let tab = self.tableau();
         let (atol, rtol) = (self.options.atol, self.options.rtol);
-        let k = &self.work.k;
-        let ynew = &self.work.ynew;
-        let stage = |j: usize, i: usize| {
-            if j == 0 {
-                self.fsal_k[i]
-            } else {
-                k[(j - 1) * n + i]
-            }
-        };
-        let mut sum = 0.0;
-        let mut sum_low = 0.0;
-        for i in 0..n {
-            let sc = (atol + rtol * y[i].abs().max(ynew[i].abs())).max(f64::MIN_POSITIVE);
-            let mut e = 0.0;
-            for (j, &ej) in tab.e.iter().enumerate() {
-                if ej != 0.0 {
-                    e += ej * stage(j, i);
-                }
-            }
-            sum += (e / sc) * (e / sc);
-            if let Some(el) = tab.e_low {
-                let mut e3 = 0.0;
-                for (j, &ej) in el.iter().enumerate() {
-                    if ej != 0.0 {
-                        e3 += ej * stage(j, i);
-                    }
-                }
-                sum_low += (e3 / sc) * (e3 / sc);
-            }
-        }
+        // the stage arguments are no longer needed: reuse their buffers for Σ e_j k_j
+        let Work {
+            k,
+            ytmp: e5,
+            yout: e3,
+            ynew,
+            ..
+        } = &mut self.work;
+        stage_sum(e5, tab.e, &self.fsal_k, k, n);
+        let scale = |i: usize| (atol + rtol * y[i].abs().max(ynew[i].abs())).max(f64::MIN_POSITIVE);
+        let sum: f64 = (0..n).map(|i| (e5[i] / scale(i)).powi(2)).sum();
         match tab.e_low {
             None => h * (sum / n as f64).sqrt(),
-            Some(_) => {
+            Some(el) => {
+                stage_sum(e3, el, &self.fsal_k, k, n);
+                let sum_low: f64 = (0..n).map(|i| (e3[i] / scale(i)).powi(2)).sum();
                 if sum == 0.0 && sum_low == 0.0 {
                     return 0.0;
                 }
@@ -576,9 +560,12 @@ impl Integrator {
     /// Hairer's stiffness test on an accepted step: |hλ| ≈ h ‖k_last - k_s‖ / ‖y1 - Y_s‖
     /// against the method's boundary. Only counts; never aborts.
     fn stiffness_test(&mut self, h: f64, tab: &Tableau) {
+        let Some(stage) = tab.stiff_stage else {
+            return;
+        };
         let n = self.dim;
         let s = tab.stages;
-        let ks = &self.work.k[(tab.stiff_stage - 1) * n..tab.stiff_stage * n];
+        let ks = &self.work.k[(stage - 1) * n..stage * n];
         let kl = &self.work.k[(s - 2) * n..(s - 1) * n];
         let mut num = 0.0;
         let mut den = 0.0;
@@ -635,16 +622,8 @@ impl Integrator {
         }
         for (m, row) in dense.d.iter().enumerate() {
             let rm = &mut r[(3 + m) * n..(4 + m) * n];
-            for (i, v) in rm.iter_mut().enumerate() {
-                let mut acc = 0.0;
-                for (j, &dj) in row.iter().enumerate() {
-                    if dj != 0.0 {
-                        let kj = if j == 0 { k0[i] } else { k[(j - 1) * n + i] };
-                        acc += dj * kj;
-                    }
-                }
-                *v = h * acc;
-            }
+            stage_sum(rm, row, k0, k, n);
+            rm.iter_mut().for_each(|v| *v *= h);
         }
         true
     }
@@ -710,21 +689,58 @@ impl Integrator {
     }
 }
 
+/// Length of the blocks in which stage sums are formed: the partial sums stay in L1 cache
+/// and registers while each stage is streamed once.
+const BLOCK: usize = 128;
+
 /// dst = y + h Σ_j a_j k_j, with k_0 = `k0` and k_j (j ≥ 1) at `k[(j-1)n..jn]`.
 /// The increments are summed first and added to y last, as in Hairer's codes, so that
 /// round-off does not accumulate in large components of y.
 fn combine(dst: &mut [f64], y: &[f64], h: f64, a: &[f64], k0: &[f64], k: &[f64], n: usize) {
-    dst.fill(0.0);
-    for (j, &aj) in a.iter().enumerate() {
-        if aj == 0.0 {
-            continue;
+    blocked_sum(dst, a, k0, k, n, |i, acc| y[i] + h * acc);
+}
+
+/// dst = Σ_j w_j k_j over the stages (zero weights skipped).
+fn stage_sum(dst: &mut [f64], w: &[f64], k0: &[f64], k: &[f64], n: usize) {
+    blocked_sum(dst, w, k0, k, n, |_, acc| acc);
+}
+
+/// dst_i = finish(i, Σ_j w_j k_j,i), formed block by block so that dst is written once.
+fn blocked_sum(
+    dst: &mut [f64],
+    w: &[f64],
+    k0: &[f64],
+    k: &[f64],
+    n: usize,
+    finish: impl Fn(usize, f64) -> f64,
+) {
+    let mut acc = [0.0; BLOCK];
+    let mut start = 0;
+    while start < n {
+        let len = BLOCK.min(n - start);
+        let acc = &mut acc[..len];
+        acc.fill(0.0);
+        for (j, &wj) in w.iter().enumerate() {
+            if wj == 0.0 {
+                continue;
+            }
+            let off = if j == 0 { 0 } else { (j - 1) * n };
+            let src = if j == 0 {
+                &k0[start..start + len]
+            } else {
+                &k[off + start..off + start + len]
+            };
+            for (a, &kv) in acc.iter_mut().zip(src) {
+                *a += wj * kv;
+            }
         }
-        let kj = if j == 0 { k0 } else { &k[(j - 1) * n..j * n] };
-        for (d, &kv) in dst.iter_mut().zip(kj) {
-            *d += aj * kv;
+        for (i, (d, &a)) in dst[start..start + len]
+            .iter_mut()
+            .zip(acc.iter())
+            .enumerate()
+        {
+            *d = finish(start + i, a);
         }
-    }
-    for (d, &yv) in dst.iter_mut().zip(y) {
-        *d = yv + h * *d;
+        start += len;
     }
 }

@@ -9,6 +9,31 @@
 //! Layout: `tableau.rs` holds the coefficients of the pairs (Dormand & Prince 1980,
 //! Bogacki & Shampine 1989, DOP853 of Hairer, Norsett & Wanner), `integrator.rs` the
 //! stepping, step control and dense output ([`Integrator`]); this file the public types.
+//!
+//! ```
+//! use breathing_torso::solver::{Integrator, Method, Ode, Options};
+//!
+//! /// y' = -y
+//! struct Decay;
+//! impl Ode for Decay {
+//!     fn dim(&self) -> usize {
+//!         1
+//!     }
+//!     fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+//!         dydt[0] = -y[0];
+//!     }
+//! }
+//!
+//! let mut solver = Integrator::new(Method::Dopri5, Options::default(), 1)?;
+//! let (mut t, mut y) = (0.0, [1.0]);
+//! for i in 1..=10 {
+//!     // communication steps of 0.1: the step size and FSAL stage carry over
+//!     solver.integrate(&mut Decay, &mut t, &mut y, 0.1 * i as f64)?;
+//! }
+//! assert_eq!(t, 1.0);
+//! assert!((y[0] - (-1.0f64).exp()).abs() < 1e-6);
+//! # Ok::<(), breathing_torso::solver::SolverError>(())
+//! ```
 
 mod integrator;
 pub mod tableau;
