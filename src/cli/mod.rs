@@ -1,5 +1,8 @@
 //! The `torso` command-line tool: one file per subcommand.
 
+pub mod common;
+pub mod simulate;
+
 use clap::{Parser, Subcommand};
 
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
@@ -14,6 +17,8 @@ pub struct Cli {
 /// Subcommands of `torso`.
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Simulate a breathing scenario and write a CSV of volumes, pressures and displacements.
+    Simulate(simulate::SimulateArgs),
     /// Print the library version.
     Version,
 }
@@ -22,6 +27,7 @@ pub enum Command {
 pub fn main() -> i32 {
     let cli = Cli::parse();
     let result: crate::Result<()> = match cli.command {
+        Command::Simulate(args) => simulate::main(&args),
         Command::Version => {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
