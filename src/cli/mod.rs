@@ -2,6 +2,8 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod validate;
+
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
 #[derive(Parser, Debug)]
 #[command(name = "torso", version, about)]
@@ -16,6 +18,10 @@ pub struct Cli {
 pub enum Command {
     /// Print the library version.
     Version,
+    /// Compare a simulated lung volume with a spirogram (statistics, plots, summary).
+    Validate(validate::ValidateArgs),
+    /// Write a synthetic spirogram (from a curve or a sinusoidal model).
+    SynthSpirometry(validate::SynthSpirometryArgs),
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -26,6 +32,8 @@ pub fn main() -> i32 {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
+        Command::Validate(a) => validate::run(&a),
+        Command::SynthSpirometry(a) => validate::run_synth(&a),
     };
     match result {
         Ok(()) => 0,
