@@ -28,9 +28,12 @@ impl Series {
         self.values.is_empty()
     }
 
-    /// Sampling rate [Hz] from the median time step.
+    /// Sampling rate [Hz] from the median time step (NaN with fewer than 2 samples).
     pub fn rate(&self) -> f64 {
         let mut dt: Vec<f64> = self.time.windows(2).map(|w| w[1] - w[0]).collect();
+        if dt.is_empty() {
+            return f64::NAN;
+        }
         dt.sort_by(f64::total_cmp);
         1.0 / dt[dt.len() / 2]
     }
@@ -166,6 +169,7 @@ impl Table {
     /// Extracts the series (`time`, `name`), checking that time strictly increases, the
     /// sampling is uniform within 50 % of the median step and there are `min_rows` rows.
     pub fn series(&self, name: &str, min_rows: usize) -> Result<Series> {
+        let min_rows = min_rows.max(2);
         let ti = self.column_index("time").ok_or_else(|| {
             parse_err(
                 &self.path,
@@ -188,17 +192,6 @@ impl Table {
                 ),
             )
         })?;
-        if self.rows.len() < min_rows {
-            return Err(parse_err(
-                &self.path,
-                self.lines.last().copied().unwrap_or(self.header_line),
-                0,
-                format!(
-                    "{} data rows, at least {min_rows} are needed",
-                    self.rows.len()
-                ),
-            ));
-        }
         let time: Vec<f64> = self.rows.iter().map(|r| r[ti]).collect();
         let values: Vec<f64> = self.rows.iter().map(|r| r[vi]).collect();
         let time_col = |k: usize| field_column(&self.raw[k], ti);
@@ -222,6 +215,17 @@ impl Table {
             values,
             column: self.headers[vi].clone(),
         };
+        if self.rows.len() < min_rows {
+            return Err(parse_err(
+                &self.path,
+                self.lines.last().copied().unwrap_or(self.header_line),
+                0,
+                format!(
+                    "{} data rows, at least {min_rows} are needed",
+                    self.rows.len()
+                ),
+            ));
+        }
         let step = 1.0 / series.rate();
         for k in 1..series.time.len() {
             let dt = series.time[k] - series.time[k - 1];

@@ -6,7 +6,8 @@
 //!    assumption is that the record holds whole breaths with no net volume change on
 //!    average. A volume spirogram is detrended the same way only on request;
 //! 2. the spirogram is resampled to the simulation's rate by the polyphase filter of
-//!    [`resample`](super::resample) (100 -> 56 Hz is 14/25);
+//!    [`resample`](super::resample) (100 -> 56 Hz is 14/25), and the samples at each end
+//!    that the filter's zero padding reaches ([`edge_samples`], 10 at 14/25) are dropped;
 //! 3. the simulated volume is multiplied by the lung ratio when it is a thoracic-cavity
 //!    volume (0.75 by default, thesis 4.2);
 //! 4. the lag in `[-max_lag, max_lag]` frames maximising the normalised cross-correlation
@@ -18,7 +19,9 @@
 //!    adds the simulation mean; here the spirogram's own mean is removed first, so the two
 //!    means are equal exactly, which the equality tests assume.
 //!
-//! Positive lags mean the spirogram sample `i + lag` pairs with simulation sample `i`.
+//! Positive lags mean the spirogram sample `i + lag` (counted on the resampled spirogram
+//! before its edges are dropped) pairs with simulation sample `i`: a spirometer started
+//! `d` seconds after the simulation's first sample gives a lag of `-d fs`.
 
 use super::io::Series;
 use super::resample::{rate_ratio, resample_poly};
@@ -91,6 +94,21 @@ pub struct Prepared {
     /// Spirometer lung volume [L], resampled, aligned and offset.
     #[serde(skip)]
     pub spiro: Vec<f64>,
+    /// The whole resampled spirogram before edge trimming, alignment and offset [L].
+    #[serde(skip)]
+    pub spiro_resampled: Vec<f64>,
+}
+
+/// Output samples at each end of a polyphase resampling that the zero padding reaches:
+/// the filter's half length `10 max(up, down)` in input-rate-times-up units, over `down`.
+pub fn edge_samples(up: usize, down: usize) -> usize {
+    let g = gcd(up, down);
+    let (up, down) = (up / g, down / g);
+    (10 * up.max(down)).div_ceil(down)
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// Cumulative trapezoid integral of `y(t)`, starting at zero.
@@ -196,8 +214,21 @@ pub fn prepare(
         SpiroKind::Volume => (spiro.values.clone(), 0.0),
     };
     let (up, down) = rate_ratio(fs_spiro, fs)?;
+    let mut trimmed = 0i64;
+    let mut resampled = Vec::new();
     if up != down {
         vol = resample_poly(&vol, up, down)?;
+        resampled = vol.clone();
+        let trim = edge_samples(up, down);
+        if vol.len() <= 2 * trim + 32 {
+            return Err(Error::invalid(
+                "spirometry samples after resampling",
+                vol.len(),
+                format!("more than {}", 2 * trim + 32),
+            ));
+        }
+        vol = vol[trim..vol.len() - trim].to_vec();
+        trimmed = trim as i64;
     }
     let simv: Vec<f64> = sim.values.iter().map(|v| v * opts.lung_ratio).collect();
     let (lag, max_correlation, curve) = best_lag(&simv, &vol, opts.max_lag)?;
@@ -217,8 +248,8 @@ pub fn prepare(
         spiro_rate_hz: fs_spiro,
         resample_ratio: (up, down),
         lung_ratio: opts.lung_ratio,
-        lag_frames: lag,
-        lag_seconds: lag as f64 / fs,
+        lag_frames: lag + trimmed,
+        lag_seconds: (lag + trimmed) as f64 / fs,
         max_correlation,
         correlation_by_lag: curve,
         spiro_offset: offset,
@@ -226,6 +257,7 @@ pub fn prepare(
         time,
         sim: simv,
         spiro: spv,
+        spiro_resampled: if resampled.is_empty() { vol } else { resampled },
     })
 }
 

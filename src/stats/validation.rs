@@ -381,7 +381,9 @@ pub fn summary_markdown(v: &Validation) -> String {
     s
 }
 
-/// Writes `validation.json`, `aligned.csv`, `summary.md` and the plots into `dir`.
+/// Writes `validation.json`, `aligned.csv` (the compared series and fits),
+/// `spiro_resampled.csv` (the spirogram at the simulation's rate before alignment),
+/// `summary.md` and the plots into `dir`.
 pub fn write_outputs(v: &Validation, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let json = serde_json::to_string_pretty(v)
@@ -417,6 +419,14 @@ pub fn write_outputs(v: &Validation, dir: &Path) -> Result<()> {
             &v.bars.spiro.lower,
             &v.bars.spiro.upper,
         ],
+    )?;
+    let rt: Vec<f64> = (0..p.spiro_resampled.len())
+        .map(|i| i as f64 / p.rate_hz)
+        .collect();
+    write_csv(
+        &dir.join("spiro_resampled.csv"),
+        &["time", "volume"],
+        &[&rt, &p.spiro_resampled],
     )?;
     let mp = dir.join("summary.md");
     std::fs::write(&mp, summary_markdown(v)).map_err(|e| Error::io(&mp, e))?;
