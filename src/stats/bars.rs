@@ -254,6 +254,25 @@ impl Problem {
         tv.extend_from_slice(&[1.0; 4]);
         let m = k + 4;
         let z = natural_map(&knots);
+        // Per knot span: first natural index and the 4 x W map from B-spline values to the
+        // row of B Z (computed once per span, not per data point).
+        let maps: Vec<(usize, [[f64; W]; 4])> = (3..m)
+            .map(|span| {
+                let lo = z[span - 3..=span]
+                    .iter()
+                    .flatten()
+                    .map(|e| e.0)
+                    .min()
+                    .unwrap_or(0);
+                let mut mm = [[0.0; W]; 4];
+                for (bi, row) in mm.iter_mut().enumerate() {
+                    for &(a, zw) in &z[span - 3 + bi] {
+                        row[a - lo] += zw;
+                    }
+                }
+                (lo, mm)
+            })
+            .collect();
         let mut rows = Vec::with_capacity(n);
         let mut gram = vec![0.0; p * p];
         let mut span = 3;
@@ -263,16 +282,12 @@ impl Problem {
             }
             let b = bspline_values(&tv, span, xv);
             // Row of B Z: natural indices lie within [lo, lo + W).
-            let lo = z[span - 3..=span]
-                .iter()
-                .flatten()
-                .map(|e| e.0)
-                .min()
-                .unwrap_or(0);
+            let (lo, mm) = &maps[span - 3];
+            let lo = *lo;
             let mut w = [0.0; W];
-            for (bi, bv) in b.iter().enumerate() {
-                for &(a, zw) in &z[span - 3 + bi] {
-                    w[a - lo] += bv * zw;
+            for (bv, row) in b.iter().zip(mm) {
+                for (wj, rj) in w.iter_mut().zip(row) {
+                    *wj += bv * rj;
                 }
             }
             let width = W.min(p - lo);
@@ -662,9 +677,16 @@ fn pointwise_band(draws: &[f32], n: usize, s: usize) -> (Vec<f64>, Vec<f64>) {
         for (j, c) in col.iter_mut().enumerate() {
             *c = draws[j * n + i];
         }
-        col.sort_unstable_by(f32::total_cmp);
-        lower.push(f64::from(col[lo_i]));
-        upper.push(f64::from(col[hi_i]));
+        let (_, lo, above) = col.select_nth_unstable_by(lo_i, f32::total_cmp);
+        lower.push(f64::from(*lo));
+        let hi = if hi_i > lo_i {
+            *above
+                .select_nth_unstable_by(hi_i - lo_i - 1, f32::total_cmp)
+                .1
+        } else {
+            *lo
+        };
+        upper.push(f64::from(hi));
     }
     (lower, upper)
 }
