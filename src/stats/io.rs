@@ -28,14 +28,14 @@ impl Series {
         self.values.is_empty()
     }
 
-    /// Sampling rate [Hz] from the median time step (NaN with fewer than 2 samples).
+    /// Sampling rate [Hz]: (n - 1) / (t_last - t_first), which is insensitive to the
+    /// rounding of individual time stamps (NaN with fewer than 2 samples).
     pub fn rate(&self) -> f64 {
-        let mut dt: Vec<f64> = self.time.windows(2).map(|w| w[1] - w[0]).collect();
-        if dt.is_empty() {
+        let n = self.time.len();
+        if n < 2 {
             return f64::NAN;
         }
-        dt.sort_by(f64::total_cmp);
-        1.0 / dt[dt.len() / 2]
+        (n - 1) as f64 / (self.time[n - 1] - self.time[0])
     }
 }
 
@@ -167,7 +167,7 @@ impl Table {
     }
 
     /// Extracts the series (`time`, `name`), checking that time strictly increases, the
-    /// sampling is uniform within 50 % of the median step and there are `min_rows` rows.
+    /// sampling is uniform within 50 % of the mean step and there are `min_rows` rows.
     pub fn series(&self, name: &str, min_rows: usize) -> Result<Series> {
         let min_rows = min_rows.max(2);
         let ti = self.column_index("time").ok_or_else(|| {
@@ -235,7 +235,7 @@ impl Table {
                     self.lines[k],
                     time_col(k),
                     format!(
-                        "column `{}`: time step {dt} s differs from the median step {step} s by more \
+                        "column `{}`: time step {dt} s differs from the mean step {step} s by more \
                          than 50 %; resample the recording uniformly first",
                         self.headers[ti]
                     ),
@@ -287,8 +287,18 @@ mod tests {
         assert!(e.starts_with("b.csv:4:1:"), "{e}");
         let e = t.series("flow", 2).unwrap_err().to_string();
         assert!(e.contains("no `flow` column"), "{e}");
+        let t = parse_table("c.csv", "time,volume\n0,1\n0.01,2\n0.02,3\n").unwrap();
         let e = t.series("volume", 10).unwrap_err().to_string();
-        assert!(e.contains("at least 10"), "{e}");
+        assert!(
+            e.starts_with("c.csv:4:0:") && e.contains("at least 10"),
+            "{e}"
+        );
+        let t = parse_table("d.csv", "time,volume\n0,1\n0.01,2\n0.05,3\n0.06,3\n").unwrap();
+        let e = t.series("volume", 2).unwrap_err().to_string();
+        assert!(
+            e.starts_with("d.csv:4:1:") && e.contains("differs from the mean step"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -112,7 +112,8 @@ pub fn resample_poly(x: &[f64], up: usize, down: usize) -> Result<Vec<f64>> {
 }
 
 /// Rational approximation `up / down` of `to_rate / from_rate`. Rates that are whole
-/// numbers of hertz (within 1e-9 relative) give the exact reduced ratio (100 -> 56 Hz is
+/// numbers of hertz (within 1e-6 relative, so time stamps rounded to microseconds still
+/// qualify) give the exact reduced ratio (100 -> 56 Hz is
 /// 14/25); otherwise the best continued-fraction convergent with `down <= 1000`.
 pub fn rate_ratio(from_rate: f64, to_rate: f64) -> Result<(usize, usize)> {
     if !(from_rate > 0.0 && from_rate.is_finite()) {
@@ -129,7 +130,7 @@ pub fn rate_ratio(from_rate: f64, to_rate: f64) -> Result<(usize, usize)> {
             "(0, inf)",
         ));
     }
-    let is_int = |r: f64| (r - r.round()).abs() <= 1e-9 * r && r.round() >= 1.0;
+    let is_int = |r: f64| (r - r.round()).abs() <= 1e-6 * r && r.round() >= 1.0;
     if is_int(from_rate) && is_int(to_rate) && to_rate.round() <= 1e6 && from_rate.round() <= 1e6 {
         let (a, b) = (to_rate.round() as usize, from_rate.round() as usize);
         let g = gcd(a, b);
@@ -173,6 +174,8 @@ mod tests {
         assert_eq!(rate_ratio(56.0, 100.0).unwrap(), (25, 14));
         let (u, d) = rate_ratio(100.0, 55.5).unwrap();
         assert_eq!((u, d), (111, 200));
+        // Time stamps rounded to 6 decimals at 56 Hz.
+        assert_eq!(rate_ratio(100.0, 999.0 / 17.839286).unwrap(), (14, 25));
     }
 
     #[test]
