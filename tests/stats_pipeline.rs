@@ -119,9 +119,24 @@ fn validation_recovers_known_lag_exactly() {
         let (sim, spiro) = sine_pair(frames, false, 0.01);
         let v = validate(&sim, &spiro, SpiroKind::Volume, &quick()).unwrap();
         assert_eq!(v.preparation.lag_frames, -frames, "offset {frames} frames");
+        assert!(!v.preparation.lag_at_search_limit);
         assert!(v.pearson.r > 0.99);
         assert!((v.frequency_sim.frequency_hz - 0.25).abs() < 0.005);
     }
+}
+
+#[test]
+fn lag_outside_the_search_window_is_flagged() {
+    // True lag -150 frames, one breath is 224 frames: within +-40 the best lag is the edge.
+    let (sim, spiro) = sine_pair(150, false, 0.01);
+    let mut opts = quick();
+    opts.prepare.max_lag = 40;
+    let v = validate(&sim, &spiro, SpiroKind::Volume, &opts).unwrap();
+    assert!(
+        v.preparation.lag_at_search_limit,
+        "lag {}",
+        v.preparation.lag_frames
+    );
 }
 
 #[test]

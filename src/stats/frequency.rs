@@ -5,8 +5,8 @@
 //! DFT bins covering the breathing band 0.1-1 Hz, pick the largest, and refine with the
 //! two-bin Hann interpolation `delta = (2a - 1) / (a + 1)`, `a = |X[k +- 1]| / |X[k]|` taken
 //! toward the larger neighbour (exact for a pure tone between bins), `f = (k + delta) fs / N`.
-//! The autocorrelation of the detrended signal, first local maximum at lags of 1-10 s, is
-//! the cross-check: when the two disagree by more than 10 % (a non-sinusoidal breath whose
+//! The autocorrelation of the detrended signal (the first local maximum at lags of 1-10 s
+//! reaching 90 % of the largest one) is the cross-check: when the two disagree by more than 10 % (a non-sinusoidal breath whose
 //! harmonic dominates the spectrum, for example) the autocorrelation value is used.
 //!
 //! Only the band's bins are evaluated (direct sums, O(N x bins)), so no FFT library is

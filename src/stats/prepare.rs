@@ -79,6 +79,9 @@ pub struct Prepared {
     pub lag_seconds: f64,
     /// Normalised cross-correlation at the chosen lag.
     pub max_correlation: f64,
+    /// True when the chosen lag is at the edge of the search window: the true lag may lie
+    /// outside it (increase `max_lag`).
+    pub lag_at_search_limit: bool,
     /// Normalised cross-correlation for lags -max_lag..=max_lag (NaN where not computed).
     pub correlation_by_lag: Vec<f64>,
     /// Constant added to the spirogram after alignment [L].
@@ -251,6 +254,7 @@ pub fn prepare(
         lag_frames: lag + trimmed,
         lag_seconds: (lag + trimmed) as f64 / fs,
         max_correlation,
+        lag_at_search_limit: lag.unsigned_abs() as usize == opts.max_lag,
         correlation_by_lag: curve,
         spiro_offset: offset,
         drift_removed_l_per_s: drift,

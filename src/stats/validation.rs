@@ -229,6 +229,13 @@ pub fn summary_markdown(v: &Validation) -> String {
         p.max_correlation,
         p.spiro_offset
     );
+    if p.lag_at_search_limit {
+        let _ = writeln!(
+            s,
+            "**Warning**: the best lag is at the edge of the +-{} frame search; the true lag may lie outside it.\n",
+            v.options.prepare.max_lag
+        );
+    }
     let _ = writeln!(s, "## Table (as thesis Table 4.4)\n");
     let _ = writeln!(
         s,
