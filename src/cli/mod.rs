@@ -5,6 +5,8 @@ pub mod simulate;
 
 use clap::{Parser, Subcommand};
 
+pub mod validate;
+
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
 #[derive(Parser, Debug)]
 #[command(name = "torso", version, about)]
@@ -21,6 +23,10 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Print the library version.
     Version,
+    /// Compare a simulated lung volume with a spirogram (statistics, plots, summary).
+    Validate(validate::ValidateArgs),
+    /// Write a synthetic spirogram (from a curve or a sinusoidal model).
+    SynthSpirometry(validate::SynthSpirometryArgs),
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -32,6 +38,8 @@ pub fn main() -> i32 {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
+        Command::Validate(a) => validate::run(&a),
+        Command::SynthSpirometry(a) => validate::run_synth(&a),
     };
     match result {
         Ok(()) => 0,
