@@ -2,8 +2,9 @@
 //! frames, ribs with their hinge axes, sternum, cartilage joints, the abdominal cavity surface
 //! and the muscle element layouts. Nothing here knows about time or forces.
 
-mod subject;
 mod muscles;
+pub mod skin;
+mod subject;
 
 pub use muscles::MuscleGroup;
 pub use subject::{Posture, Sex, Subject};
