@@ -1,1 +1,3 @@
-//! (module under construction)
+//! What is read off a state: volumes, pressures, and markers via skinning.
+
+pub mod skinning;
