@@ -2,6 +2,8 @@
 
 use clap::{Parser, Subcommand};
 
+mod fmu;
+
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
 #[derive(Parser, Debug)]
 #[command(name = "torso", version, about)]
@@ -16,6 +18,8 @@ pub struct Cli {
 pub enum Command {
     /// Print the library version.
     Version,
+    /// Build the FMI 2.0 co-simulation FMU or write its model description.
+    Fmu(fmu::FmuArgs),
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -26,6 +30,7 @@ pub fn main() -> i32 {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
+        Command::Fmu(args) => fmu::run(args),
     };
     match result {
         Ok(()) => 0,
