@@ -384,37 +384,73 @@ pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
 // ---------------------------------------------------------------------------------------------
 // Getting and setting variable values
 
-macro_rules! getter {
-    ($(#[$doc:meta])* $name:ident, $t:ty, $method:ident) => {
-        $(#[$doc])*
-        ///
-        /// # Safety
-        /// FMI 2.0 calling conventions.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(c: fmi2Component, vr: *const fmi2ValueReference, nvr: usize, value: *mut $t) -> fmi2Status {
-            unsafe {
-                with_instance(c, stringify!($name), mask::GET_VALUES, |inst| {
-                    let Some(vrs) = slice(vr, nvr) else { return null_argument(inst, stringify!($name), "vr[]") };
-                    let Some(out) = slice_mut(value, nvr) else { return null_argument(inst, stringify!($name), "value[]") };
-                    inst.$method(vrs, out)
-                })
-            }
-        }
-    };
+/// Shared body of the typed getters.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+unsafe fn get_values<T>(
+    c: fmi2Component,
+    function: &str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut T,
+    get: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> fmi2Status,
+) -> fmi2Status {
+    unsafe {
+        with_instance(c, function, mask::GET_VALUES, |inst| {
+            let Some(vrs) = slice(vr, nvr) else {
+                return null_argument(inst, function, "vr[]");
+            };
+            let Some(out) = slice_mut(value, nvr) else {
+                return null_argument(inst, function, "value[]");
+            };
+            get(inst, vrs, out)
+        })
+    }
 }
 
-getter!(
-    /// `fmi2GetReal`.
-    fmi2GetReal, fmi2Real, get_real
-);
-getter!(
-    /// `fmi2GetInteger`.
-    fmi2GetInteger, fmi2Integer, get_integer
-);
-getter!(
-    /// `fmi2GetString`: pointers valid until the next string-returning call on the instance.
-    fmi2GetString, fmi2String, get_string
-);
+/// `fmi2GetReal`.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe { get_values(c, "fmi2GetReal", vr, nvr, value, Instance::get_real) }
+}
+
+/// `fmi2GetInteger`.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    unsafe { get_values(c, "fmi2GetInteger", vr, nvr, value, Instance::get_integer) }
+}
+
+/// `fmi2GetString`: the pointers stay valid until the next string-returning call on the
+/// instance.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    unsafe { get_values(c, "fmi2GetString", vr, nvr, value, Instance::get_string) }
+}
 
 /// `fmi2GetBoolean` (no Boolean variables: any value reference is an error).
 ///
@@ -440,35 +476,60 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     }
 }
 
-macro_rules! setter {
-    ($(#[$doc:meta])* $name:ident, $t:ty, $method:ident) => {
-        $(#[$doc])*
-        ///
-        /// # Safety
-        /// FMI 2.0 calling conventions.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(c: fmi2Component, vr: *const fmi2ValueReference, nvr: usize, value: *const $t) -> fmi2Status {
-            unsafe {
-                with_instance(c, stringify!($name), mask::SET_VALUES, |inst| {
-                    let Some(vrs) = slice(vr, nvr) else { return null_argument(inst, stringify!($name), "vr[]") };
-                    let Some(values) = slice(value, nvr) else { return null_argument(inst, stringify!($name), "value[]") };
-                    inst.trace(|| format!("{}(vr={vrs:?}, value={values:?})", stringify!($name)));
-                    inst.$method(vrs, values)
-                })
-            }
-        }
-    };
+/// Shared body of the typed setters.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+unsafe fn set_values<T: std::fmt::Debug>(
+    c: fmi2Component,
+    function: &str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const T,
+    set: impl FnOnce(&mut Instance, &[u32], &[T]) -> fmi2Status,
+) -> fmi2Status {
+    unsafe {
+        with_instance(c, function, mask::SET_VALUES, |inst| {
+            let Some(vrs) = slice(vr, nvr) else {
+                return null_argument(inst, function, "vr[]");
+            };
+            let Some(values) = slice(value, nvr) else {
+                return null_argument(inst, function, "value[]");
+            };
+            inst.trace(|| format!("{function}(vr={vrs:?}, value={values:?})"));
+            set(inst, vrs, values)
+        })
+    }
 }
 
-setter!(
-    /// `fmi2SetReal`: inputs and parameters; a value out of range or not finite is an error
-    /// naming the variable, and nothing is changed.
-    fmi2SetReal, fmi2Real, set_real
-);
-setter!(
-    /// `fmi2SetInteger`: Integer parameters (all fixed).
-    fmi2SetInteger, fmi2Integer, set_integer
-);
+/// `fmi2SetReal`: inputs and parameters; a value out of range or not finite is an error
+/// naming the variable, and nothing is changed.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    unsafe { set_values(c, "fmi2SetReal", vr, nvr, value, Instance::set_real) }
+}
+
+/// `fmi2SetInteger`: Integer parameters (all fixed).
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    unsafe { set_values(c, "fmi2SetInteger", vr, nvr, value, Instance::set_integer) }
+}
 
 /// `fmi2SetBoolean` (no Boolean variables).
 ///
@@ -844,44 +905,79 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     unsafe { with_instance(c, "fmi2CancelStep", mask::CANCEL_STEP, |_| fmi2OK) }
 }
 
-macro_rules! status_getter {
-    ($(#[$doc:meta])* $name:ident, $t:ty, $method:ident, $convert:expr) => {
-        $(#[$doc])*
-        ///
-        /// # Safety
-        /// FMI 2.0 calling conventions.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(c: fmi2Component, s: fmi2StatusKind, value: *mut $t) -> fmi2Status {
-            unsafe {
-                with_instance(c, stringify!($name), mask::GET_STATUS, |inst| {
-                    if value.is_null() {
-                        return null_argument(inst, stringify!($name), "value");
-                    }
-                    match inst.$method(s) {
-                        Ok(v) => {
-                            *value = $convert(v);
-                            fmi2OK
-                        }
-                        Err(status) => status,
-                    }
-                })
+/// Shared body of the status getters.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+unsafe fn status_value<T>(
+    c: fmi2Component,
+    function: &str,
+    value: *mut T,
+    get: impl FnOnce(&mut Instance) -> Result<T, fmi2Status>,
+) -> fmi2Status {
+    unsafe {
+        with_instance(c, function, mask::GET_STATUS, |inst| {
+            if value.is_null() {
+                return null_argument(inst, function, "value");
             }
-        }
-    };
+            match get(inst) {
+                Ok(v) => {
+                    *value = v;
+                    fmi2OK
+                }
+                Err(status) => status,
+            }
+        })
+    }
 }
 
-status_getter!(
-    /// `fmi2GetStatus`: `fmi2DoStepStatus` gives the last step's status.
-    fmi2GetStatus, fmi2Status, get_status, |v| v
-);
-status_getter!(
-    /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime`.
-    fmi2GetRealStatus, fmi2Real, get_real_status, |v| v
-);
-status_getter!(
-    /// `fmi2GetBooleanStatus`: `fmi2Terminated` (true after a discarded step).
-    fmi2GetBooleanStatus, fmi2Boolean, get_boolean_status, |v: bool| if v { fmi2True } else { fmi2False }
-);
+/// `fmi2GetStatus`: `fmi2DoStepStatus` gives the last step's status.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Status,
+) -> fmi2Status {
+    unsafe { status_value(c, "fmi2GetStatus", value, |inst| inst.get_status(s)) }
+}
+
+/// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime`.
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetRealStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        status_value(c, "fmi2GetRealStatus", value, |inst| {
+            inst.get_real_status(s)
+        })
+    }
+}
+
+/// `fmi2GetBooleanStatus`: `fmi2Terminated` (true after a discarded step).
+///
+/// # Safety
+/// FMI 2.0 calling conventions.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        status_value(c, "fmi2GetBooleanStatus", value, |inst| {
+            inst.get_boolean_status(s)
+                .map(|b| if b { fmi2True } else { fmi2False })
+        })
+    }
+}
 
 /// `fmi2GetIntegerStatus`: FMI 2.0 defines no Integer status.
 ///

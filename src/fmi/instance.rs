@@ -18,10 +18,10 @@ use super::types::{
     fmi2DoStepStatus, fmi2LastSuccessfulTime, fmi2PendingStatus, fmi2Status, fmi2Terminated,
 };
 use super::variables::{
-    Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, table,
+    Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output, table,
 };
 use crate::anatomy::MuscleGroup;
-use crate::model::{Config, Quantity, Snapshot, Torso};
+use crate::model::{Config, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -549,32 +549,6 @@ impl Instance {
         }
     }
 
-    /// Reads an output quantity. Markers beyond the grid read 0 (documented in the model
-    /// description); anything the model cannot provide is an error naming the variable.
-    fn read_output(&mut self, var: &Variable, q: Quantity) -> Result<f64> {
-        if let Quantity::Marker { index, .. } = q {
-            let grid = self.config.scene.grid_rows * self.config.scene.grid_cols;
-            if usize::from(index) >= grid {
-                return Ok(0.0);
-            }
-        }
-        let torso = self.ensure_torso()?;
-        let stats = torso.solver_stats();
-        let value = match q {
-            Quantity::SolverSteps => stats.steps as f64,
-            Quantity::SolverRejectedSteps => stats.rejected as f64,
-            Quantity::SolverRhsEvaluations => stats.rhs_evaluations as f64,
-            q => torso.read(q)?,
-        };
-        if !value.is_finite() {
-            return Err(Error::Numerical {
-                time: torso.time(),
-                reason: format!("`{}` is not finite ({value})", var.name),
-            });
-        }
-        Ok(value)
-    }
-
     fn get_value(
         &mut self,
         function: &str,
@@ -586,12 +560,15 @@ impl Instance {
             Role::Time => Ok(Value::Real(self.time)),
             Role::Input(g) => Ok(Value::Real(self.inputs[g.index()])),
             Role::Parameter(p) => Ok(p.get(&self.config)),
-            Role::Output(q) => self.read_output(var, q).map(|x| match var.ty {
-                ScalarType::Integer => Value::Integer(x.min(i32::MAX as f64) as i32),
-                _ => Value::Real(x),
-            }),
+            Role::Output(q) => self
+                .ensure_torso()
+                .and_then(|t| read_output(t, &var.name, q))
+                .map(|x| match var.ty {
+                    ScalarType::Integer => Value::Integer(x.min(i32::MAX as f64) as i32),
+                    _ => Value::Real(x),
+                }),
         };
-        value.map_err(|e| self.error(&format!("{function}: cannot read `{}`: {e}", var.name)))
+        value.map_err(|e| self.error(&format!("{function}: {e}")))
     }
 
     /// `fmi2GetReal`.
