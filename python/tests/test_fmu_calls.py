@@ -4,6 +4,7 @@ rejected inputs, GUID check, doStep time checks, FMU state errors, reset and log
 The FMU is built by scripts/test.sh (`torso fmu build`) before pytest runs.
 """
 
+import itertools
 import math
 import pathlib
 import shutil
@@ -34,28 +35,38 @@ def fmu_path():
     return str(FMU)
 
 
+# fmpy's logger proxy keeps one global pointer to the last Python logger it wrapped, so the
+# tests use one logger for the whole session (never freed) and sort messages by instance name.
+_MESSAGES = {}
+_COUNTER = itertools.count()
+
+
+def _log(env, name, status, category, message):
+    _MESSAGES.setdefault(name.decode(), []).append((status, category.decode(), message.decode()))
+
+
+CALLBACKS = fmi2CallbackFunctions()
+CALLBACKS.logger = fmi2CallbackLoggerTYPE(_log)
+CALLBACKS.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+CALLBACKS.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+addLoggerProxy(byref(CALLBACKS))
+
+
 class Host:
-    """One FMU2Slave with a logger that records every message."""
+    """One FMU2Slave whose log messages are recorded."""
 
     def __init__(self, guid=None, logging_on=False):
         self.md = read_model_description(fmu_path())
         self.dir = extract(fmu_path(), tempfile.mkdtemp(prefix="bt_fmu_"))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.messages = []
-
-        def log(env, name, status, category, message):
-            self.messages.append((status, category.decode(), message.decode()))
-
-        self.callbacks = fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2CallbackLoggerTYPE(log)
-        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(self.callbacks))
+        self.name = f"torso{next(_COUNTER)}"
+        self.messages = _MESSAGES.setdefault(self.name, [])
+        self.callbacks = CALLBACKS
         self.fmu = FMU2Slave(
             guid=guid or self.md.guid,
             unzipDirectory=self.dir,
             modelIdentifier=self.md.coSimulation.modelIdentifier,
-            instanceName="torso",
+            instanceName=self.name,
         )
         self.logging_on = logging_on
 
