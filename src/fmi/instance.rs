@@ -200,6 +200,8 @@ struct Saved {
     time: f64,
     last_successful_time: f64,
     last_step_discarded: bool,
+    /// Whether a model snapshot follows (a truncated state is thus refused).
+    has_snapshot: bool,
 }
 
 const STATE_MAGIC: &[u8; 8] = b"BTFMUST\0";
@@ -258,10 +260,11 @@ impl FmuState {
             }
         }
         let rest = &body[len..];
-        let snapshot = if rest.is_empty() {
-            None
-        } else {
-            Some(Snapshot::from_bytes(rest)?)
+        let snapshot = match (saved.has_snapshot, rest.is_empty()) {
+            (true, false) => Some(Snapshot::from_bytes(rest)?),
+            (false, true) => None,
+            (true, true) => return Err(bad("truncated: the model snapshot is missing".into())),
+            (false, false) => return Err(bad("trailing bytes after the state".into())),
         };
         Ok(FmuState { saved, snapshot })
     }
@@ -894,6 +897,7 @@ impl Instance {
                 time: self.time,
                 last_successful_time: self.last_successful_time,
                 last_step_discarded: self.last_step_status == fmi2Discard,
+                has_snapshot: self.torso.is_some(),
             },
             snapshot: self.torso.as_ref().map(Torso::snapshot),
         }
