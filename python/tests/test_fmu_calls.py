@@ -312,3 +312,27 @@ def test_logger_receives_percent_signs_verbatim(host):
     with pytest.raises(FMICallException):
         f.setDebugLogging(True, ["%s%n%x%d"])
     assert "%s%n%x%d" in host.last_error()
+
+
+def test_resource_location_is_parsed_as_a_uri():
+    """Extracted into a folder whose name needs percent-escapes, a relative slp.reference is
+    found in resources/ (fmpy passes file:///...%20... as the resource location)."""
+    h = Host()
+    try:
+        spaced = pathlib.Path(tempfile.mkdtemp(prefix="bt fmu %20 ")) / "unzipped dir"
+        shutil.copytree(h.dir, spaced)
+        shutil.rmtree(h.dir, ignore_errors=True)
+        h.dir = str(spaced)
+        (spaced / "resources" / "first frame.csv").write_text("t,x\n0,0\n")
+        h.fmu = FMU2Slave(guid=h.md.guid, unzipDirectory=h.dir, modelIdentifier="BreathingTorso", instanceName=h.name)
+        f = h.instantiate()
+        f.setString([h.vr["slp.reference"]], ["first frame.csv"])
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        [path] = f.getString([h.vr["slp.reference"]])
+        assert pathlib.Path(path.decode()) == spaced / "resources" / "first frame.csv"
+        f.setString([h.vr["slp.reference"]], [""])
+        assert f.getString([h.vr["slp.reference"]]) == [b""]
+    finally:
+        h.fmu.freeInstance()
+        shutil.rmtree(pathlib.Path(h.dir).parent, ignore_errors=True)
