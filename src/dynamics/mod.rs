@@ -1,1 +1,118 @@
-//! (module under construction)
+//! The equations of motion. The state holds rib angles and rates, the sternum's pose and
+//! velocity, and the positions and velocities of the abdominal surface's free vertices; the
+//! right-hand side is computed in stages, one file each, in the manner of MuJoCo's forward
+//! dynamics:
+//!
+//! 1. [`kinematics`]: body poses from the state, then every anchor's position and velocity;
+//! 2. [`forces`]: muscle elements (thesis eq. 2.2-2.3, tension only after Zajac), membrane,
+//!    cartilage joints and wall foundation, abdominal pressure P = K (V0/V - 1) with P A n / 3
+//!    per vertex per triangle (eq. 2.5-2.6), pleural pressure from lung elastance;
+//! 3. [`accelerations`]: forces reduced to generalised forces (rib torques about the hinge
+//!    axes, sternum force and torque, vertex forces), joint springs, gravity and preload, then
+//!    accelerations.
+//!
+//! The compiled [`Model`] never changes during a run; [`Data`] holds the scratch memory, so
+//! that the right-hand side allocates nothing.
+
+pub mod accelerations;
+pub mod energy;
+pub mod forces;
+pub mod kinematics;
+mod model;
+mod params;
+pub mod state;
+
+pub use model::{volume, Carrier, Elements, Model, VectorSprings, PASSIVE, RIBS};
+pub use params::Params;
+pub use state::{rest_state, Layout};
+
+use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
+
+/// Activations applied to the muscles in one evaluation: per group, per side (right, left,
+/// midline), already clamped and multiplied by the side gains.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Activations {
+    /// `[group][side]`.
+    pub level: [[f64; 3]; 8],
+}
+
+impl Activations {
+    /// From per-group activations in [0, 1] and the left/right gains: a = min(1, a_g G_side).
+    pub fn new(groups: &[f64; 8], gain_right: f64, gain_left: f64) -> Activations {
+        let mut level = [[0.0; 3]; 8];
+        for (g, a) in groups.iter().enumerate() {
+            let a = a.clamp(0.0, 1.0);
+            level[g] = [(a * gain_right).min(1.0), (a * gain_left).min(1.0), (a * 0.5 * (gain_right + gain_left)).min(1.0)];
+        }
+        Activations { level }
+    }
+
+    /// Whether every group is inactive.
+    pub fn is_zero(&self) -> bool {
+        self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
+    }
+}
+
+/// Scratch memory of the right-hand side, sized once per model.
+#[derive(Clone, Debug)]
+pub struct Data {
+    /// Rib rotation matrices.
+    pub rib_rotation: Vec<Matrix3<f64>>,
+    /// Sternum orientation.
+    pub sternum_rotation: UnitQuaternion<f64>,
+    /// Sternum centre of mass.
+    pub sternum_x: Point3<f64>,
+    /// Sternum angular velocity (world).
+    pub sternum_w: Vector3<f64>,
+    /// Anchor positions.
+    pub pos: Vec<Point3<f64>>,
+    /// Anchor velocities.
+    pub vel: Vec<Vector3<f64>>,
+    /// Forces on anchors.
+    pub force: Vec<Vector3<f64>>,
+    /// Generalised torque per rib.
+    pub rib_torque: Vec<f64>,
+    /// Net force on the sternum.
+    pub sternum_force: Vector3<f64>,
+    /// Net torque on the sternum about its centre of mass.
+    pub sternum_torque: Vector3<f64>,
+    /// Abdominal volume of the last evaluation [m^3].
+    pub abdomen_volume: f64,
+    /// Abdominal pressure of the last evaluation [Pa].
+    pub abdomen_pressure: f64,
+    /// Thoracic volume of the last evaluation [m^3].
+    pub thorax_volume: f64,
+    /// Pleural pressure change of the last evaluation [Pa].
+    pub pleural_pressure: f64,
+}
+
+impl Data {
+    /// Scratch memory for `model`.
+    pub fn new(model: &Model) -> Data {
+        let n = model.rest.len();
+        Data {
+            rib_rotation: vec![Matrix3::identity(); RIBS],
+            sternum_rotation: UnitQuaternion::identity(),
+            sternum_x: model.sternum_com,
+            sternum_w: Vector3::zeros(),
+            pos: model.rest.clone(),
+            vel: vec![Vector3::zeros(); n],
+            force: vec![Vector3::zeros(); n],
+            rib_torque: vec![0.0; RIBS],
+            sternum_force: Vector3::zeros(),
+            sternum_torque: Vector3::zeros(),
+            abdomen_volume: model.abdomen_rest_volume,
+            abdomen_pressure: 0.0,
+            thorax_volume: model.thorax_rest_volume,
+            pleural_pressure: 0.0,
+        }
+    }
+}
+
+/// The right-hand side y' = f(y) for the given activations, in stages.
+pub fn rhs(model: &Model, data: &mut Data, act: &Activations, y: &[f64], dy: &mut [f64]) {
+    let layout = Layout::new(model);
+    kinematics::positions_and_velocities(model, data, &layout, y);
+    forces::accumulate(model, data, act);
+    accelerations::compute(model, data, &layout, y, dy);
+}

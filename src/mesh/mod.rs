@@ -1,1 +1,8 @@
-//! (module under construction)
+//! Triangle surfaces and the preparation of subject-specific meshes (Peeters & Pronost 2013):
+//! the [`TriMesh`] type with its geometry and topology, file formats, Taubin smoothing,
+//! repair, overlap resolution, geometric attachments and tetrahedral volume meshing. This
+//! module is the lowest layer of the crate and knows nothing of anatomy or dynamics.
+
+mod trimesh;
+
+pub use trimesh::{Aabb, Adjacency, MAX_ICOSPHERE_SUBDIVISIONS, Topology, TriMesh, edge_key};

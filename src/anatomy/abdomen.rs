@@ -1,0 +1,397 @@
+//! The abdominal cavity (thesis 2.3): a subdivided sphere deformed to fit under the rib cage
+//! (its top is the diaphragm dome, spanning the costal margin) and above the pelvis, behind the
+//! abdominal wall. Vertices on the back and the pelvic floor are fixed; the vertices of the
+//! costal margin ride on the ribs (the diaphragm's insertions); the dome and the lateral and
+//! ventral wall are free point masses sharing the abdomen's 8 kg (thesis Table 1.1).
+
+use super::skeleton::{Rib, Scale, Side, Spine, Sternum, rib_index};
+use super::subject::Subject;
+use super::{Anchor, Body, push_anchor};
+use crate::Result;
+use crate::mesh::TriMesh;
+use nalgebra::{Point3, Vector3};
+use std::collections::{HashMap, HashSet};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Role of an abdominal-surface vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexRole {
+    /// Fixed to the skeleton: back wall and pelvic floor.
+    Fixed,
+    /// On the costal margin, carried by a rib, the sternum or the spine: diaphragm insertions.
+    Insertion,
+    /// Diaphragm dome (free).
+    Dome,
+    /// Lateral and ventral abdominal wall (free).
+    Wall,
+}
+
+/// Exponent below 1 that fills out the dome's shoulders (a rounder, fuller dome).
+const DOME_FULLNESS: f64 = 0.7;
+
+/// Height of the dome/wall boundary on the unit sphere (u_y above it: dome).
+const DOME_CUT: f64 = 0.2;
+
+/// The abdominal cavity surface.
+#[derive(Clone, Debug)]
+pub struct Abdomen {
+    /// Anchor index of each surface vertex.
+    pub anchor: Vec<u32>,
+    /// Role of each surface vertex.
+    pub roles: Vec<VertexRole>,
+    /// Closed, outward-oriented triangles (surface vertex indices).
+    pub triangles: Vec<[u32; 3]>,
+    /// Whether each triangle belongs to the diaphragm dome.
+    pub dome: Vec<bool>,
+    /// Costal-margin loop (surface vertex indices), ordered by azimuth from dorsal, via the
+    /// right side, ventral, to the left.
+    pub rim: Vec<u32>,
+    /// Mass of each free vertex [kg] (0 for carried vertices).
+    pub mass: Vec<f64>,
+    /// Unit-sphere direction each vertex came from (its parametric coordinates).
+    pub sphere: Vec<Vector3<f64>>,
+    /// Horizontal centre (x) of the cavity's vertical axis [m].
+    pub axis_x: f64,
+    /// Height of the pelvic floor [m].
+    pub floor_y: f64,
+    /// Height of the dome apex at rest [m].
+    pub apex_y: f64,
+}
+
+impl Abdomen {
+    /// Triangles as anchor indices.
+    pub fn anchor_triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.triangles
+            .iter()
+            .map(|t| t.map(|v| self.anchor[v as usize]))
+    }
+
+    /// Dome triangles as anchor indices.
+    pub fn dome_triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.triangles
+            .iter()
+            .zip(&self.dome)
+            .filter(|(_, d)| **d)
+            .map(|(t, _)| t.map(|v| self.anchor[v as usize]))
+    }
+
+    /// Number of surface vertices.
+    pub fn len(&self) -> usize {
+        self.anchor.len()
+    }
+
+    /// Whether the surface is empty (never, once built).
+    pub fn is_empty(&self) -> bool {
+        self.anchor.is_empty()
+    }
+
+    /// Surface vertices with a given role.
+    pub fn with_role(&self, role: VertexRole) -> impl Iterator<Item = u32> + '_ {
+        self.roles
+            .iter()
+            .enumerate()
+            .filter(move |(_, r)| **r == role)
+            .map(|(i, _)| i as u32)
+    }
+}
+
+/// Azimuth about the cavity axis: 0 dorsal, increasing through the right side (pi/2),
+/// ventral (pi) and the left side (3 pi / 2).
+pub fn azimuth(x: f64, z: f64, axis_x: f64) -> f64 {
+    let phi = z.atan2(-(x - axis_x)); // 0 dorsal, +pi/2 right
+    phi.rem_euclid(2.0 * PI)
+}
+
+/// A closed polyline (the costal margin) with the carrier of each vertex.
+struct Margin {
+    points: Vec<Point3<f64>>,
+    bodies: Vec<Body>,
+}
+
+impl Margin {
+    /// Where a horizontal ray from the axis at azimuth `psi` meets the margin: the point and the
+    /// body of the nearer segment end.
+    fn at_azimuth(&self, psi: f64, axis_x: f64) -> (Point3<f64>, Body) {
+        let n = self.points.len();
+        let az: Vec<f64> = self
+            .points
+            .iter()
+            .map(|p| azimuth(p.x, p.z, axis_x))
+            .collect();
+        for i in 0..n {
+            let j = (i + 1) % n;
+            let (a0, mut a1) = (az[i], az[j]);
+            let mut q = psi;
+            if a1 < a0 {
+                a1 += 2.0 * PI;
+                if q < a0 {
+                    q += 2.0 * PI;
+                }
+            }
+            if q >= a0 && q <= a1 {
+                let f = if a1 > a0 { (q - a0) / (a1 - a0) } else { 0.0 };
+                let p = self.points[i] + (self.points[j] - self.points[i]) * f;
+                let body = if f < 0.5 {
+                    self.bodies[i]
+                } else {
+                    self.bodies[j]
+                };
+                return (p, body);
+            }
+        }
+        (self.points[0], self.bodies[0])
+    }
+}
+
+/// The costal margin, inset by the wall thickness: xiphoid, 7th costal cartilage, ends of ribs
+/// 8-12 and the spine at the first lumbar level, on both sides.
+fn costal_margin(
+    ribs: &[Rib],
+    sternum: &Sternum,
+    spine: &Spine,
+    axis_x: f64,
+    scale: &Scale,
+) -> Margin {
+    let xiphoid = Point3::new(
+        sternum.xiphisternal.x - 0.01 * scale.x,
+        sternum.xiphisternal.y - 0.045 * scale.y,
+        0.0,
+    );
+    let l1 = spine
+        .joint("lumbar1")
+        .unwrap_or(Point3::new(-0.03, 1.12, 0.0));
+    let dorsal = Point3::new(
+        l1.x + 0.03,
+        ribs[rib_index(12, Side::Right)].head.y - 0.02,
+        0.0,
+    );
+    let mut right: Vec<(Point3<f64>, Body)> = Vec::new();
+    let r7 = &ribs[rib_index(7, Side::Right)];
+    let c7 = &r7.cartilage;
+    right.push((c7[c7.len() / 2], Body::Rib(r7.index() as u8)));
+    right.push((r7.bone_end(), Body::Rib(r7.index() as u8)));
+    for level in 8..=12 {
+        let r = &ribs[rib_index(level, Side::Right)];
+        right.push((r.bone_end(), Body::Rib(r.index() as u8)));
+    }
+    let mut points = vec![dorsal];
+    let mut bodies = vec![Body::Ground];
+    // Right side from dorsal to ventral, xiphoid, then the left side from ventral to dorsal.
+    for (p, b) in right.iter().rev() {
+        points.push(*p);
+        bodies.push(*b);
+    }
+    points.push(xiphoid);
+    bodies.push(Body::Sternum);
+    for (p, b) in right.iter() {
+        points.push(Point3::new(p.x, p.y, -p.z));
+        let left = match b {
+            Body::Rib(i) => Body::Rib(*i + 12),
+            other => *other,
+        };
+        bodies.push(left);
+    }
+    // Inset toward the axis.
+    let points = points
+        .into_iter()
+        .map(|p| {
+            let d = Vector3::new(axis_x - p.x, 0.0, -p.z);
+            let n = d.norm();
+            if n > 1e-9 {
+                p + d * (super::lining::WALL_THICKNESS.min(0.5 * n) / n)
+            } else {
+                p
+            }
+        })
+        .collect();
+    Margin { points, bodies }
+}
+
+/// Builds the abdominal cavity from an icosphere with `subdivisions` (2, 3, 4), appending its
+/// anchors.
+#[allow(clippy::too_many_arguments)]
+pub fn build(
+    subject: &Subject,
+    scale: &Scale,
+    ribs: &[Rib],
+    sternum: &Sternum,
+    spine: &Spine,
+    masses: &HashMap<String, f64>,
+    subdivisions: u32,
+    anchors: &mut Vec<Anchor>,
+) -> Result<Abdomen> {
+    let sphere = TriMesh::icosphere(subdivisions)?;
+    let n = sphere.vertices.len();
+    let ansur = super::data::ansur2();
+    let sex = if subject.sex == super::Sex::Male {
+        "M"
+    } else {
+        "F"
+    };
+    let waist = |name: &str| {
+        ansur
+            .get(&(sex.to_string(), name.to_string()))
+            .map(|r| r.predict(subject.stature, subject.mass, subject.age))
+    };
+    // Cavity cross-section at the waist: the skin's waist less the abdominal wall (about 2.5 cm
+    // of muscle and fat ventrally and laterally, more for heavier subjects).
+    let wall = 0.02 + 0.0004 * (subject.mass - 50.0).max(0.0);
+    let half_breadth = 0.5 * waist("waistbreadth").unwrap_or(0.30) - wall;
+    let x_back = -0.06 * scale.x;
+    let x_front = sternum.xiphisternal.x - 0.005;
+    let axis_x = 0.5 * (x_front + x_back);
+    let margin = costal_margin(ribs, sternum, spine, axis_x, scale);
+    let floor_y = scale.y_origin - 0.07 * scale.y;
+    let waist_y = floor_y
+        + 0.55
+            * (margin
+                .points
+                .iter()
+                .map(|p| p.y)
+                .fold(f64::INFINITY, f64::min)
+                - floor_y);
+    // Dome apex: at end-expiration the domes rise to the level of the 9th thoracic vertebra
+    // dorsally and the 5th rib's anterior end ventrally; take the higher.
+    let t9 = spine.joint("thoracic9").map(|p| p.y).unwrap_or(1.22);
+    let apex_y = t9.max(ribs[rib_index(5, Side::Right)].bone_end().y) + 0.02 * scale.y;
+    let apex_x = axis_x + 0.1 * (x_front - axis_x);
+
+    let dirs: Vec<Vector3<f64>> = sphere
+        .vertices
+        .iter()
+        .map(|p| p.coords.normalize())
+        .collect();
+    let dome_tri: Vec<bool> = sphere
+        .triangles
+        .iter()
+        .map(|t| t.iter().all(|&v| dirs[v as usize].y > DOME_CUT))
+        .collect();
+    // Rim: vertices on edges between dome and non-dome triangles.
+    let mut edge_faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (f, t) in sphere.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edge_faces.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let mut rim_set: HashSet<u32> = HashSet::new();
+    for ((a, b), faces) in &edge_faces {
+        if faces.len() == 2 && dome_tri[faces[0]] != dome_tri[faces[1]] {
+            rim_set.insert(*a);
+            rim_set.insert(*b);
+        }
+    }
+    let in_dome: Vec<bool> = (0..n).map(|v| dirs[v].y > DOME_CUT).collect();
+
+    let mut roles = Vec::with_capacity(n);
+    let mut positions = Vec::with_capacity(n);
+    let mut carriers = Vec::with_capacity(n);
+    let smooth = |x: f64| {
+        let x = x.clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    };
+    for v in 0..n {
+        let u = dirs[v];
+        let psi = azimuth(u.x, u.z, 0.0);
+        let (rim_p, rim_body) = margin.at_azimuth(psi, axis_x);
+        let rim_h = Vector3::new(rim_p.x - axis_x, 0.0, rim_p.z);
+        if rim_set.contains(&(v as u32)) {
+            roles.push(VertexRole::Insertion);
+            positions.push(rim_p);
+            carriers.push(rim_body);
+        } else if in_dome[v] {
+            // Quarter-ellipse profile: vertical at the rim (zone of apposition), flat at the apex.
+            let t = ((u.y - DOME_CUT) / (1.0 - DOME_CUT)).clamp(0.0, 1.0);
+            let c = (t * FRAC_PI_2).cos();
+            let apex = Vector3::new(apex_x - axis_x, 0.0, 0.0);
+            let h = apex + (rim_h - apex) * c;
+            let y = rim_p.y + (apex_y - rim_p.y) * (t * FRAC_PI_2).sin().powf(DOME_FULLNESS);
+            positions.push(Point3::new(axis_x + h.x, y, h.z));
+            roles.push(VertexRole::Dome);
+            carriers.push(Body::Vertex(0));
+        } else {
+            let s = ((DOME_CUT - u.y) / (1.0 + DOME_CUT)).clamp(0.0, 1.0);
+            // Unit horizontal direction and the waist ellipse (ventral and dorsal halves).
+            let r = u.x.hypot(u.z).max(1e-12);
+            let (ax, az) = (u.x / r, u.z / r);
+            let depth = if ax > 0.0 {
+                x_front - axis_x
+            } else {
+                axis_x - x_back
+            };
+            let waist_h = Vector3::new(ax * depth, 0.0, az * half_breadth);
+            let b = smooth(s / 0.35);
+            let mut h = rim_h * (1.0 - b) + waist_h * b;
+            let closure = if s < 0.55 {
+                1.0
+            } else {
+                (1.0 - ((s - 0.55) / 0.45).powi(2)).max(0.0).sqrt()
+            };
+            h *= closure;
+            let y_mid = rim_p.y + (waist_y - rim_p.y) * smooth(s / 0.35);
+            let y = if s < 0.35 {
+                y_mid
+            } else {
+                waist_y + (floor_y - waist_y) * ((s - 0.35) / 0.65)
+            };
+            positions.push(Point3::new(axis_x + h.x, y, h.z));
+            let dorsal = ax < -0.45;
+            let fixed = s > 0.8 || (dorsal && s > 0.05);
+            roles.push(if fixed {
+                VertexRole::Fixed
+            } else {
+                VertexRole::Wall
+            });
+            carriers.push(if fixed { Body::Ground } else { Body::Vertex(0) });
+        }
+    }
+
+    // Free vertices get consecutive indices; mass shared by Voronoi area (a third of each
+    // adjacent triangle).
+    let mut area = vec![0.0; n];
+    for t in &sphere.triangles {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let ar = 0.5 * (b - a).cross(&(c - a)).norm();
+        for v in t {
+            area[*v as usize] += ar / 3.0;
+        }
+    }
+    let free_area: f64 = (0..n)
+        .filter(|&v| matches!(carriers[v], Body::Vertex(_)))
+        .map(|v| area[v])
+        .sum();
+    let total_mass = masses.get("abdomen").copied().unwrap_or(8.0) * subject.mass / 75.0;
+    let mut mass = vec![0.0; n];
+    let mut next_free = 0u32;
+    let mut anchor = Vec::with_capacity(n);
+    for v in 0..n {
+        let body = match carriers[v] {
+            Body::Vertex(_) => {
+                mass[v] = total_mass * area[v] / free_area;
+                next_free += 1;
+                Body::Vertex(next_free - 1)
+            }
+            other => other,
+        };
+        anchor.push(push_anchor(anchors, body, positions[v]));
+    }
+    // Rim loop ordered by azimuth.
+    let mut rim: Vec<u32> = rim_set.into_iter().collect();
+    rim.sort_by(|a, b| {
+        let pa = positions[*a as usize];
+        let pb = positions[*b as usize];
+        azimuth(pa.x, pa.z, axis_x).total_cmp(&azimuth(pb.x, pb.z, axis_x))
+    });
+    Ok(Abdomen {
+        anchor,
+        roles,
+        triangles: sphere.triangles.clone(),
+        dome: dome_tri,
+        rim,
+        mass,
+        sphere: dirs,
+        axis_x,
+        floor_y,
+        apex_y,
+    })
+}

@@ -1,0 +1,435 @@
+//! Muscle element layouts for the eight groups (thesis 2.2-2.3, default counts 250 / 250 / 12 /
+//! 500 / 100 / 50 / 60 / 60 scaled by the level of detail), with regional gains (external
+//! intercostals strongest dorsally and fading ventrally, internal intercostals mirrored: thesis
+//! 2.2.1 and 2.4.1), and the cartilage joints (ribs 1-7 to the sternum, 8-10 to the cartilage
+//! above: thesis 1.3.2).
+
+use super::abdomen::{Abdomen, VertexRole, azimuth};
+use super::skeleton::{
+    Rib, STERNUM_HALF_WIDTH, Side, Spine, Sternum, point_at, polyline_length, rib_index,
+};
+use super::{Anchor, Body, MuscleGroup, push_anchor};
+use nalgebra::{Point3, Vector3};
+
+/// One spring-damper muscle element between two anchors (thesis eq. 2.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MuscleElement {
+    /// Group whose activation drives it.
+    pub group: MuscleGroup,
+    /// First anchor.
+    pub a: u32,
+    /// Second anchor.
+    pub b: u32,
+    /// Regional gain g in [0, 1] multiplying the activation.
+    pub gain: f64,
+    /// Side of the body (for the left/right gains); `None` on the midline.
+    pub side: Option<Side>,
+    /// Force at full activation, isometric at the rest length [N].
+    pub max_force: f64,
+}
+
+/// A ball joint between two bodies, as a stiff zero-length spring between two anchors that
+/// coincide at rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Joint {
+    /// Anchor on the first body.
+    pub a: u32,
+    /// Anchor on the second body.
+    pub b: u32,
+}
+
+/// Maximal active tension of an intercostal layer per metre of interspace [N/m]: 29 N/cm^2
+/// over a 3 mm layer (De Troyer 1998), about 9 N per cm of interspace.
+pub const INTERCOSTAL_TENSION: f64 = 900.0;
+/// Maximal force of the scalenes on one side [N]: anterior 139 + medius 101 + posterior 77
+/// (Mortensen 2014).
+pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
+/// Maximal total force of the diaphragm's fibres [N]: a transdiaphragmatic pressure of about
+/// 150 cmH2O (maximal combined efforts) over about 0.04 m^2 of dome.
+pub const DIAPHRAGM_FORCE: f64 = 600.0;
+/// Maximal forces of the abdominal wall muscles, both sides together [N] (about 25 N/cm^2 over
+/// the physiological cross-sections): rectus, transversus, external and internal obliques.
+pub const ABDOMINAL_FORCES: [(MuscleGroup, f64); 4] = [
+    (MuscleGroup::RectusAbdominis, 500.0),
+    (MuscleGroup::TransversusAbdominis, 400.0),
+    (MuscleGroup::ExternalObliques, 500.0),
+    (MuscleGroup::InternalObliques, 400.0),
+];
+
+/// Element count of `group` at muscle fraction `f` (at least 2 per side where bilateral).
+fn count(group: MuscleGroup, f: f64) -> usize {
+    ((group.default_count() as f64 * f).round() as usize).max(4)
+}
+
+/// Anchor on rib `rib` at arc-length fraction `f` of its whole polyline (bone and cartilage).
+fn on_rib(rib: &Rib, f: f64, anchors: &mut Vec<Anchor>) -> u32 {
+    let line = rib.polyline();
+    let p = point_at(&line, f * polyline_length(&line));
+    push_anchor(anchors, Body::Rib(rib.index() as u8), p)
+}
+
+/// Anchor on rib `rib` at arc-length fraction `f` of its bone only.
+fn on_bone(rib: &Rib, f: f64, anchors: &mut Vec<Anchor>) -> u32 {
+    let p = point_at(&rib.bone, f * polyline_length(&rib.bone));
+    push_anchor(anchors, Body::Rib(rib.index() as u8), p)
+}
+
+/// The cartilage joints: for ribs 1-7 the cartilage end meets the sternum's costal notch; for
+/// ribs 8-10 it meets the middle of the cartilage above.
+pub fn cartilage_joints(ribs: &[Rib], sternum: &Sternum, anchors: &mut Vec<Anchor>) -> Vec<Joint> {
+    let mut joints = Vec::new();
+    for side in [Side::Right, Side::Left] {
+        for level in 1..=10 {
+            let rib = &ribs[rib_index(level, side)];
+            let Some(end) = rib.cartilage.last().copied() else {
+                continue;
+            };
+            let a = push_anchor(anchors, Body::Rib(rib.index() as u8), end);
+            let body = if level <= 7 {
+                Body::Sternum
+            } else {
+                Body::Rib(rib_index(level - 1, side) as u8)
+            };
+            let b = push_anchor(anchors, body, end);
+            joints.push(Joint { a, b });
+        }
+    }
+    let _ = (sternum, STERNUM_HALF_WIDTH);
+    joints
+}
+
+/// All muscle elements at muscle fraction `f` (level of detail).
+pub fn muscles(
+    ribs: &[Rib],
+    sternum: &Sternum,
+    spine: &Spine,
+    abdomen: &Abdomen,
+    f: f64,
+    anchors: &mut Vec<Anchor>,
+) -> Vec<MuscleElement> {
+    let mut out = Vec::new();
+    intercostals(ribs, f, anchors, &mut out);
+    scalenes(ribs, spine, f, anchors, &mut out);
+    diaphragm(abdomen, f, anchors, &mut out);
+    abdominals(ribs, sternum, abdomen, f, anchors, &mut out);
+    out
+}
+
+/// External and internal intercostals between ribs k and k+1 (k = 1..11) on both sides.
+/// External fibres run from the upper rib down and forward (lower attachment more ventral),
+/// internal fibres down and backward; 250 elements per layer at full detail (thesis 2.2.1).
+/// Gains: external 1 at the head fading to 0.2 at the ventral end, internal mirrored.
+fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<MuscleElement>) {
+    for group in [
+        MuscleGroup::ExternalIntercostals,
+        MuscleGroup::InternalIntercostals,
+    ] {
+        let per_space = (count(group, f) as f64 / 22.0).round().max(1.0) as usize;
+        let external = group == MuscleGroup::ExternalIntercostals;
+        for side in [Side::Right, Side::Left] {
+            for level in 1..=11 {
+                let upper = &ribs[rib_index(level, side)];
+                let lower = &ribs[rib_index(level + 1, side)];
+                // Interspace length: the shorter of the two ribs' spans covered by the layer.
+                let span_u = if external {
+                    polyline_length(&upper.bone)
+                } else {
+                    polyline_length(&upper.polyline())
+                };
+                let span_l = if external {
+                    polyline_length(&lower.bone)
+                } else {
+                    polyline_length(&lower.polyline())
+                };
+                let length = span_u.min(span_l);
+                let force = INTERCOSTAL_TENSION * length / per_space as f64;
+                for e in 0..per_space {
+                    let s = (e as f64 + 0.5) / per_space as f64;
+                    // Fibre obliquity: about 0.08 of the rib length between attachments.
+                    let (su, sl) = if external {
+                        (0.92 * s, 0.92 * s + 0.08)
+                    } else {
+                        (0.08 + 0.92 * s, 0.92 * s)
+                    };
+                    let (a, b) = if external {
+                        (on_bone(upper, su, anchors), on_bone(lower, sl, anchors))
+                    } else {
+                        (on_rib(upper, su, anchors), on_rib(lower, sl, anchors))
+                    };
+                    let gain = if external {
+                        1.0 - 0.8 * s
+                    } else {
+                        0.2 + 0.8 * s
+                    };
+                    out.push(MuscleElement {
+                        group,
+                        a,
+                        b,
+                        gain,
+                        side: Some(side),
+                        max_force: force,
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Scalenes: 12 elements at full detail from the transverse processes of C6 (thesis 2.2.2:
+/// "linking the cervical vertebrae C6 to the first rib") to the upper surface of rib 1.
+fn scalenes(
+    ribs: &[Rib],
+    spine: &Spine,
+    f: f64,
+    anchors: &mut Vec<Anchor>,
+    out: &mut Vec<MuscleElement>,
+) {
+    let group = MuscleGroup::Scalenes;
+    let per_side = (count(group, f) / 2).max(2);
+    let c6 = spine
+        .joint("cerv6")
+        .unwrap_or(Point3::new(-0.03, 1.50, 0.0));
+    for side in [Side::Right, Side::Left] {
+        let rib1 = &ribs[rib_index(1, side)];
+        for e in 0..per_side {
+            let s = (e as f64 + 0.5) / per_side as f64;
+            // Origins spread along the transverse process (2-3.5 cm lateral).
+            let origin = c6 + Vector3::new(0.005, 0.0, side.sign() * (0.02 + 0.015 * s));
+            let a = push_anchor(anchors, Body::Ground, origin);
+            let b = on_bone(rib1, 0.35 + 0.4 * s, anchors);
+            out.push(MuscleElement {
+                group,
+                a,
+                b,
+                gain: 1.0,
+                side: Some(side),
+                max_force: SCALENE_FORCE_PER_SIDE / per_side as f64,
+            });
+        }
+    }
+}
+
+/// Diaphragm: elements from the dome's free vertices to the costal-margin insertions (thesis
+/// 2.3: "500 spring muscles located at the top of the abdominal cavity"), each fibre running to
+/// the insertion nearest in azimuth, fanned over neighbouring insertions.
+fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<MuscleElement>) {
+    let group = MuscleGroup::Diaphragm;
+    let n = count(group, f);
+    let dome: Vec<u32> = abdomen.with_role(VertexRole::Dome).collect();
+    if dome.is_empty() || abdomen.rim.is_empty() {
+        return;
+    }
+    let rim = &abdomen.rim;
+    let rim_az: Vec<f64> = rim
+        .iter()
+        .map(|&v| {
+            let p = anchors[abdomen.anchor[v as usize] as usize].rest;
+            azimuth(p.x, p.z, abdomen.axis_x)
+        })
+        .collect();
+    let fans = n.div_ceil(dome.len());
+    let force = DIAPHRAGM_FORCE / n as f64;
+    for e in 0..n {
+        let v = dome[e % dome.len()];
+        let fan = e / dome.len();
+        let p = anchors[abdomen.anchor[v as usize] as usize].rest;
+        // Fan the fibres of one vertex symmetrically about its own azimuth.
+        let offset = if fans > 1 {
+            (fan as f64 / (fans - 1) as f64 - 0.5) * 0.6
+        } else {
+            0.0
+        };
+        let target = (azimuth(p.x, p.z, abdomen.axis_x) + offset).rem_euclid(std::f64::consts::TAU);
+        let k = nearest_angle(&rim_az, target);
+        let side = if p.z > 1e-9 {
+            Some(Side::Right)
+        } else if p.z < -1e-9 {
+            Some(Side::Left)
+        } else {
+            None
+        };
+        out.push(MuscleElement {
+            group,
+            a: abdomen.anchor[v as usize],
+            b: abdomen.anchor[rim[k] as usize],
+            gain: 1.0,
+            side,
+            max_force: force,
+        });
+    }
+}
+
+/// Index of the angle in `angles` closest to `target` on the circle.
+fn nearest_angle(angles: &[f64], target: f64) -> usize {
+    let dist = |a: f64| {
+        let d = (a - target).rem_euclid(std::f64::consts::TAU);
+        d.min(std::f64::consts::TAU - d)
+    };
+    (0..angles.len())
+        .min_by(|&i, &j| dist(angles[i]).total_cmp(&dist(angles[j])))
+        .unwrap_or(0)
+}
+
+/// The abdominal wall muscles as chains of elements through the wall's vertices, so that
+/// tension presses the wall inward where it is curved:
+/// rectus abdominis (vertical, beside the midline, pubis to the cartilages of ribs 5-7),
+/// transversus abdominis (horizontal hoops from the back to the linea alba),
+/// external obliques (lower ribs, down and forward to the linea alba and pubis),
+/// internal obliques (iliac crest, up and forward to the lower ribs and linea alba).
+fn abdominals(
+    ribs: &[Rib],
+    sternum: &Sternum,
+    abdomen: &Abdomen,
+    f: f64,
+    anchors: &mut Vec<Anchor>,
+    out: &mut Vec<MuscleElement>,
+) {
+    let wall: Vec<u32> = abdomen
+        .roles
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| matches!(r, VertexRole::Wall))
+        .map(|(v, _)| abdomen.anchor[v])
+        .collect();
+    if wall.is_empty() {
+        return;
+    }
+    // The wall's parametric surface: (azimuth, height) -> nearest wall vertex.
+    let axis_x = abdomen.axis_x;
+    let wall_pts: Vec<(u32, Point3<f64>)> = wall
+        .iter()
+        .map(|&a| (a, anchors[a as usize].rest))
+        .collect();
+    let (ymin, ymax) = wall_pts
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, p)| {
+            (lo.min(p.y), hi.max(p.y))
+        });
+    let nearest = |psi: f64, y: f64| -> u32 {
+        wall_pts
+            .iter()
+            .min_by(|(_, p), (_, q)| {
+                let cost = |p: &Point3<f64>| {
+                    let d = (azimuth(p.x, p.z, axis_x) - psi).rem_euclid(std::f64::consts::TAU);
+                    let d = d.min(std::f64::consts::TAU - d);
+                    (d * 0.12).powi(2) + (p.y - y).powi(2)
+                };
+                cost(p).total_cmp(&cost(q))
+            })
+            .map(|(a, _)| *a)
+            .unwrap_or(wall[0])
+    };
+    use std::f64::consts::PI;
+    let ventral = PI;
+    let mirror = |psi: f64, side: Side| {
+        if side == Side::Right {
+            psi
+        } else {
+            2.0 * PI - psi
+        }
+    };
+    let h = |t: f64| ymin + (ymax - ymin) * t;
+    for (group, total_force) in ABDOMINAL_FORCES {
+        let n = count(group, f);
+        let lanes = match group {
+            MuscleGroup::RectusAbdominis => 2,
+            MuscleGroup::TransversusAbdominis => 4,
+            _ => 3,
+        };
+        // Elements per chain so that the group gets its element count.
+        let segments = (n / (2 * lanes)).max(2);
+        let mut chains: Vec<(Side, Vec<u32>)> = Vec::new();
+        for side in [Side::Right, Side::Left] {
+            for lane in 0..lanes {
+                let l = lane as f64;
+                let mut nodes = Vec::new();
+                // Interior samples s in (0, 1) along the chain's path on the wall.
+                let interior =
+                    |segments: usize| (1..segments).map(move |k| k as f64 / segments as f64);
+                match group {
+                    MuscleGroup::RectusAbdominis => {
+                        let psi = mirror(ventral - 0.12 - 0.12 * l, side);
+                        let z = side.sign() * (0.02 + 0.025 * l);
+                        let base = anchors[nearest(psi, ymin) as usize].rest;
+                        let pubis = Point3::new(base.x, abdomen.floor_y + 0.04, z);
+                        nodes.push(push_anchor(anchors, Body::Ground, pubis));
+                        for s in interior(segments) {
+                            nodes.push(nearest(psi, h(0.05 + 0.9 * s)));
+                        }
+                        let rib = &ribs[rib_index(6 + lane, side)];
+                        let top = rib
+                            .cartilage
+                            .last()
+                            .copied()
+                            .unwrap_or(sternum.xiphisternal);
+                        nodes.push(push_anchor(anchors, Body::Rib(rib.index() as u8), top));
+                    }
+                    MuscleGroup::TransversusAbdominis => {
+                        // Hoops from the thoracolumbar fascia round to the linea alba.
+                        let y = h(0.15 + 0.22 * l);
+                        let back = anchors[nearest(mirror(0.7, side), y) as usize].rest;
+                        nodes.push(push_anchor(
+                            anchors,
+                            Body::Ground,
+                            Point3::new(back.x - 0.01, y, back.z),
+                        ));
+                        for s in interior(segments) {
+                            nodes.push(nearest(mirror(0.7 + (ventral - 0.75) * s, side), y));
+                        }
+                        // The linea alba: the midline vertex, shared with the other side's hoop.
+                        nodes.push(nearest(ventral, y));
+                    }
+                    MuscleGroup::ExternalObliques | MuscleGroup::InternalObliques => {
+                        let external = group == MuscleGroup::ExternalObliques;
+                        let rib = &ribs[rib_index(8 + lane, side)];
+                        let rib_anchor = on_bone(rib, 0.8, anchors);
+                        // External: from the lower ribs down and forward to the linea alba;
+                        // internal: from the iliac crest up and forward to the linea alba.
+                        let (psi0, t0, t1) = if external {
+                            (1.3 + 0.1 * l, 0.85 - 0.05 * l, 0.15 + 0.15 * l)
+                        } else {
+                            (1.2 + 0.1 * l, 0.1, 0.55 + 0.15 * l)
+                        };
+                        let start = if external {
+                            rib_anchor
+                        } else {
+                            let crest = Point3::new(
+                                axis_x - 0.02,
+                                abdomen.floor_y + 0.09,
+                                side.sign() * 0.12,
+                            );
+                            push_anchor(anchors, Body::Ground, crest)
+                        };
+                        nodes.push(start);
+                        for s in interior(segments) {
+                            nodes.push(nearest(
+                                mirror(psi0 + (ventral - 0.08 - psi0) * s, side),
+                                h(t0 + (t1 - t0) * s),
+                            ));
+                        }
+                        nodes.push(nearest(ventral, h(t1)));
+                    }
+                    _ => {}
+                }
+                nodes.dedup();
+                if nodes.len() >= 2 {
+                    chains.push((side, nodes));
+                }
+            }
+        }
+        // Chains in parallel share the group's force; elements in series carry it.
+        let per_chain = total_force / chains.len().max(1) as f64;
+        for (side, nodes) in &chains {
+            for w in nodes.windows(2) {
+                out.push(MuscleElement {
+                    group,
+                    a: w[0],
+                    b: w[1],
+                    gain: 1.0,
+                    side: Some(*side),
+                    max_force: per_chain,
+                });
+            }
+        }
+    }
+}

@@ -1,0 +1,84 @@
+//! Stage 3: anchor forces reduced to generalised forces, then accelerations.
+//!
+//! Rib r (one degree of freedom about its hinge): I_r theta'' = sum ((p - h) x F) . u
+//! + tau_gravity - k theta - d theta' + tau_preload. Sternum (free rigid body): m x'' = sum F +
+//! m g + F_preload; I_w w' = tau - w x I_w w with I_w = R I_0 R^T; q' = (0, w) q / 2. Free
+//! vertex j: m_j x'' = F_j + m_j g - gamma_j x' + F_preload (thesis eq. 2.1).
+
+use super::model::{Model, RIBS};
+use super::state::Layout;
+use super::Data;
+use nalgebra::{Quaternion, Vector3};
+
+/// Writes y' into `dy`.
+pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+    // Position derivatives are the velocities.
+    dy[l.theta..l.theta + RIBS].copy_from_slice(&y[l.theta_dot..l.theta_dot + RIBS]);
+    dy[l.sternum_x..l.sternum_x + 3].copy_from_slice(&y[l.sternum_v..l.sternum_v + 3]);
+    let n3 = 3 * l.vertices;
+    dy[l.vertex_x..l.vertex_x + n3].copy_from_slice(&y[l.vertex_v..l.vertex_v + n3]);
+    // Quaternion rate (world-frame angular velocity): q' = 1/2 (0, w) q.
+    let q = Quaternion::new(y[l.sternum_q], y[l.sternum_q + 1], y[l.sternum_q + 2], y[l.sternum_q + 3]);
+    let w = data.sternum_w;
+    let qd = Quaternion::new(0.0, w.x, w.y, w.z) * q * 0.5;
+    dy[l.sternum_q] = qd.w;
+    dy[l.sternum_q + 1] = qd.i;
+    dy[l.sternum_q + 2] = qd.j;
+    dy[l.sternum_q + 3] = qd.k;
+
+    ribs(model, data, l, y, dy);
+    sternum(model, data, l, dy);
+    vertices(model, data, l, y, dy);
+}
+
+/// Rib torques and angular accelerations.
+fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+    for r in 0..RIBS {
+        let (h, u) = (model.rib_head[r], model.rib_axis[r]);
+        let mut moment = Vector3::zeros();
+        for &a in &model.rib_anchors[r] {
+            let a = a as usize;
+            moment += (data.pos[a] - h).cross(&data.force[a]);
+        }
+        let com_arm = data.rib_rotation[r] * (model.rib_com[r] - h);
+        moment += com_arm.cross(&(model.gravity * model.rib_mass[r]));
+        let (theta, rate) = (y[l.theta + r], y[l.theta_dot + r]);
+        let torque = moment.dot(&u) - model.rib_stiffness[r] * theta - model.rib_damping[r] * rate + model.rib_preload[r];
+        data.rib_torque[r] = torque;
+        dy[l.theta_dot + r] = torque / model.rib_inertia[r];
+    }
+}
+
+/// Sternum linear and angular accelerations.
+fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
+    let x = data.sternum_x;
+    let mut force = model.gravity * model.sternum_mass + model.sternum_preload;
+    let mut torque = Vector3::zeros();
+    for &a in &model.sternum_anchors {
+        let a = a as usize;
+        force += data.force[a];
+        torque += (data.pos[a] - x).cross(&data.force[a]);
+    }
+    data.sternum_force = force;
+    data.sternum_torque = torque;
+    let acc = force / model.sternum_mass;
+    let rot = data.sternum_rotation.to_rotation_matrix();
+    let inertia = rot.matrix() * model.sternum_inertia * rot.matrix().transpose();
+    let w = data.sternum_w;
+    let rhs = torque - w.cross(&(inertia * w));
+    let alpha = inertia.cholesky().map(|c| c.solve(&rhs)).unwrap_or_else(Vector3::zeros);
+    dy[l.sternum_v..l.sternum_v + 3].copy_from_slice(acc.as_slice());
+    dy[l.sternum_w..l.sternum_w + 3].copy_from_slice(alpha.as_slice());
+}
+
+/// Free vertex accelerations.
+fn vertices(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+    for (j, &a) in model.vertex_anchor.iter().enumerate() {
+        let m = model.vertex_mass[j];
+        let pv = l.vertex_v + 3 * j;
+        let v = Vector3::new(y[pv], y[pv + 1], y[pv + 2]);
+        let f = data.force[a as usize] + model.gravity * m + model.vertex_preload[j] - v * model.vertex_damping[j];
+        let acc = f / m;
+        dy[pv..pv + 3].copy_from_slice(acc.as_slice());
+    }
+}

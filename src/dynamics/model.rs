@@ -1,0 +1,416 @@
+//! The compiled model: everything that never changes during a run (geometry, topology, rest
+//! lengths, stiffness and damping, masses, inertias, preloads, index tables), built once from
+//! an [`Anatomy`] and shared between instances (`Arc`), as MuJoCo splits `mjModel` from `mjData`.
+
+use super::params::Params;
+use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
+use nalgebra::{Matrix3, Point3, Vector3};
+
+/// Number of rib bodies.
+pub const RIBS: usize = 24;
+
+/// Code of an element's group when it is passive (membrane).
+pub const PASSIVE: u8 = u8::MAX;
+
+/// Axial spring-damper elements (muscles and membrane), structure of arrays.
+#[derive(Clone, Debug, Default)]
+pub struct Elements {
+    /// First anchor.
+    pub a: Vec<u32>,
+    /// Second anchor.
+    pub b: Vec<u32>,
+    /// Rest length l0 [m].
+    pub rest_length: Vec<f64>,
+    /// Stiffness c [N/m].
+    pub stiffness: Vec<f64>,
+    /// Damping gamma [N s/m].
+    pub damping: Vec<f64>,
+    /// Muscle group index, or [`PASSIVE`].
+    pub group: Vec<u8>,
+    /// Side code: 0 right, 1 left, 2 midline.
+    pub side: Vec<u8>,
+    /// Regional gain g.
+    pub gain: Vec<f64>,
+}
+
+impl Elements {
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.a.len()
+    }
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.a.is_empty()
+    }
+    fn push(&mut self, a: u32, b: u32, l0: f64, k: f64, c: f64, group: u8, side: u8, gain: f64) {
+        self.a.push(a);
+        self.b.push(b);
+        self.rest_length.push(l0);
+        self.stiffness.push(k);
+        self.damping.push(c);
+        self.group.push(group);
+        self.side.push(side);
+        self.gain.push(gain);
+    }
+}
+
+/// Zero-length vector springs (cartilage joints, wall foundation), structure of arrays.
+#[derive(Clone, Debug, Default)]
+pub struct VectorSprings {
+    /// First anchor.
+    pub a: Vec<u32>,
+    /// Second anchor.
+    pub b: Vec<u32>,
+    /// Stiffness [N/m].
+    pub stiffness: Vec<f64>,
+    /// Damping [N s/m].
+    pub damping: Vec<f64>,
+}
+
+/// Where an anchor's position comes from, compiled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Carrier {
+    /// Fixed point.
+    Ground,
+    /// Rib body index.
+    Rib(u16),
+    /// The sternum.
+    Sternum,
+    /// Free vertex index.
+    Vertex(u32),
+}
+
+/// The compiled model.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Constants used.
+    pub params: Params,
+    /// Carrier of each anchor.
+    pub carrier: Vec<Carrier>,
+    /// Rest position of each anchor.
+    pub rest: Vec<Point3<f64>>,
+    /// Anchors carried by each rib.
+    pub rib_anchors: Vec<Vec<u32>>,
+    /// Anchors carried by the sternum.
+    pub sternum_anchors: Vec<u32>,
+    /// Anchor of each free vertex.
+    pub vertex_anchor: Vec<u32>,
+    /// Rib hinge points.
+    pub rib_head: Vec<Point3<f64>>,
+    /// Rib hinge axes (unit).
+    pub rib_axis: Vec<Vector3<f64>>,
+    /// Rib moments of inertia about their axes [kg m^2].
+    pub rib_inertia: Vec<f64>,
+    /// Rib masses [kg].
+    pub rib_mass: Vec<f64>,
+    /// Rib centres of mass at rest.
+    pub rib_com: Vec<Point3<f64>>,
+    /// Joint stiffness per rib [N m/rad].
+    pub rib_stiffness: Vec<f64>,
+    /// Joint damping per rib [N m s/rad].
+    pub rib_damping: Vec<f64>,
+    /// Generalised preload torque per rib [N m] holding the rest pose against gravity.
+    pub rib_preload: Vec<f64>,
+    /// Sternum mass [kg].
+    pub sternum_mass: f64,
+    /// Sternum inertia about its centre of mass, at rest orientation [kg m^2].
+    pub sternum_inertia: Matrix3<f64>,
+    /// Sternum centre of mass at rest.
+    pub sternum_com: Point3<f64>,
+    /// Preload force on the sternum [N].
+    pub sternum_preload: Vector3<f64>,
+    /// Free vertex masses [kg].
+    pub vertex_mass: Vec<f64>,
+    /// Nodal damping of each free vertex [N s/m] (thesis eq. 2.1, gamma_i).
+    pub vertex_damping: Vec<f64>,
+    /// Preload force on each free vertex [N].
+    pub vertex_preload: Vec<Vector3<f64>>,
+    /// Axial elements: muscles then membrane.
+    pub elements: Elements,
+    /// Number of muscle elements (the first ones in `elements`).
+    pub muscle_count: usize,
+    /// Cartilage joints and wall foundation springs.
+    pub springs: VectorSprings,
+    /// Closed abdominal surface (anchor indices).
+    pub abdomen_triangles: Vec<[u32; 3]>,
+    /// Whether each abdominal triangle belongs to the dome.
+    pub abdomen_dome: Vec<bool>,
+    /// Closed thoracic surface (anchor indices): lining then reversed dome.
+    pub thorax_triangles: Vec<[u32; 3]>,
+    /// Number of lining triangles at the start of `thorax_triangles`.
+    pub lining_count: usize,
+    /// Rest volume of the abdomen [m^3].
+    pub abdomen_rest_volume: f64,
+    /// Rest volume of the thorax [m^3].
+    pub thorax_rest_volume: f64,
+    /// Gravity vector [m/s^2].
+    pub gravity: Vector3<f64>,
+    /// Free abdominal vertices of the dome crown (for the diaphragm displacement).
+    pub dome_crown: Vec<u32>,
+    /// Anchor at the middle of the sternum (for its displacement).
+    pub sternum_probe: u32,
+}
+
+/// Signed volume enclosed by triangles over points (divergence theorem).
+pub fn volume(points: &[Point3<f64>], tris: &[[u32; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| points[i as usize].coords);
+            a.dot(&b.cross(&c))
+        })
+        .sum::<f64>()
+        / 6.0
+}
+
+impl Model {
+    /// Compiles `anatomy` with constants `params`.
+    pub fn compile(anatomy: &Anatomy, params: Params) -> Model {
+        let posture = anatomy.subject.posture;
+        let g = Params::gravity_direction(posture);
+        let gravity = Vector3::new(g[0], g[1], g[2]) * params.gravity;
+        let n_anchor = anatomy.anchors.len();
+        let rest: Vec<Point3<f64>> = anatomy.anchors.iter().map(|a| a.rest).collect();
+        let carrier: Vec<Carrier> = anatomy
+            .anchors
+            .iter()
+            .map(|a| match a.body {
+                Body::Ground => Carrier::Ground,
+                Body::Rib(i) => Carrier::Rib(i as u16),
+                Body::Sternum => Carrier::Sternum,
+                Body::Vertex(j) => Carrier::Vertex(j),
+            })
+            .collect();
+        let mut rib_anchors = vec![Vec::new(); RIBS];
+        let mut sternum_anchors = Vec::new();
+        let n_free = carrier.iter().filter(|c| matches!(c, Carrier::Vertex(_))).count();
+        let mut vertex_anchor = vec![0u32; n_free];
+        for (i, c) in carrier.iter().enumerate() {
+            match c {
+                Carrier::Rib(r) => rib_anchors[*r as usize].push(i as u32),
+                Carrier::Sternum => sternum_anchors.push(i as u32),
+                Carrier::Vertex(j) => vertex_anchor[*j as usize] = i as u32,
+                Carrier::Ground => {}
+            }
+        }
+        // Effective translational mass seen at each anchor, for element damping.
+        let rib_inertia: Vec<f64> = anatomy.ribs.iter().map(|r| r.inertia_about_axis()).collect();
+        let ab = &anatomy.abdomen;
+        let mut vertex_mass = vec![0.0; n_free];
+        for (v, &anchor) in ab.anchor.iter().enumerate() {
+            if let Carrier::Vertex(j) = carrier[anchor as usize] {
+                vertex_mass[j as usize] = ab.mass[v];
+            }
+        }
+        let sternum_mass = anatomy.sternum.mass;
+        let anchor_mass = |i: u32| -> f64 {
+            match carrier[i as usize] {
+                Carrier::Ground => f64::INFINITY,
+                Carrier::Rib(r) => {
+                    let rib = &anatomy.ribs[r as usize];
+                    let d = rest[i as usize] - rib.head;
+                    let perp = d - rib.axis.into_inner() * d.dot(&rib.axis);
+                    rib_inertia[r as usize] / perp.norm_squared().max(1e-4)
+                }
+                Carrier::Sternum => sternum_mass,
+                Carrier::Vertex(j) => vertex_mass[j as usize],
+            }
+        };
+        let pair_mass = |a: u32, b: u32| {
+            let (ma, mb) = (anchor_mass(a), anchor_mass(b));
+            1.0 / (1.0 / ma + 1.0 / mb)
+        };
+        let zeta = params.damping_ratio;
+        let damping_for = |k: f64, a: u32, b: u32| 2.0 * zeta * (k * pair_mass(a, b)).sqrt();
+
+        // Muscles: c = F_max / (beta_max l0) so that a full isometric contraction gives F_max.
+        let mut elements = Elements::default();
+        for m in &anatomy.muscles {
+            let l0 = (rest[m.b as usize] - rest[m.a as usize]).norm().max(1e-4);
+            let k = m.max_force / (params.beta_max * l0);
+            let side = match m.side {
+                Some(Side::Right) => 0,
+                Some(Side::Left) => 1,
+                None => 2,
+            };
+            elements.push(m.a, m.b, l0, k, damping_for(k, m.a, m.b), m.group.index() as u8, side, m.gain);
+        }
+        let muscle_count = elements.len();
+        // Membrane: every edge of the abdominal surface with a free end.
+        let mut edges = std::collections::BTreeSet::new();
+        for t in &ab.triangles {
+            for k in 0..3 {
+                let (u, v) = (t[k], t[(k + 1) % 3]);
+                edges.insert((u.min(v), u.max(v)));
+            }
+        }
+        for (u, v) in edges {
+            let (a, b) = (ab.anchor[u as usize], ab.anchor[v as usize]);
+            if !matches!(carrier[a as usize], Carrier::Vertex(_)) && !matches!(carrier[b as usize], Carrier::Vertex(_)) {
+                continue;
+            }
+            let l0 = (rest[b as usize] - rest[a as usize]).norm();
+            let k = params.membrane_stiffness;
+            elements.push(a, b, l0, k, damping_for(k, a, b), PASSIVE, 2, 0.0);
+        }
+        // Cartilage joints.
+        let mut springs = VectorSprings::default();
+        for j in &anatomy.joints {
+            let k = params.cartilage_stiffness;
+            springs.a.push(j.a);
+            springs.b.push(j.b);
+            springs.stiffness.push(k);
+            springs.damping.push(damping_for(k, j.a, j.b));
+        }
+        // Wall foundation: each free wall vertex tied to its rest position with stiffness
+        // kappa A_v, kappa = A_wall / C_wall, so a uniform pressure P displaces the wall by
+        // P / kappa and its volume by P C_wall.
+        let mut vertex_area = vec![0.0; ab.len()];
+        for t in &ab.triangles {
+            let [p, q, r] = t.map(|v| rest[ab.anchor[v as usize] as usize]);
+            let a = 0.5 * (q - p).cross(&(r - p)).norm();
+            for v in t {
+                vertex_area[*v as usize] += a / 3.0;
+            }
+        }
+        let wall: Vec<usize> = (0..ab.len()).filter(|&v| ab.roles[v] == VertexRole::Wall).collect();
+        let wall_area: f64 = wall.iter().map(|&v| vertex_area[v]).sum();
+        let kappa = wall_area / params.abdominal_wall_compliance;
+        let mut ground_anchors = Vec::new();
+        for &v in &wall {
+            let a = ab.anchor[v];
+            let k = kappa * vertex_area[v];
+            ground_anchors.push((a, rest[a as usize], k, 2.0 * zeta * (k * anchor_mass(a)).sqrt()));
+        }
+        let mut rest = rest;
+        let mut carrier = carrier;
+        for (a, p, k, c) in ground_anchors {
+            rest.push(p);
+            carrier.push(Carrier::Ground);
+            let g_idx = (rest.len() - 1) as u32;
+            springs.a.push(a);
+            springs.b.push(g_idx);
+            springs.stiffness.push(k);
+            springs.damping.push(c);
+        }
+        debug_assert!(rest.len() >= n_anchor);
+        // Nodal damping: light tissue viscosity on free vertices.
+        let vertex_damping: Vec<f64> = vertex_mass.iter().map(|m| 2.0 * m).collect();
+
+        let abdomen_triangles: Vec<[u32; 3]> = ab.anchor_triangles().collect();
+        let thorax_triangles = anatomy.thorax_triangles();
+        let abdomen_rest_volume = volume(&rest, &abdomen_triangles);
+        let thorax_rest_volume = volume(&rest, &thorax_triangles);
+        let dome_crown: Vec<u32> = (0..ab.len())
+            .filter(|&v| ab.roles[v] == VertexRole::Dome && ab.sphere[v].y > 0.75)
+            .filter_map(|v| match carrier[ab.anchor[v] as usize] {
+                Carrier::Vertex(j) => Some(j),
+                _ => None,
+            })
+            .collect();
+        let st = &anatomy.sternum;
+        let sternum_com = st.centre_of_mass();
+        rest.push(nalgebra::center(&st.angle, &st.xiphisternal));
+        carrier.push(Carrier::Sternum);
+        let sternum_probe = (rest.len() - 1) as u32;
+        sternum_anchors.push(sternum_probe);
+
+        let ribs = &anatomy.ribs;
+        let mut model = Model {
+            carrier,
+            rest,
+            rib_anchors,
+            sternum_anchors,
+            vertex_anchor,
+            rib_head: ribs.iter().map(|r| r.head).collect(),
+            rib_axis: ribs.iter().map(|r| r.axis.into_inner()).collect(),
+            rib_mass: ribs.iter().map(|r| r.mass()).collect(),
+            rib_com: ribs.iter().map(|r| r.centre_of_mass()).collect(),
+            rib_stiffness: vec![params.rib_joint_stiffness; RIBS],
+            rib_damping: rib_inertia
+                .iter()
+                .map(|i| 2.0 * zeta * (params.rib_joint_stiffness * i).sqrt())
+                .collect(),
+            rib_inertia,
+            rib_preload: vec![0.0; RIBS],
+            sternum_mass,
+            sternum_inertia: st.inertia(),
+            sternum_com,
+            sternum_preload: Vector3::zeros(),
+            vertex_mass,
+            vertex_damping,
+            vertex_preload: vec![Vector3::zeros(); n_free],
+            elements,
+            muscle_count,
+            springs,
+            abdomen_triangles,
+            abdomen_dome: ab.dome.clone(),
+            lining_count: anatomy.lining_triangles.len(),
+            thorax_triangles,
+            abdomen_rest_volume,
+            thorax_rest_volume,
+            gravity,
+            dome_crown,
+            sternum_probe,
+            params,
+        };
+        model.compute_preload();
+        model
+    }
+
+    /// Number of free abdominal vertices.
+    pub fn free_vertices(&self) -> usize {
+        self.vertex_anchor.len()
+    }
+
+    /// Length of the state vector.
+    pub fn state_len(&self) -> usize {
+        super::state::Layout::new(self).len
+    }
+
+    /// Sets the preloads so that the rest pose is an equilibrium under gravity: the generalised
+    /// forces at rest (no activation, no velocity) are computed and cancelled.
+    fn compute_preload(&mut self) {
+        let mut data = super::Data::new(self);
+        let y = super::state::rest_state(self);
+        let mut dy = vec![0.0; y.len()];
+        super::rhs(self, &mut data, &super::Activations::default(), &y, &mut dy);
+        let layout = super::state::Layout::new(self);
+        for r in 0..RIBS {
+            self.rib_preload[r] = -data.rib_torque[r];
+        }
+        self.sternum_preload = -data.sternum_force;
+        for j in 0..self.free_vertices() {
+            self.vertex_preload[j] = -data.force[self.vertex_anchor[j] as usize] - self.gravity * self.vertex_mass[j];
+        }
+        let _ = layout;
+    }
+
+    /// A fingerprint of the compiled model (FNV-1a over its defining numbers).
+    pub fn fingerprint(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: f64| {
+            for b in x.to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for p in &self.rest {
+            eat(p.x);
+            eat(p.y);
+            eat(p.z);
+        }
+        for k in &self.elements.stiffness {
+            eat(*k);
+        }
+        eat(self.abdomen_rest_volume);
+        eat(self.thorax_rest_volume);
+        eat(self.gravity.x);
+        eat(self.gravity.y);
+        h
+    }
+
+    /// Group index of muscle element `e`.
+    pub fn element_group(&self, e: usize) -> Option<MuscleGroup> {
+        MuscleGroup::ALL.get(self.elements.group[e] as usize).copied()
+    }
+}

@@ -1,0 +1,66 @@
+//! Physical constants of the model, with their sources. Stiffness and damping are physical
+//! (N/m per element, Pa, N m/rad) rather than the thesis's unit gains, so that the default
+//! activations produce physiological volumes.
+
+use crate::anatomy::Posture;
+use serde::{Deserialize, Serialize};
+
+/// Constants of the dynamics. `Params::for_posture` gives the defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Largest contraction of a muscle element's rest length at full activation and unit
+    /// gain: r = 1 - beta_max a g >= 0.7 (thesis 2.4 after Klute et al.: r in [0.7, 1.2]).
+    pub beta_max: f64,
+    /// Damping ratio of every spring-damper element against the masses it joins (thesis 2.4:
+    /// critically damped).
+    pub damping_ratio: f64,
+    /// Bulk modulus K of the abdominal contents [Pa] (thesis eq. 2.5: P = K (V0/V - 1)).
+    pub bulk_modulus: f64,
+    /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the thorax,
+    /// 1 / (0.2 L/cmH2O) (lung compliance, physiology reference).
+    pub lung_elastance: f64,
+    /// Stiffness of a cartilage ball joint [N/m].
+    pub cartilage_stiffness: f64,
+    /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
+    /// [N m/rad].
+    pub rib_joint_stiffness: f64,
+    /// In-plane stiffness of an abdominal membrane edge [N/m] (2D modulus about 1.15 k).
+    pub membrane_stiffness: f64,
+    /// Compliance of the abdominal wall [m^3/Pa] (elastic support of the wall by its muscles,
+    /// fascia and skin), spread over the free wall vertices as a foundation stiffness.
+    pub abdominal_wall_compliance: f64,
+    /// Gravitational acceleration [m/s^2].
+    pub gravity: f64,
+}
+
+impl Params {
+    /// Defaults for a posture: supine increases the abdominal compliance (thesis 2.3: "a change
+    /// from the seated to the supine position increases the abdominal compliance").
+    pub fn for_posture(posture: Posture) -> Params {
+        let compliance_factor = match posture {
+            Posture::Standing => 1.0,
+            Posture::Sitting => 1.1,
+            Posture::Supine => 1.8,
+        };
+        Params {
+            beta_max: 0.3,
+            damping_ratio: 1.0,
+            bulk_modulus: 1.0e5,
+            lung_elastance: 1.0 / 2.0e-6,
+            cartilage_stiffness: 3.0e4,
+            rib_joint_stiffness: 20.0,
+            membrane_stiffness: 400.0,
+            abdominal_wall_compliance: 1.5e-6 * compliance_factor,
+            gravity: 9.81,
+        }
+    }
+
+    /// Unit vector of gravity in the model frame (x anterior, y cranial, z right).
+    pub fn gravity_direction(posture: Posture) -> [f64; 3] {
+        match posture {
+            Posture::Standing | Posture::Sitting => [0.0, -1.0, 0.0],
+            // Lying on the back: gravity points dorsally.
+            Posture::Supine => [-1.0, 0.0, 0.0],
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! Layout of the state vector: positions then velocities.
+//!
+//! y = [ theta (24 rib angles) | sternum position (3) | sternum orientation quaternion (w, x,
+//! y, z) | free vertex positions (3n) | theta rates (24) | sternum velocity (3) | sternum
+//! angular velocity, world frame (3) | free vertex velocities (3n) ].
+
+use super::model::{Model, RIBS};
+
+/// Offsets into the state vector.
+#[derive(Clone, Copy, Debug)]
+pub struct Layout {
+    /// Rib angles.
+    pub theta: usize,
+    /// Sternum centre of mass.
+    pub sternum_x: usize,
+    /// Sternum quaternion.
+    pub sternum_q: usize,
+    /// Free vertex positions.
+    pub vertex_x: usize,
+    /// Rib angular rates.
+    pub theta_dot: usize,
+    /// Sternum velocity.
+    pub sternum_v: usize,
+    /// Sternum angular velocity.
+    pub sternum_w: usize,
+    /// Free vertex velocities.
+    pub vertex_v: usize,
+    /// Number of free vertices.
+    pub vertices: usize,
+    /// Total length.
+    pub len: usize,
+}
+
+impl Layout {
+    /// The layout of `model`'s state.
+    pub fn new(model: &Model) -> Layout {
+        let n = model.free_vertices();
+        let theta = 0;
+        let sternum_x = RIBS;
+        let sternum_q = sternum_x + 3;
+        let vertex_x = sternum_q + 4;
+        let theta_dot = vertex_x + 3 * n;
+        let sternum_v = theta_dot + RIBS;
+        let sternum_w = sternum_v + 3;
+        let vertex_v = sternum_w + 3;
+        let len = vertex_v + 3 * n;
+        Layout { theta, sternum_x, sternum_q, vertex_x, theta_dot, sternum_v, sternum_w, vertex_v, vertices: n, len }
+    }
+}
+
+/// The rest state: all angles zero, sternum and vertices at rest, identity orientation.
+pub fn rest_state(model: &Model) -> Vec<f64> {
+    let l = Layout::new(model);
+    let mut y = vec![0.0; l.len];
+    let c = model.sternum_com;
+    y[l.sternum_x..l.sternum_x + 3].copy_from_slice(&[c.x, c.y, c.z]);
+    y[l.sternum_q] = 1.0;
+    for (j, &a) in model.vertex_anchor.iter().enumerate() {
+        let p = model.rest[a as usize];
+        y[l.vertex_x + 3 * j..l.vertex_x + 3 * j + 3].copy_from_slice(&[p.x, p.y, p.z]);
+    }
+    y
+}

@@ -1,0 +1,746 @@
+//! The adaptive integrator: one embedded Runge-Kutta pair (see `tableau.rs`) driven by a
+//! weighted RMS error norm, a PI step-size controller, FSAL reuse, dense output, Hairer's
+//! automatic initial step and his stiffness test. All working memory is allocated when the
+//! integrator is created (or first used after deserialisation); the step loop never
+//! allocates.
+//!
+//! Sources: Hairer, Norsett & Wanner, *Solving Ordinary Differential Equations I* (2nd ed.,
+//! 1993), Sec. II.4 (error norm, initial step `hinit`, step control) and the `dopri5` /
+//! `dop853` codes; K. Gustafsson, "Control theoretic techniques for stepsize selection in
+//! explicit Runge-Kutta methods", ACM TOMS 17 (1991) 533-554 (PI control); Hairer & Wanner,
+//! *Solving ODEs II* (1996), Sec. IV.2 (stiffness detection).
+
+use serde::{Deserialize, Serialize};
+
+use super::tableau::Tableau;
+use super::{Method, Ode, Options, SolverError, Stats};
+
+/// Safety factor of the step-size controller.
+const SAFETY: f64 = 0.9;
+/// Smallest step-size ratio h_new / h.
+const FAC_MIN: f64 = 0.2;
+/// Largest step-size ratio h_new / h.
+const FAC_MAX: f64 = 10.0;
+/// Lower bound of the PI memory (Hairer's `facold` floor).
+const ERR_OLD_MIN: f64 = 1e-4;
+/// Step-size ratio after a step failed with non-finite values.
+const FAC_NON_FINITE: f64 = 0.25;
+/// The stiffness flag is raised after this many positive tests ...
+const STIFF_HITS: u32 = 15;
+/// ... without this many consecutive negative ones in between (Hairer's `dopri5`).
+const NONSTIFF_RESET: u32 = 6;
+
+/// Scratch memory of the stepper; rebuilt (once) when missing, e.g. after deserialisation.
+#[derive(Clone, Debug, Default)]
+struct Work {
+    /// Stages 1.. of the pair, then its extra dense stages, `n` values each (stage 0 is
+    /// the FSAL vector kept in [`Integrator::fsal_k`]).
+    k: Vec<f64>,
+    /// Argument of the stage being evaluated; then the error estimate Σ e_j k_j.
+    ytmp: Vec<f64>,
+    /// Candidate solution y1.
+    ynew: Vec<f64>,
+    /// State of the stage used by the stiffness test.
+    ystiff: Vec<f64>,
+    /// Dense-output vectors r1, r2, ... of the last accepted step.
+    dense: Vec<f64>,
+    /// Interpolated state handed to the output callback (also the second error estimate
+    /// of DOP853 while a step is being assessed).
+    yout: Vec<f64>,
+}
+
+/// Adaptive embedded Runge-Kutta integrator with memory across calls.
+///
+/// Holds the method, its options, the step size to try next, the PI-controller memory,
+/// the FSAL stage f(t, y) at the current point, preallocated stage buffers and cumulative
+/// [`Stats`]. Serialising it and restoring it later continues the integration bit for bit.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Integrator {
+    method: Method,
+    options: Options,
+    dim: usize,
+    /// Step size to try next; 0 until chosen.
+    h_next: f64,
+    /// PI controller memory: the error norm of the last accepted step (floored).
+    err_old: f64,
+    /// Whether the FSAL vector is f(fsal_t, fsal_y).
+    fsal_valid: bool,
+    fsal_t: f64,
+    fsal_y: Vec<f64>,
+    fsal_k: Vec<f64>,
+    stats: Stats,
+    stiff_hits: u32,
+    nonstiff_run: u32,
+    #[serde(skip)]
+    work: Work,
+}
+
+/// Result of one step attempt.
+enum Attempt {
+    /// Finite error norm (accepted if <= 1).
+    Error(f64),
+    /// A stage or the candidate state was not finite.
+    NonFinite,
+}
+
+impl Integrator {
+    /// Creates an integrator for systems of dimension `dim` (> 0).
+    pub fn new(method: Method, options: Options, dim: usize) -> Result<Self, SolverError> {
+        options.validate()?;
+        if dim == 0 {
+            return Err(SolverError::InvalidArgument(
+                "system dimension is 0; it must be at least 1".into(),
+            ));
+        }
+        let mut it = Integrator {
+            method,
+            options,
+            dim,
+            h_next: 0.0,
+            err_old: ERR_OLD_MIN,
+            fsal_valid: false,
+            fsal_t: 0.0,
+            fsal_y: vec![0.0; dim],
+            fsal_k: vec![0.0; dim],
+            stats: Stats::default(),
+            stiff_hits: 0,
+            nonstiff_run: 0,
+            work: Work::default(),
+        };
+        it.ensure_workspace();
+        Ok(it)
+    }
+
+    /// The method in use.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The options in use.
+    pub fn options(&self) -> &Options {
+        &self.options
+    }
+
+    /// Replaces the options (validated first; the step size and FSAL stage are kept).
+    pub fn set_options(&mut self, options: Options) -> Result<(), SolverError> {
+        options.validate()?;
+        self.options = options;
+        Ok(())
+    }
+
+    /// Dimension of the system.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Cumulative statistics since creation or the last [`Integrator::reset`].
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// The step size the next step will try (0 before the first step).
+    pub fn step_size(&self) -> f64 {
+        self.h_next
+    }
+
+    /// Whether Hairer's stiffness test currently considers the problem stiff: it fired on
+    /// 15 accepted steps without 6 consecutive negative tests in between.
+    pub fn stiffness_detected(&self) -> bool {
+        self.stiff_hits >= STIFF_HITS
+    }
+
+    /// The right-hand side changed discontinuously (new inputs): forget the FSAL stage,
+    /// keep the step size and controller memory.
+    pub fn invalidate(&mut self) {
+        self.fsal_valid = false;
+    }
+
+    /// Forgets everything: step size, controller memory, FSAL stage, statistics.
+    pub fn reset(&mut self) {
+        self.h_next = 0.0;
+        self.err_old = ERR_OLD_MIN;
+        self.fsal_valid = false;
+        self.stats = Stats::default();
+        self.stiff_hits = 0;
+        self.nonstiff_run = 0;
+    }
+
+    /// Advances `(t, y)` exactly to `t_end` (>= t) with adaptive steps; the last step is
+    /// shortened to land on `t_end`, and the natural step size is remembered for the next
+    /// call. On error, `*t` and `y` hold the last accepted step.
+    pub fn integrate<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        self.run(ode, t, y, t_end, &[], &mut |_: f64, _: &[f64]| {})
+    }
+
+    /// As [`Integrator::integrate`], calling `callback(τ, y(τ))` at every `output_times`
+    /// entry τ in (t, t_end], in order, from the method's continuous extension (steps are
+    /// not shortened to hit output times). `output_times` must be finite and
+    /// non-decreasing; entries outside (t, t_end] are ignored.
+    pub fn integrate_dense<O: Ode + ?Sized, F: FnMut(f64, &[f64])>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+        output_times: &[f64],
+        mut callback: F,
+    ) -> Result<(), SolverError> {
+        if output_times.iter().any(|v| !v.is_finite()) {
+            return Err(SolverError::InvalidArgument(
+                "output times must be finite".into(),
+            ));
+        }
+        if let Some(i) = output_times.windows(2).position(|w| w[1] < w[0]) {
+            return Err(SolverError::InvalidArgument(format!(
+                "output times must be non-decreasing; entry {} ({}) is below entry {} ({})",
+                i + 1,
+                output_times[i + 1],
+                i,
+                output_times[i]
+            )));
+        }
+        self.run(ode, t, y, t_end, output_times, &mut callback)
+    }
+
+    /// Fixed-step integration without error control (for convergence studies and
+    /// reproducible runs): takes n = ⌈(t_end - t)/h⌉ equal steps of (t_end - t)/n
+    /// (a relative slack of 1e-9 avoids an extra step from round-off). Does not touch the
+    /// adaptive step size or controller memory; counts steps in the statistics.
+    pub fn integrate_fixed<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+        h: f64,
+    ) -> Result<(), SolverError> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(SolverError::InvalidArgument(format!(
+                "fixed step h = {h} must be finite and > 0"
+            )));
+        }
+        self.check_call(ode, *t, y, t_end)?;
+        if t_end == *t {
+            return Ok(());
+        }
+        self.ensure_workspace();
+        self.ensure_fsal(ode, *t, y)?;
+        let t0 = *t;
+        let span = t_end - t0;
+        let n = ((span / h) * (1.0 - 1e-9)).ceil().max(1.0);
+        if n > self.options.max_steps as f64 {
+            return Err(SolverError::TooManySteps {
+                t: *t,
+                steps: self.options.max_steps,
+            });
+        }
+        let n = n as u64;
+        let hs = span / n as f64;
+        for i in 1..=n {
+            let tn = if i == n { t_end } else { t0 + i as f64 * hs };
+            let h_i = tn - *t;
+            match self.attempt(ode, *t, y, h_i) {
+                Attempt::NonFinite => return Err(SolverError::NonFinite { t: *t }),
+                Attempt::Error(_) => {}
+            }
+            self.stats.steps += 1;
+            self.commit(t, y, tn);
+        }
+        Ok(())
+    }
+
+    // -----------------------------------------------------------------------------------
+
+    fn tableau(&self) -> &'static Tableau {
+        self.method.tableau()
+    }
+
+    fn check_call<O: Ode + ?Sized>(
+        &self,
+        ode: &O,
+        t: f64,
+        y: &[f64],
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        self.options.validate()?;
+        if self.dim == 0 || ode.dim() != self.dim || y.len() != self.dim {
+            return Err(SolverError::InvalidArgument(format!(
+                "dimension mismatch: integrator {}, system {}, state vector {}",
+                self.dim,
+                ode.dim(),
+                y.len()
+            )));
+        }
+        if !t.is_finite() || !t_end.is_finite() {
+            return Err(SolverError::InvalidArgument(format!(
+                "times must be finite (t = {t}, t_end = {t_end})"
+            )));
+        }
+        if t_end < t {
+            return Err(SolverError::InvalidArgument(format!(
+                "t_end = {t_end} is before t = {t}; only forward integration is supported"
+            )));
+        }
+        if y.iter().any(|v| !v.is_finite()) {
+            return Err(SolverError::NonFinite { t });
+        }
+        Ok(())
+    }
+
+    /// Sizes the scratch memory (allocates only when it does not fit, i.e. once).
+    fn ensure_workspace(&mut self) {
+        let n = self.dim;
+        let tab = self.tableau();
+        let nk = (tab.stages - 1 + tab.dense.extra_c.len()) * n;
+        let nd = (3 + tab.dense.d.len()) * n;
+        let w = &mut self.work;
+        for (buf, len) in [
+            (&mut w.k, nk),
+            (&mut w.ytmp, n),
+            (&mut w.ynew, n),
+            (&mut w.ystiff, n),
+            (&mut w.dense, nd),
+            (&mut w.yout, n),
+        ] {
+            if buf.len() != len {
+                buf.clear();
+                buf.resize(len, 0.0);
+            }
+        }
+        if self.fsal_k.len() != n || self.fsal_y.len() != n {
+            self.fsal_k.clear();
+            self.fsal_k.resize(n, 0.0);
+            self.fsal_y.clear();
+            self.fsal_y.resize(n, 0.0);
+            self.fsal_valid = false;
+        }
+    }
+
+    /// Makes `fsal_k` = f(t, y), reusing it when it was computed at exactly this point.
+    fn ensure_fsal<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: f64,
+        y: &[f64],
+    ) -> Result<(), SolverError> {
+        if self.fsal_valid && self.fsal_t == t && self.fsal_y.as_slice() == y {
+            return Ok(());
+        }
+        ode.rhs(t, y, &mut self.fsal_k);
+        self.stats.rhs_evaluations += 1;
+        if self.fsal_k.iter().any(|v| !v.is_finite()) {
+            // keep the stored vector finite so that the integrator stays serialisable
+            self.fsal_k.fill(0.0);
+            self.fsal_valid = false;
+            return Err(SolverError::NonFinite { t });
+        }
+        self.fsal_t = t;
+        self.fsal_y.copy_from_slice(y);
+        self.fsal_valid = true;
+        Ok(())
+    }
+
+    /// The adaptive driver behind [`Integrator::integrate`] and
+    /// [`Integrator::integrate_dense`].
+    fn run<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+        output_times: &[f64],
+        callback: &mut dyn FnMut(f64, &[f64]),
+    ) -> Result<(), SolverError> {
+        self.check_call(ode, *t, y, t_end)?;
+        if t_end == *t {
+            return Ok(());
+        }
+        self.ensure_workspace();
+        self.ensure_fsal(ode, *t, y)?;
+        let mut next_out = output_times.partition_point(|&v| v <= *t);
+        if self.h_next <= 0.0 || !self.h_next.is_finite() {
+            self.h_next = match self.options.h_init {
+                Some(h) => h,
+                None => self.initial_step(ode, *t, y, t_end),
+            };
+        }
+        let tab = self.tableau();
+        let opts = self.options;
+        let h_chain_start = self.h_next;
+        let mut attempts: u64 = 0;
+        let mut rejections: u32 = 0;
+        let mut last_non_finite = false;
+        let mut h_good = h_chain_start;
+        while *t < t_end {
+            if attempts >= opts.max_steps {
+                return Err(SolverError::TooManySteps {
+                    t: *t,
+                    steps: attempts,
+                });
+            }
+            let h_nat = self.h_next.min(opts.h_max);
+            let remaining = t_end - *t;
+            let clipped = h_nat * 1.01 >= remaining;
+            let h = if clipped { remaining } else { h_nat };
+            let too_small = (h_nat < opts.h_min || *t + h_nat == *t) && !(clipped && h > 0.0);
+            if too_small {
+                self.h_next = h_good;
+                return Err(if last_non_finite {
+                    SolverError::NonFinite { t: *t }
+                } else {
+                    SolverError::StepTooSmall { t: *t, h: h_nat }
+                });
+            }
+            attempts += 1;
+            match self.attempt(ode, *t, y, h) {
+                Attempt::Error(err) if err <= 1.0 => {
+                    let t_new = if clipped { t_end } else { *t + h };
+                    if next_out < output_times.len() && output_times[next_out] <= t_new {
+                        if !self.prepare_dense(ode, *t, y, h) {
+                            self.h_next = h_good;
+                            return Err(SolverError::NonFinite { t: *t });
+                        }
+                        while next_out < output_times.len() && output_times[next_out] <= t_new {
+                            let tau = output_times[next_out];
+                            if tau >= t_new {
+                                callback(tau, &self.work.ynew);
+                            } else {
+                                self.eval_dense(y, (tau - *t) / h);
+                                callback(tau, &self.work.yout);
+                            }
+                            next_out += 1;
+                        }
+                    }
+                    if opts.stiffness_check {
+                        self.stiffness_test(h, tab);
+                    }
+                    // PI step-size control (Hairer's dopri5 form of Gustafsson's controller)
+                    let fac11 = err.powf(tab.pi_alpha);
+                    let fac = (fac11 / self.err_old.powf(tab.pi_beta) / SAFETY)
+                        .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                    let mut h_new = h / fac;
+                    if rejections > 0 {
+                        h_new = h_new.min(h);
+                    }
+                    if clipped && h < h_nat {
+                        // a step shortened to land on t_end: remember the natural size and
+                        // leave the controller memory as it was
+                        h_new = h_new.max(h_nat);
+                    } else {
+                        self.err_old = err.max(ERR_OLD_MIN);
+                    }
+                    self.h_next = h_new;
+                    h_good = h_new;
+                    self.stats.steps += 1;
+                    self.commit(t, y, t_new);
+                    rejections = 0;
+                    last_non_finite = false;
+                }
+                outcome => {
+                    self.stats.rejected += 1;
+                    rejections += 1;
+                    self.h_next = match outcome {
+                        Attempt::Error(err) => {
+                            last_non_finite = false;
+                            let fac11 = err.powf(tab.pi_alpha);
+                            h / (fac11 / SAFETY).min(1.0 / FAC_MIN)
+                        }
+                        Attempt::NonFinite => {
+                            last_non_finite = true;
+                            h * FAC_NON_FINITE
+                        }
+                    };
+                    if rejections > opts.max_rejections {
+                        self.h_next = h_good;
+                        return Err(if last_non_finite {
+                            SolverError::NonFinite { t: *t }
+                        } else {
+                            SolverError::TooManyRejections {
+                                t: *t,
+                                count: rejections,
+                            }
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Accepts the step held in the work buffers: y ← y1, t ← t_new, FSAL ← f(t_new, y1).
+    fn commit(&mut self, t: &mut f64, y: &mut [f64], t_new: f64) {
+        let n = self.dim;
+        let s = self.tableau().stages;
+        y.copy_from_slice(&self.work.ynew);
+        self.fsal_k
+            .copy_from_slice(&self.work.k[(s - 2) * n..(s - 1) * n]);
+        self.fsal_y.copy_from_slice(y);
+        self.fsal_t = t_new;
+        self.fsal_valid = true;
+        *t = t_new;
+    }
+
+    /// Computes all stages of one step of size h from (t, y) into the work buffers and
+    /// returns the weighted RMS error norm (or reports non-finite values).
+    fn attempt<O: Ode + ?Sized>(&mut self, ode: &mut O, t: f64, y: &[f64], h: f64) -> Attempt {
+        let n = self.dim;
+        let tab = self.tableau();
+        let s = tab.stages;
+        let Work {
+            k,
+            ytmp,
+            ynew,
+            ystiff,
+            ..
+        } = &mut self.work;
+        let k0 = &self.fsal_k;
+        for i in 1..s {
+            let dst: &mut [f64] = if i == s - 1 {
+                &mut ynew[..]
+            } else {
+                &mut ytmp[..]
+            };
+            combine(dst, y, h, tab.a[i], k0, k, n);
+            if self.options.stiffness_check && tab.stiff_stage == Some(i) {
+                ystiff.copy_from_slice(dst);
+            }
+            let ki = &mut k[(i - 1) * n..i * n];
+            ode.rhs(t + tab.c[i] * h, dst, ki);
+        }
+        self.stats.rhs_evaluations += (s - 1) as u64;
+        let k_last = &k[(s - 2) * n..(s - 1) * n];
+        if ynew.iter().chain(k_last).any(|v| !v.is_finite()) {
+            return Attempt::NonFinite;
+        }
+        let err = self.error_norm(y, h);
+        if err.is_finite() {
+            Attempt::Error(err)
+        } else {
+            Attempt::NonFinite
+        }
+    }
+
+    /// Weighted RMS norm of the local error estimate h Σ e_j k_j with
+    /// sc_i = atol + rtol · max(|y0_i|, |y1_i|) (Hairer, Norsett & Wanner, eq. II.4.11).
+    /// DOP853 combines its two estimators as err5² / sqrt(err5² + 0.01 err3²).
+    fn error_norm(&mut self, y: &[f64], h: f64) -> f64 {
+        let n = self.dim;
+        let tab = self.tableau();
+        let (atol, rtol) = (self.options.atol, self.options.rtol);
+        // the stage arguments are no longer needed: reuse their buffers for Σ e_j k_j
+        let Work {
+            k,
+            ytmp: e5,
+            yout: e3,
+            ynew,
+            ..
+        } = &mut self.work;
+        stage_sum(e5, tab.e, &self.fsal_k, k, n);
+        let scale = |i: usize| (atol + rtol * y[i].abs().max(ynew[i].abs())).max(f64::MIN_POSITIVE);
+        let sum: f64 = (0..n).map(|i| (e5[i] / scale(i)).powi(2)).sum();
+        match tab.e_low {
+            None => h * (sum / n as f64).sqrt(),
+            Some(el) => {
+                stage_sum(e3, el, &self.fsal_k, k, n);
+                let sum_low: f64 = (0..n).map(|i| (e3[i] / scale(i)).powi(2)).sum();
+                if sum == 0.0 && sum_low == 0.0 {
+                    return 0.0;
+                }
+                h * sum / ((sum + 0.01 * sum_low) * n as f64).sqrt()
+            }
+        }
+    }
+
+    /// Hairer's stiffness test on an accepted step: |hλ| ≈ h ‖k_last - k_s‖ / ‖y1 - Y_s‖
+    /// against the method's boundary. Only counts; never aborts.
+    fn stiffness_test(&mut self, h: f64, tab: &Tableau) {
+        let Some(stage) = tab.stiff_stage else {
+            return;
+        };
+        let n = self.dim;
+        let s = tab.stages;
+        let ks = &self.work.k[(stage - 1) * n..stage * n];
+        let kl = &self.work.k[(s - 2) * n..(s - 1) * n];
+        let mut num = 0.0;
+        let mut den = 0.0;
+        for i in 0..n {
+            let dk = kl[i] - ks[i];
+            let dy = self.work.ynew[i] - self.work.ystiff[i];
+            num += dk * dk;
+            den += dy * dy;
+        }
+        if den > 0.0 && h * (num / den).sqrt() > tab.stiff_boundary {
+            self.stats.stiff_steps += 1;
+            self.nonstiff_run = 0;
+            self.stiff_hits = self.stiff_hits.saturating_add(1);
+        } else {
+            self.nonstiff_run += 1;
+            if self.nonstiff_run >= NONSTIFF_RESET {
+                self.stiff_hits = 0;
+            }
+        }
+    }
+
+    /// Builds the dense-output vectors of the step just computed (evaluating the extra
+    /// stages if the method has any). Returns false if an extra stage was not finite.
+    fn prepare_dense<O: Ode + ?Sized>(&mut self, ode: &mut O, t: f64, y: &[f64], h: f64) -> bool {
+        let n = self.dim;
+        let tab = self.tableau();
+        let s = tab.stages;
+        let dense = &tab.dense;
+        let Work {
+            k,
+            ytmp,
+            ynew,
+            dense: r,
+            ..
+        } = &mut self.work;
+        let k0 = &self.fsal_k;
+        for (m, (&c, a)) in dense.extra_c.iter().zip(dense.extra_a).enumerate() {
+            combine(ytmp, y, h, a, k0, k, n);
+            let idx = s - 1 + m;
+            let km = &mut k[idx * n..(idx + 1) * n];
+            ode.rhs(t + c * h, ytmp, km);
+            self.stats.rhs_evaluations += 1;
+            if km.iter().any(|v| !v.is_finite()) {
+                return false;
+            }
+        }
+        let k_last = &k[(s - 2) * n..(s - 1) * n];
+        for i in 0..n {
+            let dy = ynew[i] - y[i];
+            let bspl = h * k0[i] - dy;
+            r[i] = dy;
+            r[n + i] = bspl;
+            r[2 * n + i] = dy - h * k_last[i] - bspl;
+        }
+        for (m, row) in dense.d.iter().enumerate() {
+            let rm = &mut r[(3 + m) * n..(4 + m) * n];
+            stage_sum(rm, row, k0, k, n);
+            rm.iter_mut().for_each(|v| *v *= h);
+        }
+        true
+    }
+
+    /// Evaluates the continuous extension at θ ∈ [0, 1] into `work.yout`.
+    fn eval_dense(&mut self, y: &[f64], theta: f64) {
+        let n = self.dim;
+        let m = self.work.dense.len() / n;
+        let th1 = 1.0 - theta;
+        let Work { dense: r, yout, .. } = &mut self.work;
+        for i in 0..n {
+            // innermost term first; factors alternate θ (odd r index) and 1-θ
+            let mut acc = 0.0;
+            for j in (0..m).rev() {
+                let f = if j % 2 == 0 { theta } else { th1 };
+                acc = (r[j * n + i] + acc) * f;
+            }
+            yout[i] = y[i] + acc;
+        }
+    }
+
+    /// Hairer's automatic initial step (`hinit` of `dopri5`), with RMS norms: a first
+    /// guess from ‖y‖/‖f‖, one explicit Euler step to estimate the second derivative,
+    /// then h = min(100 h0, (0.01 / max(‖f'‖, ‖f‖))^(1/p), h_max).
+    fn initial_step<O: Ode + ?Sized>(&mut self, ode: &mut O, t: f64, y: &[f64], t_end: f64) -> f64 {
+        let n = self.dim;
+        let (atol, rtol) = (self.options.atol, self.options.rtol);
+        let f0 = &self.fsal_k;
+        let sc = |i: usize| (atol + rtol * y[i].abs()).max(f64::MIN_POSITIVE);
+        let rms =
+            |g: &dyn Fn(usize) -> f64| ((0..n).map(|i| g(i) * g(i)).sum::<f64>() / n as f64).sqrt();
+        let d0 = rms(&|i| y[i] / sc(i));
+        let d1 = rms(&|i| f0[i] / sc(i));
+        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+            1e-6
+        } else {
+            0.01 * d0 / d1
+        };
+        h0 = h0.min(self.options.h_max).min(t_end - t);
+        let Work { ytmp, k, .. } = &mut self.work;
+        let f1 = &mut k[..n];
+        for i in 0..n {
+            ytmp[i] = y[i] + h0 * f0[i];
+        }
+        ode.rhs(t + h0, ytmp, f1);
+        self.stats.rhs_evaluations += 1;
+        let d2 = rms(&|i| (f1[i] - f0[i]) / sc(i)) / h0;
+        let p = self.method.tableau().error_order as f64;
+        let h1 = if !d2.is_finite() {
+            h0 * 1e-3
+        } else {
+            let der12 = d2.max(d1);
+            if der12 <= 1e-15 {
+                (h0 * 1e-3).max(1e-6)
+            } else {
+                (0.01 / der12).powf(1.0 / p)
+            }
+        };
+        (100.0 * h0)
+            .min(h1)
+            .min(self.options.h_max)
+            .max(self.options.h_min)
+    }
+}
+
+/// Length of the blocks in which stage sums are formed: the partial sums stay in L1 cache
+/// and registers while each stage is streamed once.
+const BLOCK: usize = 128;
+
+/// dst = y + h Σ_j a_j k_j, with k_0 = `k0` and k_j (j ≥ 1) at `k[(j-1)n..jn]`.
+/// The increments are summed first and added to y last, as in Hairer's codes, so that
+/// round-off does not accumulate in large components of y.
+fn combine(dst: &mut [f64], y: &[f64], h: f64, a: &[f64], k0: &[f64], k: &[f64], n: usize) {
+    blocked_sum(dst, a, k0, k, n, |i, acc| y[i] + h * acc);
+}
+
+/// dst = Σ_j w_j k_j over the stages (zero weights skipped).
+fn stage_sum(dst: &mut [f64], w: &[f64], k0: &[f64], k: &[f64], n: usize) {
+    blocked_sum(dst, w, k0, k, n, |_, acc| acc);
+}
+
+/// dst_i = finish(i, Σ_j w_j k_j,i), formed block by block so that dst is written once.
+fn blocked_sum(
+    dst: &mut [f64],
+    w: &[f64],
+    k0: &[f64],
+    k: &[f64],
+    n: usize,
+    finish: impl Fn(usize, f64) -> f64,
+) {
+    let mut acc = [0.0; BLOCK];
+    let mut start = 0;
+    while start < n {
+        let len = BLOCK.min(n - start);
+        let acc = &mut acc[..len];
+        acc.fill(0.0);
+        for (j, &wj) in w.iter().enumerate() {
+            if wj == 0.0 {
+                continue;
+            }
+            let off = if j == 0 { 0 } else { (j - 1) * n };
+            let src = if j == 0 {
+                &k0[start..start + len]
+            } else {
+                &k[off + start..off + start + len]
+            };
+            for (a, &kv) in acc.iter_mut().zip(src) {
+                *a += wj * kv;
+            }
+        }
+        for (i, (d, &a)) in dst[start..start + len]
+            .iter_mut()
+            .zip(acc.iter())
+            .enumerate()
+        {
+            *d = finish(start + i, a);
+        }
+        start += len;
+    }
+}
