@@ -15,7 +15,7 @@
 //! [`crate::Config::validate`] stays the final check. A test checks that both agree at every
 //! bound.
 
-use crate::anatomy::MuscleGroup;
+use crate::anatomy::{MuscleGroup, SUBJECT_RANGES};
 use crate::model::{Config, Quantity, Torso, Wave};
 use crate::solver::Method;
 use crate::{Error, Result};
@@ -552,6 +552,13 @@ impl Row {
         self.0.max = Some(hi);
         self
     }
+    /// The range the anatomy declares for this subject field ([`SUBJECT_RANGES`]).
+    fn subject_range(self) -> Row {
+        match SUBJECT_RANGES.iter().find(|r| r.0 == self.0.name) {
+            Some(&(_, lo, hi)) => self.range(lo, hi),
+            None => self,
+        }
+    }
     fn output(mut self, variability: Variability) -> Row {
         self.0.causality = Causality::Output;
         self.0.variability = variability;
@@ -626,7 +633,7 @@ fn build() -> Vec<Variable> {
         .range(0.0, 1.0),
         par("subject.age", 100, Real, P::Age, "Age of the subject")
             .unit("y")
-            .range(18.0, 90.0),
+            .subject_range(),
         par(
             "subject.stature",
             101,
@@ -635,7 +642,7 @@ fn build() -> Vec<Variable> {
             "Stature of the subject",
         )
         .unit("m")
-        .range(1.4, 2.1),
+        .subject_range(),
         par(
             "subject.mass",
             102,
@@ -644,7 +651,7 @@ fn build() -> Vec<Variable> {
             "Body mass of the subject (body mass index 13-60 kg/m2)",
         )
         .unit("kg")
-        .range(40.0, 160.0),
+        .subject_range(),
         par(
             "subject.breast_size",
             103,
@@ -652,7 +659,7 @@ fn build() -> Vec<Variable> {
             P::BreastSize,
             "Breast size, 0 (none) to 1 (large)",
         )
-        .range(0.0, 1.0),
+        .subject_range(),
         par(
             "posture",
             201,
