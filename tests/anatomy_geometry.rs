@@ -35,7 +35,7 @@ fn cavities_are_closed_and_oriented() {
             );
             assert!(m.volume() > 0.0, "{name} at lod {lod} has negative volume");
         }
-        let counts: Vec<(MuscleGroup, usize)> = MuscleGroup::ALL
+        let counts: Vec<(MuscleGroup, usize, usize)> = MuscleGroup::ALL
             .iter()
             .map(|g| (*g, a.muscles.iter().filter(|m| m.group == *g).count()))
             .collect();

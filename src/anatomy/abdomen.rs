@@ -26,6 +26,14 @@ pub enum VertexRole {
     Wall,
 }
 
+/// Height of the dome's apex above the higher of the 9th thoracic vertebra and the 5th rib's
+/// anterior end [m] (end-expiratory position, upright).
+const APEX_RISE: f64 = 0.04;
+
+/// Inset of the diaphragm's insertions from the costal-margin centrelines toward the cavity
+/// axis [m] (half a rib's thickness).
+const MARGIN_INSET: f64 = 0.008;
+
 /// Exponent below 1 that fills out the dome's shoulders (a rounder, fuller dome).
 const DOME_FULLNESS: f64 = 0.7;
 
@@ -160,8 +168,10 @@ fn costal_margin(
     let l1 = spine
         .joint("lumbar1")
         .unwrap_or(Point3::new(-0.03, 1.12, 0.0));
+    // Dorsally the diaphragm's crura reach down beside the lumbar spine: the margin passes
+    // just behind the front of the vertebral bodies.
     let dorsal = Point3::new(
-        l1.x + 0.03,
+        l1.x - 0.01 * scale.x,
         ribs[rib_index(12, Side::Right)].head.y - 0.02,
         0.0,
     );
@@ -173,6 +183,12 @@ fn costal_margin(
     for level in 8..=12 {
         let r = &ribs[rib_index(level, Side::Right)];
         right.push((r.bone_end(), Body::Rib(r.index() as u8)));
+    }
+    // Dorsally the margin follows the bodies of ribs 11 and 12 round the posterior gutters.
+    for (level, f) in [(11, 0.4), (12, 0.3)] {
+        let r = &ribs[rib_index(level, Side::Right)];
+        let p = super::skeleton::point_at(&r.bone, f * super::skeleton::polyline_length(&r.bone));
+        right.push((p, Body::Rib(r.index() as u8)));
     }
     let mut points = vec![dorsal];
     let mut bodies = vec![Body::Ground];
@@ -198,7 +214,7 @@ fn costal_margin(
             let d = Vector3::new(axis_x - p.x, 0.0, -p.z);
             let n = d.norm();
             if n > 1e-9 {
-                p + d * (super::lining::WALL_THICKNESS.min(0.5 * n) / n)
+                p + d * (MARGIN_INSET.min(0.5 * n) / n)
             } else {
                 p
             }
@@ -253,7 +269,7 @@ pub fn build(
     // Dome apex: at end-expiration the domes rise to the level of the 9th thoracic vertebra
     // dorsally and the 5th rib's anterior end ventrally; take the higher.
     let t9 = spine.joint("thoracic9").map(|p| p.y).unwrap_or(1.22);
-    let apex_y = t9.max(ribs[rib_index(5, Side::Right)].bone_end().y) + 0.02 * scale.y;
+    let apex_y = t9.max(ribs[rib_index(5, Side::Right)].bone_end().y) + APEX_RISE * scale.y;
     let apex_x = axis_x + 0.1 * (x_front - axis_x);
 
     let dirs: Vec<Vector3<f64>> = sphere
@@ -346,11 +362,12 @@ pub fn build(
         }
     }
 
-    // Free vertices get consecutive indices; mass shared by Voronoi area (a third of each
-    // adjacent triangle).
+    // Free vertices get consecutive indices; the contents' mass is shared by the vertices'
+    // areas on the parametric sphere (nearly uniform), not by the deformed areas, so that no
+    // vertex squeezed near the costal margin becomes needlessly light.
     let mut area = vec![0.0; n];
     for t in &sphere.triangles {
-        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let [a, b, c] = t.map(|v| Point3::from(dirs[v as usize]));
         let ar = 0.5 * (b - a).cross(&(c - a)).norm();
         for v in t {
             area[*v as usize] += ar / 3.0;

@@ -11,15 +11,16 @@ use super::skeleton::{
 use super::{Anchor, Body, MuscleGroup, push_anchor};
 use nalgebra::{Point3, Vector3};
 
-/// One spring-damper muscle element between two anchors (thesis eq. 2.2).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One spring-damper muscle element (thesis eq. 2.2) along a path of anchors: its length is
+/// the path's length, so a muscle can wrap over the abdominal wall or the diaphragm dome
+/// through via points, as musculoskeletal models route muscles. A two-anchor path is a
+/// straight element.
+#[derive(Clone, Debug, PartialEq)]
 pub struct MuscleElement {
     /// Group whose activation drives it.
     pub group: MuscleGroup,
-    /// First anchor.
-    pub a: u32,
-    /// Second anchor.
-    pub b: u32,
+    /// Anchors from origin to insertion (at least two).
+    pub path: Vec<u32>,
     /// Regional gain g in [0, 1] multiplying the activation.
     pub gain: f64,
     /// Side of the body (for the left/right gains); `None` on the midline.
@@ -38,9 +39,14 @@ pub struct Joint {
     pub b: u32,
 }
 
+/// Obliquity of the intercostal fibres: the arc-length fraction of the rib separating a
+/// fibre's two attachments (external fibres run caudally and ventrally, internal fibres
+/// caudally and dorsally).
+pub const OBLIQUITY: f64 = 0.2;
+
 /// Maximal active tension of an intercostal layer per metre of interspace [N/m]: 29 N/cm^2
 /// over a 3 mm layer (De Troyer 1998), about 9 N per cm of interspace.
-pub const INTERCOSTAL_TENSION: f64 = 900.0;
+pub const INTERCOSTAL_TENSION: f64 = 1200.0;
 /// Maximal force of the scalenes on one side [N]: anterior 139 + medius 101 + posterior 77
 /// (Mortensen 2014).
 pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
@@ -147,9 +153,9 @@ fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<M
                     let s = (e as f64 + 0.5) / per_space as f64;
                     // Fibre obliquity: about 0.08 of the rib length between attachments.
                     let (su, sl) = if external {
-                        (0.92 * s, 0.92 * s + 0.08)
+                        ((1.0 - OBLIQUITY) * s, (1.0 - OBLIQUITY) * s + OBLIQUITY)
                     } else {
-                        (0.08 + 0.92 * s, 0.92 * s)
+                        (OBLIQUITY + (1.0 - OBLIQUITY) * s, (1.0 - OBLIQUITY) * s)
                     };
                     let (a, b) = if external {
                         (on_bone(upper, su, anchors), on_bone(lower, sl, anchors))
@@ -157,14 +163,13 @@ fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<M
                         (on_rib(upper, su, anchors), on_rib(lower, sl, anchors))
                     };
                     let gain = if external {
-                        1.0 - 0.8 * s
+                        1.0 - 0.6 * s
                     } else {
-                        0.2 + 0.8 * s
+                        0.4 + 0.6 * s
                     };
                     out.push(MuscleElement {
                         group,
-                        a,
-                        b,
+                        path: vec![a, b],
                         gain,
                         side: Some(side),
                         max_force: force,
@@ -199,8 +204,7 @@ fn scalenes(
             let b = on_bone(rib1, 0.35 + 0.4 * s, anchors);
             out.push(MuscleElement {
                 group,
-                a,
-                b,
+                path: vec![a, b],
                 gain: 1.0,
                 side: Some(side),
                 max_force: SCALENE_FORCE_PER_SIDE / per_side as f64,
@@ -209,38 +213,62 @@ fn scalenes(
     }
 }
 
-/// Diaphragm: elements from the dome's free vertices to the costal-margin insertions (thesis
-/// 2.3: "500 spring muscles located at the top of the abdominal cavity"), each fibre running to
-/// the insertion nearest in azimuth, fanned over neighbouring insertions.
+/// Diaphragm (thesis 2.3): radial fibres from the costal-margin insertions up the dome to the
+/// central tendon along the dome's meridians, each a series of elements between successive
+/// dome vertices, so that their shortening lowers the dome like a piston while pulling the
+/// insertions (and the lower ribs) cranially. One fibre per insertion vertex; the elements
+/// number about the thesis's 500 at full detail.
 fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<MuscleElement>) {
     let group = MuscleGroup::Diaphragm;
-    let n = count(group, f);
-    let dome: Vec<u32> = abdomen.with_role(VertexRole::Dome).collect();
-    if dome.is_empty() || abdomen.rim.is_empty() {
-        return;
+    let n = abdomen.len();
+    let mut neighbours = vec![Vec::new(); n];
+    for t in &abdomen.triangles {
+        for k in 0..3 {
+            let (u, v) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            if !neighbours[u].contains(&v) {
+                neighbours[u].push(v);
+                neighbours[v].push(u);
+            }
+        }
     }
-    let rim = &abdomen.rim;
-    let rim_az: Vec<f64> = rim
-        .iter()
-        .map(|&v| {
-            let p = anchors[abdomen.anchor[v as usize] as usize].rest;
-            azimuth(p.x, p.z, abdomen.axis_x)
-        })
-        .collect();
-    let fans = n.div_ceil(dome.len());
-    let force = DIAPHRAGM_FORCE / n as f64;
-    for e in 0..n {
-        let v = dome[e % dome.len()];
-        let fan = e / dome.len();
-        let p = anchors[abdomen.anchor[v as usize] as usize].rest;
-        // Fan the fibres of one vertex symmetrically about its own azimuth.
-        let offset = if fans > 1 {
-            (fan as f64 / (fans - 1) as f64 - 0.5) * 0.6
-        } else {
-            0.0
-        };
-        let target = (azimuth(p.x, p.z, abdomen.axis_x) + offset).rem_euclid(std::f64::consts::TAU);
-        let k = nearest_angle(&rim_az, target);
+    let dir = &abdomen.sphere;
+    let tendon = |v: usize| dir[v].y > CENTRAL_TENDON;
+    let mut paths: Vec<Vec<usize>> = Vec::new();
+    for &r in &abdomen.rim {
+        let r = r as usize;
+        let az0 = azimuth(dir[r].x, dir[r].z, 0.0);
+        let mut path = vec![r];
+        let mut cur = r;
+        while !tendon(cur) && path.len() < 64 {
+            let next = neighbours[cur]
+                .iter()
+                .copied()
+                .filter(|&v| abdomen.roles[v] == VertexRole::Dome && dir[v].y > dir[cur].y + 1e-9)
+                .min_by(|&a, &b| {
+                    let cost = |v: usize| {
+                        let d = (azimuth(dir[v].x, dir[v].z, 0.0) - az0)
+                            .rem_euclid(std::f64::consts::TAU);
+                        d.min(std::f64::consts::TAU - d) - 2.0 * (dir[v].y - dir[cur].y)
+                    };
+                    cost(a).total_cmp(&cost(b))
+                });
+            match next {
+                Some(v) => {
+                    path.push(v);
+                    cur = v;
+                }
+                None => break,
+            }
+        }
+        if path.len() >= 2 {
+            paths.push(path);
+        }
+    }
+    let segments: usize = paths.iter().map(|p| p.len() - 1).sum();
+    let _ = f;
+    let force = DIAPHRAGM_FORCE / paths.len().max(1) as f64;
+    for path in paths {
+        let p = anchors[abdomen.anchor[path[0]] as usize].rest;
         let side = if p.z > 1e-9 {
             Some(Side::Right)
         } else if p.z < -1e-9 {
@@ -248,27 +276,23 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
         } else {
             None
         };
-        out.push(MuscleElement {
-            group,
-            a: abdomen.anchor[v as usize],
-            b: abdomen.anchor[rim[k] as usize],
-            gain: 1.0,
-            side,
-            max_force: force,
-        });
+        // One element per segment, in series along the fibre: each shortens by the same
+        // fraction, so the whole muscular part contracts evenly and the dome descends.
+        for w in path.windows(2) {
+            out.push(MuscleElement {
+                group,
+                path: vec![abdomen.anchor[w[0]], abdomen.anchor[w[1]]],
+                gain: 1.0,
+                side,
+                max_force: force,
+            });
+        }
     }
+    let _ = segments;
 }
 
-/// Index of the angle in `angles` closest to `target` on the circle.
-fn nearest_angle(angles: &[f64], target: f64) -> usize {
-    let dist = |a: f64| {
-        let d = (a - target).rem_euclid(std::f64::consts::TAU);
-        d.min(std::f64::consts::TAU - d)
-    };
-    (0..angles.len())
-        .min_by(|&i, &j| dist(angles[i]).total_cmp(&dist(angles[j])))
-        .unwrap_or(0)
-}
+/// Height on the unit sphere above which the dome is central tendon (no muscle fibres).
+pub const CENTRAL_TENDON: f64 = 0.85;
 
 /// The abdominal wall muscles as chains of elements through the wall's vertices, so that
 /// tension presses the wall inward where it is curved:
@@ -417,19 +441,17 @@ fn abdominals(
                 }
             }
         }
-        // Chains in parallel share the group's force; elements in series carry it.
+        // Chains in parallel share the group's force; each is one element wrapping over the
+        // wall through its via points.
         let per_chain = total_force / chains.len().max(1) as f64;
-        for (side, nodes) in &chains {
-            for w in nodes.windows(2) {
-                out.push(MuscleElement {
-                    group,
-                    a: w[0],
-                    b: w[1],
-                    gain: 1.0,
-                    side: Some(*side),
-                    max_force: per_chain,
-                });
-            }
+        for (side, nodes) in chains {
+            out.push(MuscleElement {
+                group,
+                path: nodes,
+                gain: 1.0,
+                side: Some(side),
+                max_force: per_chain,
+            });
         }
     }
 }

@@ -15,7 +15,7 @@ mod skeleton;
 mod subject;
 
 pub use abdomen::{Abdomen, VertexRole};
-pub use layout::{Joint, MuscleElement};
+pub use layout::{CENTRAL_TENDON, Joint, MuscleElement};
 pub use muscles::MuscleGroup;
 pub use skeleton::{Rib, Scale, Side, Spine, Sternum, rib_index};
 pub use subject::{Posture, SUBJECT_RANGES, Sex, Subject};

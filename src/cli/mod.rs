@@ -1,5 +1,8 @@
 //! The `torso` command-line tool: one file per subcommand.
 
+pub mod common;
+pub mod simulate;
+
 use clap::{Parser, Subcommand};
 
 mod fmu;
@@ -16,6 +19,8 @@ pub struct Cli {
 /// Subcommands of `torso`.
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Simulate a breathing scenario and write a CSV of volumes, pressures and displacements.
+    Simulate(simulate::SimulateArgs),
     /// Print the library version.
     Version,
     /// Build the FMI 2.0 co-simulation FMU or write its model description.
@@ -26,6 +31,7 @@ pub enum Command {
 pub fn main() -> i32 {
     let cli = Cli::parse();
     let result: crate::Result<()> = match cli.command {
+        Command::Simulate(args) => simulate::main(&args),
         Command::Version => {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())

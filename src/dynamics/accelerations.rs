@@ -5,9 +5,9 @@
 //! m g + F_preload; I_w w' = tau - w x I_w w with I_w = R I_0 R^T; q' = (0, w) q / 2. Free
 //! vertex j: m_j x'' = F_j + m_j g - gamma_j x' + F_preload (thesis eq. 2.1).
 
+use super::Data;
 use super::model::{Model, RIBS};
 use super::state::Layout;
-use super::Data;
 use nalgebra::{Quaternion, Vector3};
 
 /// Writes y' into `dy`.
@@ -18,7 +18,12 @@ pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [
     let n3 = 3 * l.vertices;
     dy[l.vertex_x..l.vertex_x + n3].copy_from_slice(&y[l.vertex_v..l.vertex_v + n3]);
     // Quaternion rate (world-frame angular velocity): q' = 1/2 (0, w) q.
-    let q = Quaternion::new(y[l.sternum_q], y[l.sternum_q + 1], y[l.sternum_q + 2], y[l.sternum_q + 3]);
+    let q = Quaternion::new(
+        y[l.sternum_q],
+        y[l.sternum_q + 1],
+        y[l.sternum_q + 2],
+        y[l.sternum_q + 3],
+    );
     let w = data.sternum_w;
     let qd = Quaternion::new(0.0, w.x, w.y, w.z) * q * 0.5;
     dy[l.sternum_q] = qd.w;
@@ -43,7 +48,8 @@ fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
         let com_arm = data.rib_rotation[r] * (model.rib_com[r] - h);
         moment += com_arm.cross(&(model.gravity * model.rib_mass[r]));
         let (theta, rate) = (y[l.theta + r], y[l.theta_dot + r]);
-        let torque = moment.dot(&u) - model.rib_stiffness[r] * theta - model.rib_damping[r] * rate + model.rib_preload[r];
+        let torque = moment.dot(&u) - model.rib_stiffness[r] * theta - model.rib_damping[r] * rate
+            + model.rib_preload[r];
         data.rib_torque[r] = torque;
         dy[l.theta_dot + r] = torque / model.rib_inertia[r];
     }
@@ -66,7 +72,10 @@ fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
     let inertia = rot.matrix() * model.sternum_inertia * rot.matrix().transpose();
     let w = data.sternum_w;
     let rhs = torque - w.cross(&(inertia * w));
-    let alpha = inertia.cholesky().map(|c| c.solve(&rhs)).unwrap_or_else(Vector3::zeros);
+    let alpha = inertia
+        .cholesky()
+        .map(|c| c.solve(&rhs))
+        .unwrap_or_else(Vector3::zeros);
     dy[l.sternum_v..l.sternum_v + 3].copy_from_slice(acc.as_slice());
     dy[l.sternum_w..l.sternum_w + 3].copy_from_slice(alpha.as_slice());
 }
@@ -77,7 +86,8 @@ fn vertices(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64
         let m = model.vertex_mass[j];
         let pv = l.vertex_v + 3 * j;
         let v = Vector3::new(y[pv], y[pv + 1], y[pv + 2]);
-        let f = data.force[a as usize] + model.gravity * m + model.vertex_preload[j] - v * model.vertex_damping[j];
+        let f = data.force[a as usize] + model.gravity * m + model.vertex_preload[j]
+            - v * model.vertex_damping[j];
         let acc = f / m;
         dy[pv..pv + 3].copy_from_slice(acc.as_slice());
     }

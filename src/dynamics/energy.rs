@@ -4,9 +4,9 @@
 //! abdomen, K (V - V0 - V0 ln(V/V0)), and of the lungs, E_L (V - V0)^2 / 2; gravity; and the
 //! potential of the constant preloads.
 
-use super::model::{volume, Model, PASSIVE, RIBS};
+use super::model::{Model, PASSIVE, RIBS, volume};
 use super::state::Layout;
-use super::{kinematics, Data};
+use super::{Data, kinematics};
 use nalgebra::Vector3;
 
 /// Total mechanical energy [J] of state `y` with no muscle activation.
@@ -30,7 +30,11 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     // Elastic.
     let el = &model.elements;
     for i in 0..el.len() {
-        let len = (data.pos[el.b[i] as usize] - data.pos[el.a[i] as usize]).norm();
+        let len: f64 = el
+            .path_of(i)
+            .windows(2)
+            .map(|w| (data.pos[w[1] as usize] - data.pos[w[0] as usize]).norm())
+            .sum();
         let stretch = len - el.rest_length[i];
         if el.group[i] == PASSIVE || stretch > 0.0 {
             e += 0.5 * el.stiffness[i] * stretch * stretch;
@@ -38,13 +42,20 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     }
     let s = &model.springs;
     for i in 0..s.a.len() {
-        e += 0.5 * s.stiffness[i] * (data.pos[s.b[i] as usize] - data.pos[s.a[i] as usize]).norm_squared();
+        let mut d = data.pos[s.b[i] as usize] - data.pos[s.a[i] as usize];
+        if s.horizontal[i] {
+            d.y = 0.0;
+        }
+        e += 0.5 * s.stiffness[i] * d.norm_squared();
     }
     for r in 0..RIBS {
         e += 0.5 * model.rib_stiffness[r] * y[l.theta + r].powi(2);
     }
     // Pressures.
-    let (v0, va) = (model.abdomen_rest_volume, volume(&data.pos, &model.abdomen_triangles));
+    let (v0, va) = (
+        model.abdomen_rest_volume,
+        volume(&data.pos, &model.abdomen_triangles),
+    );
     e += model.params.bulk_modulus * (va - v0 - v0 * (va / v0).ln());
     let vt = volume(&data.pos, &model.thorax_triangles);
     e += 0.5 * model.params.lung_elastance * (vt - model.thorax_rest_volume).powi(2);

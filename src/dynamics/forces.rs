@@ -9,7 +9,7 @@
 //!   with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx.
 //! - Pleural pressure: P_pl = -E_L (V_th - V_th0) on the thoracic surface (lung recoil).
 
-use super::model::{volume, Model, PASSIVE};
+use super::model::{Model, PASSIVE, volume};
 use super::{Activations, Data};
 use nalgebra::Vector3;
 
@@ -24,18 +24,15 @@ pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
     pleural_pressure(model, data);
 }
 
-/// Muscle and membrane elements.
+/// Muscle and membrane elements. An element along a path p_0 .. p_m has length
+/// L = sum |p_{k+1} - p_k| and rate L' = sum (v_{k+1} - v_k) . n_k; its tension f acts on each
+/// via point along the bisector n_k - n_{k-1}, on the origin along n_0 and on the insertion
+/// along -n_{m-1}.
 fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let el = &model.elements;
     let beta = model.params.beta_max;
     for e in 0..el.len() {
-        let (a, b) = (el.a[e] as usize, el.b[e] as usize);
-        let d = data.pos[b] - data.pos[a];
-        let len = d.norm();
-        if len < 1e-12 {
-            continue;
-        }
-        let n = d / len;
+        let path = el.path_of(e);
         let group = el.group[e];
         let (rest, muscle) = if group == PASSIVE {
             (el.rest_length[e], false)
@@ -43,16 +40,50 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             let a_g = act.level[group as usize][el.side[e] as usize];
             (el.rest_length[e] * (1.0 - beta * a_g * el.gain[e]), true)
         };
-        let stretch = len - rest;
-        let rate = (data.vel[b] - data.vel[a]).dot(&n);
-        let mut f = el.stiffness[e] * stretch + el.damping[e] * rate;
-        if muscle && f < 0.0 {
-            f = 0.0;
-        }
-        if f != 0.0 {
+        if path.len() == 2 {
+            let (a, b) = (path[0] as usize, path[1] as usize);
+            let d = data.pos[b] - data.pos[a];
+            let len = d.norm();
+            if len < 1e-12 {
+                continue;
+            }
+            let n = d / len;
+            let rate = (data.vel[b] - data.vel[a]).dot(&n);
+            let mut f = el.stiffness[e] * (len - rest) + el.damping[e] * rate;
+            if muscle && f < 0.0 {
+                f = 0.0;
+            }
             let fv = n * f;
             data.force[a] += fv;
             data.force[b] -= fv;
+            continue;
+        }
+        let (mut len, mut rate) = (0.0, 0.0);
+        for w in path.windows(2) {
+            let (a, b) = (w[0] as usize, w[1] as usize);
+            let d = data.pos[b] - data.pos[a];
+            let l = d.norm();
+            len += l;
+            if l > 1e-12 {
+                rate += (data.vel[b] - data.vel[a]).dot(&d) / l;
+            }
+        }
+        let mut f = el.stiffness[e] * (len - rest) + el.damping[e] * rate;
+        if muscle && f < 0.0 {
+            f = 0.0;
+        }
+        if f == 0.0 {
+            continue;
+        }
+        for w in path.windows(2) {
+            let (a, b) = (w[0] as usize, w[1] as usize);
+            let d = data.pos[b] - data.pos[a];
+            let l = d.norm();
+            if l > 1e-12 {
+                let fv = d * (f / l);
+                data.force[a] += fv;
+                data.force[b] -= fv;
+            }
         }
     }
 }
@@ -62,7 +93,11 @@ fn vector_springs(model: &Model, data: &mut Data) {
     let s = &model.springs;
     for i in 0..s.a.len() {
         let (a, b) = (s.a[i] as usize, s.b[i] as usize);
-        let f = (data.pos[b] - data.pos[a]) * s.stiffness[i] + (data.vel[b] - data.vel[a]) * s.damping[i];
+        let mut f = (data.pos[b] - data.pos[a]) * s.stiffness[i]
+            + (data.vel[b] - data.vel[a]) * s.damping[i];
+        if s.horizontal[i] {
+            f.y = 0.0;
+        }
         data.force[a] += f;
         data.force[b] -= f;
     }

@@ -4,9 +4,9 @@
 //! p = h + R(u, theta)(p0 - h), v = theta' u x (p - h). The sternum is a free rigid body:
 //! p = x + R(q)(p0 - x0), v = x' + w x (p - x). Free vertices are read directly.
 
+use super::Data;
 use super::model::{Carrier, Model, RIBS};
 use super::state::Layout;
-use super::Data;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 /// Rotation matrix about unit axis `u` by `angle` (Rodrigues' formula).
@@ -21,7 +21,12 @@ pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &
     for r in 0..RIBS {
         data.rib_rotation[r] = axis_rotation(&model.rib_axis[r], y[l.theta + r]);
     }
-    let q = Quaternion::new(y[l.sternum_q], y[l.sternum_q + 1], y[l.sternum_q + 2], y[l.sternum_q + 3]);
+    let q = Quaternion::new(
+        y[l.sternum_q],
+        y[l.sternum_q + 1],
+        y[l.sternum_q + 2],
+        y[l.sternum_q + 3],
+    );
     data.sternum_rotation = UnitQuaternion::from_quaternion(q);
     data.sternum_x = nalgebra::Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]);
     data.sternum_w = Vector3::new(y[l.sternum_w], y[l.sternum_w + 1], y[l.sternum_w + 2]);

@@ -22,9 +22,9 @@ mod model;
 mod params;
 pub mod state;
 
-pub use model::{volume, Carrier, Elements, Model, VectorSprings, PASSIVE, RIBS};
+pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VectorSprings, volume};
 pub use params::Params;
-pub use state::{rest_state, Layout};
+pub use state::{Layout, rest_state};
 
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 
@@ -42,7 +42,11 @@ impl Activations {
         let mut level = [[0.0; 3]; 8];
         for (g, a) in groups.iter().enumerate() {
             let a = a.clamp(0.0, 1.0);
-            level[g] = [(a * gain_right).min(1.0), (a * gain_left).min(1.0), (a * 0.5 * (gain_right + gain_left)).min(1.0)];
+            level[g] = [
+                (a * gain_right).min(1.0),
+                (a * gain_left).min(1.0),
+                (a * 0.5 * (gain_right + gain_left)).min(1.0),
+            ];
         }
         Activations { level }
     }

@@ -12,13 +12,14 @@ pub const RIBS: usize = 24;
 /// Code of an element's group when it is passive (membrane).
 pub const PASSIVE: u8 = u8::MAX;
 
-/// Axial spring-damper elements (muscles and membrane), structure of arrays.
-#[derive(Clone, Debug, Default)]
+/// Axial spring-damper elements (muscles and membrane), structure of arrays. Element e runs
+/// along the anchors `path[start[e]..start[e + 1]]`; its length is the path's length.
+#[derive(Clone, Debug)]
 pub struct Elements {
-    /// First anchor.
-    pub a: Vec<u32>,
-    /// Second anchor.
-    pub b: Vec<u32>,
+    /// Offsets into `path`, one more than the number of elements.
+    pub start: Vec<u32>,
+    /// Anchors of all paths, concatenated.
+    pub path: Vec<u32>,
     /// Rest length l0 [m].
     pub rest_length: Vec<f64>,
     /// Stiffness c [N/m].
@@ -33,18 +34,38 @@ pub struct Elements {
     pub gain: Vec<f64>,
 }
 
+impl Default for Elements {
+    fn default() -> Self {
+        Elements {
+            start: vec![0],
+            path: Vec::new(),
+            rest_length: Vec::new(),
+            stiffness: Vec::new(),
+            damping: Vec::new(),
+            group: Vec::new(),
+            side: Vec::new(),
+            gain: Vec::new(),
+        }
+    }
+}
+
 impl Elements {
     /// Number of elements.
     pub fn len(&self) -> usize {
-        self.a.len()
+        self.rest_length.len()
     }
     /// Whether there are none.
     pub fn is_empty(&self) -> bool {
-        self.a.is_empty()
+        self.rest_length.is_empty()
     }
-    fn push(&mut self, a: u32, b: u32, l0: f64, k: f64, c: f64, group: u8, side: u8, gain: f64) {
-        self.a.push(a);
-        self.b.push(b);
+    /// Anchors along element `e`.
+    pub fn path_of(&self, e: usize) -> &[u32] {
+        &self.path[self.start[e] as usize..self.start[e + 1] as usize]
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn push(&mut self, path: &[u32], l0: f64, k: f64, c: f64, group: u8, side: u8, gain: f64) {
+        self.path.extend_from_slice(path);
+        self.start.push(self.path.len() as u32);
         self.rest_length.push(l0);
         self.stiffness.push(k);
         self.damping.push(c);
@@ -54,9 +75,13 @@ impl Elements {
     }
 }
 
-/// Zero-length vector springs (cartilage joints, wall foundation), structure of arrays.
+/// Zero-length vector springs (cartilage joints, wall foundation, dome support), structure of
+/// arrays.
 #[derive(Clone, Debug, Default)]
 pub struct VectorSprings {
+    /// Whether the spring acts in the horizontal plane only (the model's y is free): the
+    /// dome's support by the lungs and the rib cage, which lets it slide cranio-caudally.
+    pub horizontal: Vec<bool>,
     /// First anchor.
     pub a: Vec<u32>,
     /// Second anchor.
@@ -182,7 +207,10 @@ impl Model {
             .collect();
         let mut rib_anchors = vec![Vec::new(); RIBS];
         let mut sternum_anchors = Vec::new();
-        let n_free = carrier.iter().filter(|c| matches!(c, Carrier::Vertex(_))).count();
+        let n_free = carrier
+            .iter()
+            .filter(|c| matches!(c, Carrier::Vertex(_)))
+            .count();
         let mut vertex_anchor = vec![0u32; n_free];
         for (i, c) in carrier.iter().enumerate() {
             match c {
@@ -193,7 +221,11 @@ impl Model {
             }
         }
         // Effective translational mass seen at each anchor, for element damping.
-        let rib_inertia: Vec<f64> = anatomy.ribs.iter().map(|r| r.inertia_about_axis()).collect();
+        let rib_inertia: Vec<f64> = anatomy
+            .ribs
+            .iter()
+            .map(|r| r.inertia_about_axis())
+            .collect();
         let ab = &anatomy.abdomen;
         let mut vertex_mass = vec![0.0; n_free];
         for (v, &anchor) in ab.anchor.iter().enumerate() {
@@ -220,19 +252,80 @@ impl Model {
             1.0 / (1.0 / ma + 1.0 / mb)
         };
         let zeta = params.damping_ratio;
-        let damping_for = |k: f64, a: u32, b: u32| 2.0 * zeta * (k * pair_mass(a, b)).sqrt();
+        // Number of spring-dampers meeting at each body, so that the dampers of a body add up
+        // to about critical damping of its collective motion: c = 2 zeta sqrt(k m / n).
+        let body_of = |i: u32| match carrier[i as usize] {
+            Carrier::Ground => None,
+            Carrier::Rib(r) => Some(r as usize),
+            Carrier::Sternum => Some(RIBS),
+            Carrier::Vertex(j) => Some(RIBS + 1 + j as usize),
+        };
+        let mut degree = vec![0usize; RIBS + 1 + n_free];
+        let count_path = |path: &[u32], degree: &mut Vec<usize>| {
+            let mut seen: Vec<usize> = path.iter().filter_map(|&i| body_of(i)).collect();
+            seen.sort_unstable();
+            seen.dedup();
+            for b in seen {
+                degree[b] += 1;
+            }
+        };
+        for m in &anatomy.muscles {
+            count_path(&m.path, &mut degree);
+        }
+        for t in &ab.triangles {
+            for k in 0..3 {
+                // Each edge is seen from its two triangles: count half.
+                let (u, v) = (ab.anchor[t[k] as usize], ab.anchor[t[(k + 1) % 3] as usize]);
+                if (t[k] as usize) < (t[(k + 1) % 3] as usize) {
+                    count_path(&[u, v], &mut degree);
+                }
+            }
+        }
+        for j in &anatomy.joints {
+            count_path(&[j.a, j.b], &mut degree);
+        }
+        for (v, &anchor) in ab.anchor.iter().enumerate() {
+            if matches!(ab.roles[v], VertexRole::Wall | VertexRole::Dome) {
+                count_path(&[anchor], &mut degree);
+            }
+        }
+        let share = |path: &[u32]| {
+            path.iter()
+                .filter_map(|&i| body_of(i))
+                .map(|b| degree[b])
+                .max()
+                .unwrap_or(1)
+                .max(1) as f64
+        };
+        let damping_for =
+            |k: f64, a: u32, b: u32| 2.0 * zeta * (k * pair_mass(a, b) / share(&[a, b])).sqrt();
+        // A path's effective mass: its ends in series with its via points in parallel.
+        let path_mass = |path: &[u32]| {
+            let ends = pair_mass(path[0], path[path.len() - 1]);
+            let via: f64 = path[1..path.len() - 1]
+                .iter()
+                .map(|&i| anchor_mass(i))
+                .sum();
+            if via > 0.0 { ends.min(via) } else { ends }
+        };
+        let path_length = |path: &[u32]| {
+            path.windows(2)
+                .map(|w| (rest[w[1] as usize] - rest[w[0] as usize]).norm())
+                .sum::<f64>()
+        };
 
         // Muscles: c = F_max / (beta_max l0) so that a full isometric contraction gives F_max.
         let mut elements = Elements::default();
         for m in &anatomy.muscles {
-            let l0 = (rest[m.b as usize] - rest[m.a as usize]).norm().max(1e-4);
+            let l0 = path_length(&m.path).max(1e-4);
             let k = m.max_force / (params.beta_max * l0);
             let side = match m.side {
                 Some(Side::Right) => 0,
                 Some(Side::Left) => 1,
                 None => 2,
             };
-            elements.push(m.a, m.b, l0, k, damping_for(k, m.a, m.b), m.group.index() as u8, side, m.gain);
+            let c = 2.0 * zeta * (k * path_mass(&m.path) / share(&m.path)).sqrt();
+            elements.push(&m.path, l0, k, c, m.group.index() as u8, side, m.gain);
         }
         let muscle_count = elements.len();
         // Membrane: every edge of the abdominal surface with a free end.
@@ -245,17 +338,33 @@ impl Model {
         }
         for (u, v) in edges {
             let (a, b) = (ab.anchor[u as usize], ab.anchor[v as usize]);
-            if !matches!(carrier[a as usize], Carrier::Vertex(_)) && !matches!(carrier[b as usize], Carrier::Vertex(_)) {
+            if !matches!(carrier[a as usize], Carrier::Vertex(_))
+                && !matches!(carrier[b as usize], Carrier::Vertex(_))
+            {
                 continue;
             }
             let l0 = (rest[b as usize] - rest[a as usize]).norm();
-            let k = params.membrane_stiffness;
-            elements.push(a, b, l0, k, damping_for(k, a, b), PASSIVE, 2, 0.0);
+            let dome = |v: u32| {
+                matches!(
+                    ab.roles[v as usize],
+                    VertexRole::Dome | VertexRole::Insertion
+                )
+            };
+            let tendon = |v: u32| ab.sphere[v as usize].y > crate::anatomy::CENTRAL_TENDON;
+            let k = if tendon(u) && tendon(v) {
+                params.tendon_stiffness
+            } else if dome(u) && dome(v) {
+                params.dome_membrane_stiffness
+            } else {
+                params.membrane_stiffness
+            };
+            elements.push(&[a, b], l0, k, damping_for(k, a, b), PASSIVE, 2, 0.0);
         }
         // Cartilage joints.
         let mut springs = VectorSprings::default();
         for j in &anatomy.joints {
             let k = params.cartilage_stiffness;
+            springs.horizontal.push(false);
             springs.a.push(j.a);
             springs.b.push(j.b);
             springs.stiffness.push(k);
@@ -272,18 +381,40 @@ impl Model {
                 vertex_area[*v as usize] += a / 3.0;
             }
         }
-        let wall: Vec<usize> = (0..ab.len()).filter(|&v| ab.roles[v] == VertexRole::Wall).collect();
+        let wall: Vec<usize> = (0..ab.len())
+            .filter(|&v| ab.roles[v] == VertexRole::Wall)
+            .collect();
         let wall_area: f64 = wall.iter().map(|&v| vertex_area[v]).sum();
         let kappa = wall_area / params.abdominal_wall_compliance;
         let mut ground_anchors = Vec::new();
         for &v in &wall {
             let a = ab.anchor[v];
             let k = kappa * vertex_area[v];
-            ground_anchors.push((a, rest[a as usize], k, 2.0 * zeta * (k * anchor_mass(a)).sqrt()));
+            ground_anchors.push((
+                a,
+                rest[a as usize],
+                k,
+                2.0 * zeta * (k * anchor_mass(a) / share(&[a])).sqrt(),
+                false,
+            ));
+        }
+        // Dome support: the dome slides within the rib cage (zone of apposition) and under the
+        // lungs; its horizontal motion is held by a foundation of stiffness kappa_h per area.
+        for v in (0..ab.len()).filter(|&v| ab.roles[v] == VertexRole::Dome) {
+            let a = ab.anchor[v];
+            let k = params.dome_support * vertex_area[v];
+            ground_anchors.push((
+                a,
+                rest[a as usize],
+                k,
+                2.0 * zeta * (k * anchor_mass(a) / share(&[a])).sqrt(),
+                true,
+            ));
         }
         let mut rest = rest;
         let mut carrier = carrier;
-        for (a, p, k, c) in ground_anchors {
+        for (a, p, k, c, horizontal) in ground_anchors {
+            springs.horizontal.push(horizontal);
             rest.push(p);
             carrier.push(Carrier::Ground);
             let g_idx = (rest.len() - 1) as u32;
@@ -380,7 +511,8 @@ impl Model {
         }
         self.sternum_preload = -data.sternum_force;
         for j in 0..self.free_vertices() {
-            self.vertex_preload[j] = -data.force[self.vertex_anchor[j] as usize] - self.gravity * self.vertex_mass[j];
+            self.vertex_preload[j] =
+                -data.force[self.vertex_anchor[j] as usize] - self.gravity * self.vertex_mass[j];
         }
         let _ = layout;
     }
@@ -411,6 +543,8 @@ impl Model {
 
     /// Group index of muscle element `e`.
     pub fn element_group(&self, e: usize) -> Option<MuscleGroup> {
-        MuscleGroup::ALL.get(self.elements.group[e] as usize).copied()
+        MuscleGroup::ALL
+            .get(self.elements.group[e] as usize)
+            .copied()
     }
 }

@@ -26,6 +26,15 @@ pub struct Params {
     pub rib_joint_stiffness: f64,
     /// In-plane stiffness of an abdominal membrane edge [N/m] (2D modulus about 1.15 k).
     pub membrane_stiffness: f64,
+    /// In-plane stiffness of a membrane edge of the diaphragm dome [N/m]: the dome's passive
+    /// stiffness is low along its fibres, so that their shortening can lower it like a piston.
+    pub dome_membrane_stiffness: f64,
+    /// In-plane stiffness of a membrane edge of the central tendon [N/m] (stiff: it carries the
+    /// radial fibres' pull across the top of the dome).
+    pub tendon_stiffness: f64,
+    /// Horizontal support of the diaphragm dome by the rib cage and lungs [N/m^3] (foundation
+    /// stiffness per area of dome).
+    pub dome_support: f64,
     /// Compliance of the abdominal wall [m^3/Pa] (elastic support of the wall by its muscles,
     /// fascia and skin), spread over the free wall vertices as a foundation stiffness.
     pub abdominal_wall_compliance: f64,
@@ -47,9 +56,12 @@ impl Params {
             damping_ratio: 1.0,
             bulk_modulus: 1.0e5,
             lung_elastance: 1.0 / 2.0e-6,
-            cartilage_stiffness: 3.0e4,
-            rib_joint_stiffness: 20.0,
+            cartilage_stiffness: 1.0e4,
+            rib_joint_stiffness: 2.0,
             membrane_stiffness: 400.0,
+            dome_membrane_stiffness: 40.0,
+            dome_support: 2.0e5,
+            tendon_stiffness: 2000.0,
             abdominal_wall_compliance: 1.5e-6 * compliance_factor,
             gravity: 9.81,
         }

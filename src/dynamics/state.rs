@@ -44,7 +44,18 @@ impl Layout {
         let sternum_w = sternum_v + 3;
         let vertex_v = sternum_w + 3;
         let len = vertex_v + 3 * n;
-        Layout { theta, sternum_x, sternum_q, vertex_x, theta_dot, sternum_v, sternum_w, vertex_v, vertices: n, len }
+        Layout {
+            theta,
+            sternum_x,
+            sternum_q,
+            vertex_x,
+            theta_dot,
+            sternum_v,
+            sternum_w,
+            vertex_v,
+            vertices: n,
+            len,
+        }
     }
 }
 

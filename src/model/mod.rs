@@ -16,6 +16,7 @@
 mod config;
 mod drive;
 mod quantity;
+pub mod run;
 mod snapshot;
 mod torso;
 

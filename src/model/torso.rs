@@ -1,9 +1,12 @@
 //! [`Torso`]: the model facade.
 
 use super::{Config, Drive, Quantity, Snapshot};
-use crate::anatomy::MuscleGroup;
-use crate::solver::Stats;
+use crate::anatomy::{Anatomy, MuscleGroup};
+use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
+use crate::observe::{self, Compartments, Observation};
+use crate::solver::{Integrator, Ode, Options, Stats};
 use crate::{Error, Result};
+use std::sync::Arc;
 
 /// Statistics of one [`Torso::advance_to`] call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -16,22 +19,119 @@ pub struct AdvanceStats {
     pub rhs_evaluations: u64,
 }
 
+/// The compiled, immutable part of a torso, shareable between instances and threads.
+#[derive(Debug)]
+pub struct Compiled {
+    /// The anatomy (rest-pose geometry).
+    pub anatomy: Anatomy,
+    /// The compiled dynamics.
+    pub model: Model,
+    /// Wall regions for the displaced compartments.
+    pub compartments: Compartments,
+    /// Fingerprint of `model`.
+    pub fingerprint: u64,
+}
+
+impl Compiled {
+    /// Builds the anatomy and compiles the dynamics for `config` (subject, posture, level of
+    /// detail).
+    pub fn build(config: &Config) -> Result<Compiled> {
+        config.validate()?;
+        let anatomy = Anatomy::build(&config.subject, config.scene.level_of_detail)?;
+        let model = Model::compile(&anatomy, Params::for_posture(config.subject.posture));
+        let compartments = Compartments::new(&model);
+        let fingerprint = model.fingerprint();
+        Ok(Compiled {
+            anatomy,
+            model,
+            compartments,
+            fingerprint,
+        })
+    }
+}
+
+/// The ODE seen by the solver: the model with activations = clamp(input + drive, 0, 1).
+struct System<'a> {
+    model: &'a Model,
+    data: &'a mut Data,
+    inputs: [f64; 8],
+    drive: &'a Drive,
+    gain_right: f64,
+    gain_left: f64,
+}
+
+impl System<'_> {
+    fn activations(&self, t: f64) -> Activations {
+        let mut groups = [0.0; 8];
+        for g in MuscleGroup::ALL {
+            groups[g.index()] =
+                (self.inputs[g.index()] + self.drive.activation(g, t)).clamp(0.0, 1.0);
+        }
+        Activations::new(&groups, self.gain_right, self.gain_left)
+    }
+}
+
+impl Ode for System<'_> {
+    fn dim(&self) -> usize {
+        self.model.state_len()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        let act = self.activations(t);
+        dynamics::rhs(self.model, self.data, &act, y, dydt);
+    }
+}
+
 /// A breathing torso: a compiled model plus its mutable data.
 pub struct Torso {
     config: Config,
+    compiled: Arc<Compiled>,
+    data: Data,
+    y: Vec<f64>,
     time: f64,
     inputs: [f64; 8],
+    integrator: Integrator,
+    observation: Option<Observation>,
+}
+
+fn solver_options(config: &Config) -> Options {
+    Options {
+        rtol: config.solver.rtol,
+        atol: config.solver.atol,
+        h_max: config.solver.max_step,
+        ..Options::default()
+    }
 }
 
 impl Torso {
     /// Builds the model for `config` (validated first; the error names the bad field).
     pub fn new(config: Config) -> Result<Torso> {
+        let compiled = Arc::new(Compiled::build(&config)?);
+        Torso::with_compiled(config, compiled)
+    }
+
+    /// An instance sharing an already compiled model (built from the same subject, posture
+    /// and level of detail); used by fits and batches to compile once.
+    pub fn with_compiled(config: Config, compiled: Arc<Compiled>) -> Result<Torso> {
         config.validate()?;
+        let model = &compiled.model;
+        let y = dynamics::rest_state(model);
+        let integrator = Integrator::new(config.solver.method, solver_options(&config), y.len())
+            .map_err(|e| Error::invalid("solver", e.to_string(), "valid solver options"))?;
         Ok(Torso {
-            config,
+            data: Data::new(model),
+            y,
             time: 0.0,
             inputs: [0.0; 8],
+            integrator,
+            observation: None,
+            config,
+            compiled,
         })
+    }
+
+    /// The compiled model (shareable).
+    pub fn compiled(&self) -> &Arc<Compiled> {
+        &self.compiled
     }
 
     /// The configuration the model was built from (with the current drive).
@@ -47,7 +147,10 @@ impl Torso {
     /// Sets the activation input of `group` (in [0, 1]); a rejected value leaves the state as it was.
     pub fn set_activation(&mut self, group: MuscleGroup, value: f64) -> Result<()> {
         super::check(&format!("activation.{}", group.name()), value, (0.0, 1.0))?;
-        self.inputs[group.index()] = value;
+        if self.inputs[group.index()] != value {
+            self.inputs[group.index()] = value;
+            self.integrator.invalidate();
+        }
         Ok(())
     }
 
@@ -56,52 +159,223 @@ impl Torso {
         self.inputs[group.index()]
     }
 
+    /// The activation applied to `group` now: clamp(input + drive, 0, 1).
+    pub fn applied_activation(&self, group: MuscleGroup) -> f64 {
+        (self.inputs[group.index()] + self.config.drive.activation(group, self.time))
+            .clamp(0.0, 1.0)
+    }
+
     /// Replaces the drive (validated first).
     pub fn set_drive(&mut self, drive: Drive) -> Result<()> {
         drive.validate()?;
-        self.config.drive = drive;
+        if drive != self.config.drive {
+            self.config.drive = drive;
+            self.integrator.invalidate();
+        }
         Ok(())
     }
 
-    /// Integrates from the current time to `t`, inputs held constant.
+    /// Integrates from the current time to `t`, inputs held constant. On failure the torso
+    /// stays at its last good time (see [`Torso::time`]) and the error says why.
     pub fn advance_to(&mut self, t: f64) -> Result<AdvanceStats> {
-        Err(Error::Numerical {
-            time: self.time,
-            reason: format!("cannot advance to {t}: dynamics not built"),
+        if !t.is_finite() || t < self.time {
+            return Err(Error::invalid(
+                "time",
+                t,
+                format!("a finite time >= the current time {}", self.time),
+            ));
+        }
+        let before = self.integrator.stats();
+        if t > self.time {
+            let Torso {
+                compiled,
+                data,
+                y,
+                time,
+                inputs,
+                integrator,
+                config,
+                ..
+            } = self;
+            let mut system = System {
+                model: &compiled.model,
+                data,
+                inputs: *inputs,
+                drive: &config.drive,
+                gain_right: config.gain_right,
+                gain_left: config.gain_left,
+            };
+            let result = integrator.integrate(&mut system, time, y, t);
+            self.observation = None;
+            result.map_err(|e| Error::Numerical {
+                time: self.time,
+                reason: e.to_string(),
+            })?;
+        }
+        let after = self.integrator.stats();
+        Ok(AdvanceStats {
+            steps: after.steps - before.steps,
+            rejected: after.rejected - before.rejected,
+            rhs_evaluations: after.rhs_evaluations - before.rhs_evaluations,
         })
     }
 
-    /// Reads a quantity.
-    pub fn read(&mut self, quantity: Quantity) -> Result<f64> {
-        match quantity {
-            Quantity::Time => Ok(self.time),
-            q => Err(Error::State(format!("{q:?} is not available"))),
+    /// The observation of the current state, computed once per state (lazily).
+    pub fn observation(&mut self) -> Observation {
+        if let Some(o) = self.observation {
+            return o;
         }
+        let model = &self.compiled.model;
+        dynamics::kinematics::positions_and_velocities(
+            model,
+            &mut self.data,
+            &Layout::new(model),
+            &self.y,
+        );
+        let o = observe::observe(model, &self.compiled.compartments, &self.data.pos);
+        self.observation = Some(o);
+        o
+    }
+
+    /// Reads a quantity (volumes in litres, pressure in Pa, lengths in m).
+    pub fn read(&mut self, quantity: Quantity) -> Result<f64> {
+        let litres = 1e3;
+        Ok(match quantity {
+            Quantity::Time => self.time,
+            Quantity::LungVolume => self.observation().thorax * litres * self.config.lung_ratio,
+            Quantity::ThoraxVolume => self.observation().thorax * litres,
+            Quantity::AbdomenVolume => self.observation().abdomen * litres,
+            Quantity::TrunkVolume => self.observation().trunk * litres,
+            Quantity::RibCageDisplaced => self.observation().rib_cage_displaced * litres,
+            Quantity::AbdomenDisplaced => self.observation().abdomen_displaced * litres,
+            Quantity::AbdominalPressure => self.observation().abdominal_pressure,
+            Quantity::DiaphragmDisplacement => self.observation().diaphragm_displacement,
+            Quantity::SternumDisplacement(axis) if axis < 3 => {
+                self.observation().sternum_displacement[axis as usize]
+            }
+            Quantity::Activation(g) if (g as usize) < 8 => {
+                self.applied_activation(MuscleGroup::ALL[g as usize])
+            }
+            Quantity::SolverSteps => self.integrator.stats().steps as f64,
+            Quantity::SolverRejectedSteps => self.integrator.stats().rejected as f64,
+            Quantity::SolverRhsEvaluations => self.integrator.stats().rhs_evaluations as f64,
+            Quantity::Marker { index, axis } => {
+                return Err(Error::State(format!(
+                    "marker[{}].{} is not available: this build has no skin model",
+                    index as usize + 1,
+                    ["x", "y", "z"].get(axis as usize).unwrap_or(&"?")
+                )));
+            }
+            q => {
+                return Err(Error::invalid(
+                    "quantity",
+                    format!("{q:?}"),
+                    "a valid quantity",
+                ));
+            }
+        })
     }
 
     /// Cumulative solver statistics.
     pub fn solver_stats(&self) -> Stats {
-        Stats::default()
+        self.integrator.stats()
+    }
+
+    /// Whether the solver's stiffness test has fired (the scene may be better served by a
+    /// stiff method).
+    pub fn stiffness_detected(&self) -> bool {
+        self.integrator.stiffness_detected()
+    }
+
+    /// Length of the state vector.
+    pub fn state_dim(&self) -> usize {
+        self.y.len()
+    }
+
+    /// The current state vector (layout: [`crate::dynamics::Layout`]).
+    pub fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// Evaluates the right-hand side f(t, y) with the current inputs and drive, for external
+    /// integrators. `y` and `dydt` must have [`Torso::state_dim`] elements.
+    pub fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<()> {
+        let n = self.y.len();
+        if y.len() != n || dydt.len() != n {
+            return Err(Error::invalid(
+                "state length",
+                y.len().max(dydt.len()),
+                format!("{n}"),
+            ));
+        }
+        let Torso {
+            compiled,
+            data,
+            inputs,
+            config,
+            ..
+        } = self;
+        let mut system = System {
+            model: &compiled.model,
+            data,
+            inputs: *inputs,
+            drive: &config.drive,
+            gain_right: config.gain_right,
+            gain_left: config.gain_left,
+        };
+        system.rhs(t, y, dydt);
+        Ok(())
+    }
+
+    /// Mechanical energy of the current state [J] (passive: as if no muscle were active).
+    pub fn mechanical_energy(&mut self) -> f64 {
+        dynamics::energy::mechanical_energy(&self.compiled.model, &mut self.data, &self.y)
     }
 
     /// A snapshot of the mutable data.
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
             version: super::snapshot::SNAPSHOT_VERSION,
-            fingerprint: 0,
+            fingerprint: self.compiled.fingerprint,
             time: self.time,
-            state: Vec::new(),
+            state: self.y.clone(),
             inputs: self.inputs,
             drive: self.config.drive,
-            solver: serde_json::Value::Null,
+            solver: serde_json::to_value(&self.integrator).unwrap_or(serde_json::Value::Null),
         }
     }
 
-    /// Restores a snapshot taken from a model with the same fingerprint.
+    /// Restores a snapshot taken from a model with the same fingerprint; on error nothing changes.
     pub fn restore(&mut self, snapshot: &Snapshot) -> Result<()> {
+        if snapshot.fingerprint != self.compiled.fingerprint {
+            return Err(Error::State(
+                "snapshot belongs to a different model (subject, posture or level of detail)"
+                    .into(),
+            ));
+        }
+        if snapshot.state.len() != self.y.len()
+            || snapshot.state.iter().any(|v| !v.is_finite())
+            || !snapshot.time.is_finite()
+        {
+            return Err(Error::State("snapshot state is malformed".into()));
+        }
+        snapshot.drive.validate()?;
+        for (g, v) in MuscleGroup::ALL.iter().zip(snapshot.inputs) {
+            super::check(&format!("activation.{}", g.name()), v, (0.0, 1.0))?;
+        }
+        let integrator: Integrator = serde_json::from_value(snapshot.solver.clone())
+            .map_err(|e| Error::State(format!("snapshot solver memory is malformed: {e}")))?;
+        if integrator.dim() != self.y.len() {
+            return Err(Error::State(
+                "snapshot solver memory has the wrong dimension".into(),
+            ));
+        }
+        self.integrator = integrator;
         self.time = snapshot.time;
+        self.y.copy_from_slice(&snapshot.state);
         self.inputs = snapshot.inputs;
         self.config.drive = snapshot.drive;
+        self.observation = None;
         Ok(())
     }
 
@@ -109,5 +383,8 @@ impl Torso {
     pub fn reset(&mut self) {
         self.time = 0.0;
         self.inputs = [0.0; 8];
+        self.y = dynamics::rest_state(&self.compiled.model);
+        self.integrator.reset();
+        self.observation = None;
     }
 }

@@ -1,1 +1,133 @@
-//! (module under construction)
+//! What is read off a state: volumes of the trunk, abdomen, thorax and lungs, the volumes
+//! displaced by the rib-cage wall and by the abdominal wall (the compartments of
+//! optoelectronic plethysmography), the abdominal pressure, the diaphragm dome's and the
+//! sternum's displacements. Computed from anchor positions on demand, never inside the
+//! right-hand side.
+//!
+//! Volumes use the divergence theorem over closed, outward-oriented triangle surfaces:
+//! V = 1/6 sum_t a . (b x c). The trunk's surface is the rib-cage lining plus the abdominal
+//! surface without the dome; splitting that sum by wall region (taken about the thorax's rest
+//! centroid) gives the displaced compartments, which add up to the trunk's volume change.
+//! V_thorax = V_trunk - V_abdomen and V_lung = ratio x V_thorax (thesis 4.2).
+
+use crate::dynamics::{Model, volume};
+use nalgebra::{Point3, Vector3};
+
+/// Volumes and displacements of one state (SI units: m^3, Pa, m).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Observation {
+    /// Thoracic cavity volume [m^3].
+    pub thorax: f64,
+    /// Abdominal cavity volume [m^3].
+    pub abdomen: f64,
+    /// Trunk cavity volume [m^3].
+    pub trunk: f64,
+    /// Volume displaced by the rib-cage wall since rest [m^3].
+    pub rib_cage_displaced: f64,
+    /// Volume displaced by the abdominal wall since rest [m^3].
+    pub abdomen_displaced: f64,
+    /// Abdominal pressure above rest [Pa] (thesis eq. 2.5).
+    pub abdominal_pressure: f64,
+    /// Cranial displacement of the diaphragm since rest [m]: the dome's piston-equivalent
+    /// displacement, volume swept by the dome divided by its projected (horizontal) area.
+    pub diaphragm_displacement: f64,
+    /// Displacement of the middle of the sternum since rest [m].
+    pub sternum_displacement: Vector3<f64>,
+}
+
+/// Sum of the divergence-theorem terms of `tris` about `origin` (not closed: a wall region).
+fn partial_volume(pos: &[Point3<f64>], tris: &[[u32; 3]], origin: &Point3<f64>) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| pos[i as usize] - origin);
+            a.dot(&b.cross(&c))
+        })
+        .sum::<f64>()
+        / 6.0
+}
+
+/// Precomputed wall regions of a model for the compartment split.
+#[derive(Clone, Debug)]
+pub struct Compartments {
+    dome: Vec<[u32; 3]>,
+    dome_rest: f64,
+    dome_area: f64,
+    lining: Vec<[u32; 3]>,
+    abdominal_wall: Vec<[u32; 3]>,
+    origin: Point3<f64>,
+    lining_rest: f64,
+    wall_rest: f64,
+}
+
+impl Compartments {
+    /// Splits `model`'s trunk surface into the rib-cage wall and the abdominal wall.
+    pub fn new(model: &Model) -> Compartments {
+        let lining = model.thorax_triangles[..model.lining_count].to_vec();
+        let abdominal_wall: Vec<[u32; 3]> = model
+            .abdomen_triangles
+            .iter()
+            .zip(&model.abdomen_dome)
+            .filter(|(_, d)| !**d)
+            .map(|(t, _)| *t)
+            .collect();
+        let dome: Vec<[u32; 3]> = model
+            .abdomen_triangles
+            .iter()
+            .zip(&model.abdomen_dome)
+            .filter(|(_, d)| **d)
+            .map(|(t, _)| *t)
+            .collect();
+        // Projected area: the dome's outward (abdominal) normals point cranially.
+        let dome_area = dome
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| model.rest[i as usize]);
+                0.5 * (b - a).cross(&(c - a)).y
+            })
+            .sum::<f64>()
+            .max(1e-9);
+        let n = (model.lining_count * 3) as f64;
+        let origin = Point3::from(
+            lining
+                .iter()
+                .flatten()
+                .fold(Vector3::zeros(), |s, &i| s + model.rest[i as usize].coords)
+                / n.max(1.0),
+        );
+        Compartments {
+            dome_rest: partial_volume(&model.rest, &dome, &origin),
+            dome,
+            dome_area,
+            lining_rest: partial_volume(&model.rest, &lining, &origin),
+            wall_rest: partial_volume(&model.rest, &abdominal_wall, &origin),
+            lining,
+            abdominal_wall,
+            origin,
+        }
+    }
+}
+
+/// Observes the state whose anchor positions are `pos`.
+pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) -> Observation {
+    let abdomen = volume(pos, &model.abdomen_triangles);
+    let thorax = volume(pos, &model.thorax_triangles);
+    let o = &compartments.origin;
+    let rib_cage_displaced =
+        partial_volume(pos, &compartments.lining, o) - compartments.lining_rest;
+    let abdomen_displaced =
+        partial_volume(pos, &compartments.abdominal_wall, o) - compartments.wall_rest;
+    let diaphragm_displacement = (partial_volume(pos, &compartments.dome, o)
+        - compartments.dome_rest)
+        / compartments.dome_area;
+    let probe = model.sternum_probe as usize;
+    Observation {
+        thorax,
+        abdomen,
+        trunk: thorax + abdomen,
+        rib_cage_displaced,
+        abdomen_displaced,
+        abdominal_pressure: model.params.bulk_modulus * (model.abdomen_rest_volume / abdomen - 1.0),
+        diaphragm_displacement,
+        sternum_displacement: pos[probe] - model.rest[probe],
+    }
+}
