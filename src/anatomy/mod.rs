@@ -12,6 +12,7 @@ mod layout;
 mod lining;
 mod muscles;
 mod skeleton;
+pub mod skin;
 mod subject;
 
 pub use abdomen::{Abdomen, VertexRole};

@@ -6,6 +6,7 @@ pub mod simulate;
 use clap::{Parser, Subcommand};
 
 mod fmu;
+pub mod validate;
 
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
 #[derive(Parser, Debug)]
@@ -25,6 +26,10 @@ pub enum Command {
     Version,
     /// Build the FMI 2.0 co-simulation FMU or write its model description.
     Fmu(fmu::FmuArgs),
+    /// Compare a simulated lung volume with a spirogram (statistics, plots, summary).
+    Validate(validate::ValidateArgs),
+    /// Write a synthetic spirogram (from a curve or a sinusoidal model).
+    SynthSpirometry(validate::SynthSpirometryArgs),
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -37,6 +42,8 @@ pub fn main() -> i32 {
             Ok(())
         }
         Command::Fmu(args) => fmu::run(args),
+        Command::Validate(a) => validate::run(&a),
+        Command::SynthSpirometry(a) => validate::run_synth(&a),
     };
     match result {
         Ok(()) => 0,

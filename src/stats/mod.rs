@@ -1,1 +1,45 @@
-//! (module under construction)
+//! Validation of a simulated lung volume against spirometry (thesis chapter 4): data
+//! preparation (polyphase resampling, lung ratio, offset, alignment by cross-correlation),
+//! breathing-frequency estimation, Pearson correlation, Bland-Altman on samples and on
+//! breaths, the cosinor model and its equality tests, BARS (Bayesian adaptive regression
+//! splines) and its equality test, plots and reports, and a synthetic spirometry generator.
+//!
+//! Formulas follow the project's statistics reference (methods of Nelson et al. 1979,
+//! Bland & Altman 1986, DiMatteo, Genovese & Kass 2001, Behseta & Kass 2005); each file
+//! states its equations and sources. The entry point is [`validation::validate`], used by
+//! `torso validate`.
+//!
+//! | file | owns |
+//! |---|---|
+//! | [`io`] | CSV series with line/column errors |
+//! | [`resample`] | polyphase FIR resampling (SciPy `resample_poly` defaults) |
+//! | [`prepare`] | flow integration, drift, lung ratio, alignment, offset |
+//! | [`frequency`] | breathing frequency: Hann-interpolated DFT, autocorrelation check |
+//! | [`agreement`] | Pearson correlation, Bland-Altman |
+//! | [`breaths`] | breath segmentation and pairing |
+//! | [`ols`] | least squares, Newey-West covariance, F and Wald tests |
+//! | [`cosinor`] | cosinor fits and equality tests |
+//! | [`bars`] | BARS fits and equality test |
+//! | [`special`] | gamma, incomplete beta, t, F, normal distributions |
+//! | [`rng`] | seeded PCG64 generator and variates |
+//! | [`synth`] | synthetic spirometry |
+//! | [`plot`] | PNG/SVG figures |
+//! | [`validation`] | the whole pipeline and its outputs |
+
+pub mod agreement;
+pub mod bars;
+pub mod breaths;
+pub mod cosinor;
+pub mod frequency;
+pub mod io;
+pub mod ols;
+pub mod plot;
+pub mod prepare;
+pub mod resample;
+pub mod rng;
+pub mod special;
+pub mod synth;
+pub mod validation;
+
+pub use frequency::{FrequencyEstimate, estimate_frequency};
+pub use validation::{Validation, ValidationOptions, validate, write_outputs};
