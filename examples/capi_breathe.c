@@ -5,6 +5,7 @@
  *   gcc -std=c11 -Iinclude examples/capi_breathe.c -Ltarget/release -lbreathing_torso -lm
  *   LD_LIBRARY_PATH=target/release ./a.out
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -81,6 +82,34 @@ int main(void) {
         }
     }
     printf("replay identical\n");
+
+    /* The right-hand side for external integrators agrees with the model's own integrator:
+     * (y(t + dt) - y(t)) / dt approaches f(t, y(t)) for a small dt. */
+    size_t n = 0;
+    if (!check(torso, bt_state_dim(torso, &n), "bt_state_dim")) return 1;
+    double *y0 = malloc(n * sizeof(double)), *y1 = malloc(n * sizeof(double)), *f = malloc(n * sizeof(double));
+    double t0 = 0;
+    bt_time(torso, &t0);
+    const double dt = 1e-6;
+    if (!check(torso, bt_get_state(torso, y0, n), "bt_get_state")) return 1;
+    if (!check(torso, bt_rhs(torso, t0, y0, f, n), "bt_rhs")) return 1;
+    if (!check(torso, bt_advance_to(torso, t0 + dt, NULL), "bt_advance_to (dt)")) return 1;
+    bt_get_state(torso, y1, n);
+    double err = 0, scale = 0;
+    for (size_t i = 0; i < n; i++) {
+        double d = (y1[i] - y0[i]) / dt - f[i];
+        err += d * d;
+        scale += f[i] * f[i];
+    }
+    printf("state dimension %zu, |(y1 - y0)/dt - f| / |f| = %.2e\n", n, sqrt(err / (scale > 0 ? scale : 1)));
+    if (!(sqrt(err) <= 1e-3 * sqrt(scale) + 1e-9)) {
+        fprintf(stderr, "bt_rhs disagrees with the integrator\n");
+        return 1;
+    }
+    printf("rhs consistent\n");
+    free(y0);
+    free(y1);
+    free(f);
     free(snapshot);
     free(xyz);
     bt_destroy(torso);

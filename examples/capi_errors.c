@@ -97,6 +97,13 @@ int main(void) {
     expect(rc != BT_OK && strlen(bt_last_error(torso)) > 0, "garbage snapshot rejected", bt_last_error(torso));
     free(buffer);
 
+    /* The right-hand side checks the state length. */
+    size_t dim = 0;
+    expect(bt_state_dim(torso, &dim) == BT_OK && dim > 0, "state dimension", "");
+    double y[4], dydt[4];
+    rc = bt_rhs(torso, 0.0, y, dydt, 4);
+    expect(dim == 4 || rc == BT_ERR_INVALID, "wrong state length rejected", bt_last_error(torso));
+
     /* NULL handles and arguments. */
     expect(bt_time(NULL, &v) == BT_ERR_NULL, "NULL handle rejected", "");
     expect(bt_time(torso, NULL) == BT_ERR_NULL, "NULL output rejected", bt_last_error(torso));

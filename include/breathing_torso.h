@@ -413,8 +413,9 @@ int bt_restore(struct BtTorso *h, const uint8_t *buffer, size_t size);
 int bt_reset(struct BtTorso *h);
 
 /**
- * For external integrators: the dimension n of the model's first-order state y.
- * `BT_ERR_UNAVAILABLE` until the model exposes its right-hand side.
+ * For external integrators: the dimension n of the model's first-order state y (layout in
+ * the crate's `dynamics::Layout`: rib angles and rates, sternum pose and velocity, abdominal
+ * vertex positions and velocities).
  *
  * # Safety
  * `h` must be NULL or a live handle; `n` NULL or writable.
@@ -422,7 +423,7 @@ int bt_reset(struct BtTorso *h);
 int bt_state_dim(struct BtTorso *h, size_t *n);
 
 /**
- * For external integrators: copies the current state y (n doubles) into `y`.
+ * For external integrators: copies the current state y (n = `bt_state_dim` doubles) into `y`.
  *
  * # Safety
  * `h` must be NULL or a live handle; `y` NULL or `n` writable doubles.
@@ -431,7 +432,8 @@ int bt_get_state(struct BtTorso *h, double *y, size_t n);
 
 /**
  * For external integrators: sets the model to time `t` and state y (n doubles), so that the
- * quantities read afterwards (`bt_read`) are those of that state.
+ * quantities read afterwards (`bt_read`) are those of that state. `BT_ERR_UNAVAILABLE` until
+ * the model accepts an external state.
  *
  * # Safety
  * `h` must be NULL or a live handle; `y` NULL or `n` readable doubles.

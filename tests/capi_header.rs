@@ -171,5 +171,8 @@ fn c_example_errors_runs() {
 #[test]
 fn c_example_breathe_runs() {
     let out = build_and_run_example("capi_breathe");
-    assert!(out.contains("replay identical"), "{out}");
+    assert!(
+        out.contains("replay identical") && out.contains("rhs consistent"),
+        "{out}"
+    );
 }

@@ -820,38 +820,65 @@ pub unsafe extern "C" fn bt_reset(h: *mut BtTorso) -> c_int {
     }
 }
 
-const NO_RHS: &str = "the right-hand side is not exposed by this build of the model";
-
-/// For external integrators: the dimension n of the model's first-order state y.
-/// `BT_ERR_UNAVAILABLE` until the model exposes its right-hand side.
+/// For external integrators: the dimension n of the model's first-order state y (layout in
+/// the crate's `dynamics::Layout`: rib angles and rates, sternum pose and velocity, abdominal
+/// vertex positions and velocities).
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `n` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn bt_state_dim(h: *mut BtTorso, n: *mut usize) -> c_int {
-    let _ = n;
-    unsafe { with_handle(h, |_| Err(unavailable(NO_RHS))) }
+    unsafe { with_handle(h, |b| put(n, b.torso.state_dim(), "n")) }
 }
 
-/// For external integrators: copies the current state y (n doubles) into `y`.
+/// Checks a caller's state length against the model's.
+fn check_dim(b: &BtTorso, n: usize) -> Outcome {
+    let dim = b.torso.state_dim();
+    if n == dim {
+        Ok(())
+    } else {
+        Err(Failure(
+            BT_ERR_INVALID,
+            format!("state length {n}: this model's state has {dim} elements (bt_state_dim)"),
+        ))
+    }
+}
+
+/// For external integrators: copies the current state y (n = `bt_state_dim` doubles) into `y`.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `y` NULL or `n` writable doubles.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn bt_get_state(h: *mut BtTorso, y: *mut f64, n: usize) -> c_int {
-    let _ = (y, n);
-    unsafe { with_handle(h, |_| Err(unavailable(NO_RHS))) }
+    unsafe {
+        with_handle(h, |b| {
+            check_dim(b, n)?;
+            if y.is_null() {
+                return Err(Failure(BT_ERR_NULL, "argument `y` is NULL".into()));
+            }
+            std::slice::from_raw_parts_mut(y, n).copy_from_slice(b.torso.state());
+            Ok(())
+        })
+    }
 }
 
 /// For external integrators: sets the model to time `t` and state y (n doubles), so that the
-/// quantities read afterwards (`bt_read`) are those of that state.
+/// quantities read afterwards (`bt_read`) are those of that state. `BT_ERR_UNAVAILABLE` until
+/// the model accepts an external state.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `y` NULL or `n` readable doubles.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn bt_set_state(h: *mut BtTorso, t: f64, y: *const f64, n: usize) -> c_int {
-    let _ = (t, y, n);
-    unsafe { with_handle(h, |_| Err(unavailable(NO_RHS))) }
+    let _ = (t, y);
+    unsafe {
+        with_handle(h, |b| {
+            check_dim(b, n)?;
+            Err(unavailable(
+                "setting an external state is not available in this build of the model",
+            ))
+        })
+    }
 }
 
 /// For external integrators: evaluates dy/dt = f(t, y) with the current inputs and drive,
@@ -868,8 +895,23 @@ pub unsafe extern "C" fn bt_rhs(
     dydt: *mut f64,
     n: usize,
 ) -> c_int {
-    let _ = (t, y, dydt, n);
-    unsafe { with_handle(h, |_| Err(unavailable(NO_RHS))) }
+    unsafe {
+        with_handle(h, |b| {
+            check_dim(b, n)?;
+            if y.is_null() || dydt.is_null() {
+                return Err(Failure(
+                    BT_ERR_NULL,
+                    "arguments `y` and `dydt` must not be NULL".into(),
+                ));
+            }
+            if !t.is_finite() {
+                return Err(Failure(BT_ERR_INVALID, format!("t = {t} is not finite")));
+            }
+            let y = std::slice::from_raw_parts(y, n);
+            let dydt = std::slice::from_raw_parts_mut(dydt, n);
+            Ok(b.torso.rhs(t, y, dydt)?)
+        })
+    }
 }
 
 /// The value-reference block appended to `include/breathing_torso.h`: one `BT_VR_*` constant
