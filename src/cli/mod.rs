@@ -5,6 +5,7 @@ pub mod simulate;
 
 use clap::{Parser, Subcommand};
 
+mod fmu;
 pub mod validate;
 
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
@@ -23,6 +24,8 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Print the library version.
     Version,
+    /// Build the FMI 2.0 co-simulation FMU or write its model description.
+    Fmu(fmu::FmuArgs),
     /// Compare a simulated lung volume with a spirogram (statistics, plots, summary).
     Validate(validate::ValidateArgs),
     /// Write a synthetic spirogram (from a curve or a sinusoidal model).
@@ -38,6 +41,7 @@ pub fn main() -> i32 {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
+        Command::Fmu(args) => fmu::run(args),
         Command::Validate(a) => validate::run(&a),
         Command::SynthSpirometry(a) => validate::run_synth(&a),
     };
