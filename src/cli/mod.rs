@@ -2,6 +2,7 @@
 
 pub mod common;
 pub mod simulate;
+pub mod skin;
 
 use clap::{Parser, Subcommand};
 
@@ -30,6 +31,10 @@ pub enum Command {
     Validate(validate::ValidateArgs),
     /// Write a synthetic spirogram (from a curve or a sinusoidal model).
     SynthSpirometry(validate::SynthSpirometryArgs),
+    /// Write the rest geometry (skin, ribs, sternum, abdomen, marker grid) as OBJ files.
+    ExportObj(skin::ExportObjArgs),
+    /// Render the skin and markers at rest and at end-inspiration as a PNG.
+    RenderSkin(skin::RenderSkinArgs),
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -44,6 +49,8 @@ pub fn main() -> i32 {
         Command::Fmu(args) => fmu::run(args),
         Command::Validate(a) => validate::run(&a),
         Command::SynthSpirometry(a) => validate::run_synth(&a),
+        Command::ExportObj(a) => skin::export_obj(&a),
+        Command::RenderSkin(a) => skin::render_skin(&a),
     };
     match result {
         Ok(()) => 0,
