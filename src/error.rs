@@ -54,12 +54,23 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     /// Shorthand for [`Error::InvalidParameter`].
-    pub fn invalid(name: impl Into<String>, value: impl std::fmt::Display, range: impl Into<String>) -> Self {
-        Error::InvalidParameter { name: name.into(), value: value.to_string(), range: range.into() }
+    pub fn invalid(
+        name: impl Into<String>,
+        value: impl std::fmt::Display,
+        range: impl Into<String>,
+    ) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            value: value.to_string(),
+            range: range.into(),
+        }
     }
 
     /// Shorthand for an I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Error::Io { path: path.into(), source }
+        Error::Io {
+            path: path.into(),
+            source,
+        }
     }
 }

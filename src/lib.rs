@@ -20,18 +20,18 @@
 //! | [`fmi`], [`capi`] | the FMI 2.0 co-simulation layer and the native C ABI |
 //! | [`cli`] | the `torso` command-line tool |
 
-pub mod error;
-pub mod mesh;
 pub mod anatomy;
-pub mod solver;
-pub mod dynamics;
-pub mod observe;
-pub mod model;
-pub mod fit;
-pub mod stats;
-pub mod fmi;
 pub mod capi;
 pub mod cli;
+pub mod dynamics;
+pub mod error;
+pub mod fit;
+pub mod fmi;
+pub mod mesh;
+pub mod model;
+pub mod observe;
+pub mod solver;
+pub mod stats;
 
 pub use error::{Error, Result};
 pub use model::{Config, Quantity, Torso};

@@ -26,7 +26,11 @@ impl Sex {
         match code {
             0 => Ok(Sex::Male),
             1 => Ok(Sex::Female),
-            _ => Err(Error::invalid("subject.sex", code, "0 (male) or 1 (female)")),
+            _ => Err(Error::invalid(
+                "subject.sex",
+                code,
+                "0 (male) or 1 (female)",
+            )),
         }
     }
 }
@@ -58,7 +62,11 @@ impl Posture {
             0 => Ok(Posture::Standing),
             1 => Ok(Posture::Sitting),
             2 => Ok(Posture::Supine),
-            _ => Err(Error::invalid("posture", code, "0 (standing), 1 (sitting) or 2 (supine)")),
+            _ => Err(Error::invalid(
+                "posture",
+                code,
+                "0 (standing), 1 (sitting) or 2 (supine)",
+            )),
         }
     }
     /// Parses a name (`standing`, `sitting`, `supine`).
@@ -67,7 +75,11 @@ impl Posture {
             "standing" => Ok(Posture::Standing),
             "sitting" => Ok(Posture::Sitting),
             "supine" | "lying" => Ok(Posture::Supine),
-            _ => Err(Error::invalid("posture", name, "standing, sitting or supine")),
+            _ => Err(Error::invalid(
+                "posture",
+                name,
+                "standing, sitting or supine",
+            )),
         }
     }
 }
@@ -91,7 +103,14 @@ pub struct Subject {
 
 impl Default for Subject {
     fn default() -> Self {
-        Subject { sex: Sex::Male, age: 30.0, stature: 1.75, mass: 75.0, breast_size: 0.0, posture: Posture::Standing }
+        Subject {
+            sex: Sex::Male,
+            age: 30.0,
+            stature: 1.75,
+            mass: 75.0,
+            breast_size: 0.0,
+            posture: Posture::Standing,
+        }
     }
 }
 
@@ -118,7 +137,10 @@ impl Subject {
             return Err(Error::invalid(
                 "subject.mass",
                 self.mass,
-                format!("a body mass index of 13-60 kg/m^2 at stature {} m (got {bmi:.1})", self.stature),
+                format!(
+                    "a body mass index of 13-60 kg/m^2 at stature {} m (got {bmi:.1})",
+                    self.stature
+                ),
             ));
         }
         Ok(())

@@ -3,6 +3,7 @@
 //! repair, overlap resolution, geometric attachments and tetrahedral volume meshing. This
 //! module is the lowest layer of the crate and knows nothing of anatomy or dynamics.
 
+pub mod io;
 mod trimesh;
 
 pub use trimesh::{Aabb, Adjacency, MAX_ICOSPHERE_SUBDIVISIONS, Topology, TriMesh, edge_key};

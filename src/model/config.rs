@@ -1,6 +1,6 @@
 //! Configuration of a [`super::Torso`]: subject, scene, solver, drive and model constants.
 
-use super::drive::{check, Drive};
+use super::drive::{Drive, check};
 use crate::anatomy::Subject;
 use crate::solver::Method;
 use crate::{Error, Result};
@@ -23,7 +23,12 @@ pub struct Scene {
 
 impl Default for Scene {
     fn default() -> Self {
-        Scene { level_of_detail: 1, grid_rows: 10, grid_cols: 6, slp_reference: None }
+        Scene {
+            level_of_detail: 1,
+            grid_rows: 10,
+            grid_cols: 6,
+            slp_reference: None,
+        }
     }
 }
 
@@ -42,7 +47,12 @@ pub struct SolverConfig {
 
 impl Default for SolverConfig {
     fn default() -> Self {
-        SolverConfig { method: Method::Dopri5, rtol: 1e-6, atol: 1e-8, max_step: 0.05 }
+        SolverConfig {
+            method: Method::Dopri5,
+            rtol: 1e-6,
+            atol: 1e-8,
+            max_step: 0.05,
+        }
     }
 }
 
@@ -85,9 +95,16 @@ impl Config {
         self.subject.validate()?;
         self.drive.validate()?;
         if self.scene.level_of_detail > 2 {
-            return Err(Error::invalid("scene.level_of_detail", self.scene.level_of_detail, "0, 1 or 2"));
+            return Err(Error::invalid(
+                "scene.level_of_detail",
+                self.scene.level_of_detail,
+                "0, 1 or 2",
+            ));
         }
-        for (name, v) in [("grid.rows", self.scene.grid_rows), ("grid.cols", self.scene.grid_cols)] {
+        for (name, v) in [
+            ("grid.rows", self.scene.grid_rows),
+            ("grid.cols", self.scene.grid_cols),
+        ] {
             if !(1..=16).contains(&v) {
                 return Err(Error::invalid(name, v, "1..16"));
             }

@@ -38,7 +38,12 @@ pub struct Drive {
 
 impl Default for Drive {
     fn default() -> Self {
-        Drive { frequency: 0.25, ribs: Wave::default(), diaphragm: Wave::default(), abdominals: Wave::default() }
+        Drive {
+            frequency: 0.25,
+            ribs: Wave::default(),
+            diaphragm: Wave::default(),
+            abdominals: Wave::default(),
+        }
     }
 }
 
@@ -53,8 +58,14 @@ impl Drive {
     pub fn quiet() -> Self {
         Drive {
             frequency: 0.25,
-            ribs: Wave { amplitude: 0.2, phase: 0.0 },
-            diaphragm: Wave { amplitude: 0.25, phase: 0.1 },
+            ribs: Wave {
+                amplitude: 0.2,
+                phase: 0.0,
+            },
+            diaphragm: Wave {
+                amplitude: 0.25,
+                phase: 0.1,
+            },
             abdominals: Wave::default(),
         }
     }
@@ -63,9 +74,18 @@ impl Drive {
     pub fn forced() -> Self {
         Drive {
             frequency: 0.2,
-            ribs: Wave { amplitude: 0.45, phase: 0.0 },
-            diaphragm: Wave { amplitude: 0.5, phase: -0.1 },
-            abdominals: Wave { amplitude: 0.15, phase: 0.0 },
+            ribs: Wave {
+                amplitude: 0.45,
+                phase: 0.0,
+            },
+            diaphragm: Wave {
+                amplitude: 0.5,
+                phase: -0.1,
+            },
+            abdominals: Wave {
+                amplitude: 0.15,
+                phase: 0.0,
+            },
         }
     }
 
@@ -82,8 +102,16 @@ impl Drive {
     /// Checks every field; the error names the FMI parameter.
     pub fn validate(&self) -> Result<()> {
         check("drive.frequency", self.frequency, FREQUENCY_RANGE)?;
-        for (family, w) in [("ribs", self.ribs), ("diaphragm", self.diaphragm), ("abdominals", self.abdominals)] {
-            check(&format!("drive.{family}.amplitude"), w.amplitude, (0.0, 1.0))?;
+        for (family, w) in [
+            ("ribs", self.ribs),
+            ("diaphragm", self.diaphragm),
+            ("abdominals", self.abdominals),
+        ] {
+            check(
+                &format!("drive.{family}.amplitude"),
+                w.amplitude,
+                (0.0, 1.0),
+            )?;
             check(&format!("drive.{family}.phase"), w.phase, PHASE_RANGE)?;
         }
         Ok(())

@@ -20,8 +20,8 @@ mod snapshot;
 mod torso;
 
 pub use config::{Config, Scene, SolverConfig};
+pub(crate) use drive::check;
 pub use drive::{Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::Snapshot;
 pub use torso::{AdvanceStats, Torso};
-pub(crate) use drive::check;

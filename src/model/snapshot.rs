@@ -46,7 +46,9 @@ impl Snapshot {
         }
         let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
         if version != SNAPSHOT_VERSION {
-            return Err(bad(&format!("version {version}, this library reads {SNAPSHOT_VERSION}")));
+            return Err(bad(&format!(
+                "version {version}, this library reads {SNAPSHOT_VERSION}"
+            )));
         }
         serde_json::from_slice(&bytes[12..]).map_err(|e| bad(&e.to_string()))
     }

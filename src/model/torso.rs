@@ -27,7 +27,11 @@ impl Torso {
     /// Builds the model for `config` (validated first; the error names the bad field).
     pub fn new(config: Config) -> Result<Torso> {
         config.validate()?;
-        Ok(Torso { config, time: 0.0, inputs: [0.0; 8] })
+        Ok(Torso {
+            config,
+            time: 0.0,
+            inputs: [0.0; 8],
+        })
     }
 
     /// The configuration the model was built from (with the current drive).
@@ -61,7 +65,10 @@ impl Torso {
 
     /// Integrates from the current time to `t`, inputs held constant.
     pub fn advance_to(&mut self, t: f64) -> Result<AdvanceStats> {
-        Err(Error::Numerical { time: self.time, reason: format!("cannot advance to {t}: dynamics not built") })
+        Err(Error::Numerical {
+            time: self.time,
+            reason: format!("cannot advance to {t}: dynamics not built"),
+        })
     }
 
     /// Reads a quantity.

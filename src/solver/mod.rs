@@ -40,7 +40,9 @@ impl Method {
     }
     /// Method from its FMI code.
     pub fn from_code(code: i64) -> Option<Method> {
-        usize::try_from(code).ok().and_then(|i| Self::ALL.get(i).copied())
+        usize::try_from(code)
+            .ok()
+            .and_then(|i| Self::ALL.get(i).copied())
     }
     /// Short name (`dopri5`, `bs3`, ...).
     pub fn name(self) -> &'static str {
