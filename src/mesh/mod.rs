@@ -3,7 +3,10 @@
 //! repair, overlap resolution, geometric attachments and tetrahedral volume meshing. This
 //! module is the lowest layer of the crate and knows nothing of anatomy or dynamics.
 
+pub mod bvh;
+pub mod geom;
 pub mod io;
 mod trimesh;
 
+pub use bvh::{Bvh, Closest};
 pub use trimesh::{Aabb, Adjacency, MAX_ICOSPHERE_SUBDIVISIONS, Topology, TriMesh, edge_key};
