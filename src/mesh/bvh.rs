@@ -352,6 +352,21 @@ impl Bvh {
     }
 }
 
+/// One-sided Hausdorff distance: the largest distance from a vertex of `a` to the surface
+/// of `b` (vertex sampling of `a`).
+pub fn hausdorff_one_sided(a: &TriMesh, b: &Bvh) -> f64 {
+    a.vertices
+        .iter()
+        .filter_map(|p| b.closest(p))
+        .map(|c| c.distance)
+        .fold(0.0, f64::max)
+}
+
+/// Symmetric Hausdorff distance between two surfaces, sampled at their vertices.
+pub fn hausdorff(a: &TriMesh, b: &TriMesh) -> f64 {
+    hausdorff_one_sided(a, &Bvh::new(b)).max(hausdorff_one_sided(b, &Bvh::new(a)))
+}
+
 fn tri_box(c: &[Point3<f64>; 3]) -> Aabb {
     let mut b = Aabb::empty();
     for p in c {

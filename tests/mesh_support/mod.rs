@@ -1,0 +1,64 @@
+//! Shared helpers of the mesh tests: a deterministic random generator and test surfaces.
+#![allow(dead_code)]
+
+use breathing_torso::mesh::{Bvh, TriMesh};
+use nalgebra::{Point3, Vector3};
+
+/// SplitMix64: a small deterministic generator, enough for test noise.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [-1, 1).
+    pub fn signed(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
+/// An ellipsoid whose vertices are moved along their normal by uniform noise of amplitude
+/// `amp` (a fraction of the smallest semi-axis).
+pub fn noisy_ellipsoid(
+    r: Vector3<f64>,
+    subdivisions: u32,
+    amp: f64,
+    seed: u64,
+) -> (TriMesh, TriMesh) {
+    let clean = TriMesh::ellipsoid(&Point3::origin(), &r, subdivisions).unwrap();
+    let mut noisy = clean.clone();
+    let n = clean.vertex_normals();
+    let mut rng = Rng(seed);
+    let a = amp * r.min();
+    for (p, n) in noisy.vertices.iter_mut().zip(&n) {
+        *p += n * (a * rng.signed());
+    }
+    (clean, noisy)
+}
+
+/// RMS of |p| - 1 over the vertices: the residual to the unit sphere.
+pub fn sphere_residual(m: &TriMesh) -> f64 {
+    (m.vertices
+        .iter()
+        .map(|p| (p.coords.norm() - 1.0).powi(2))
+        .sum::<f64>()
+        / m.vertices.len() as f64)
+        .sqrt()
+}
+
+/// RMS distance from the vertices of `a` to the surface of `b`.
+pub fn rms_distance(a: &TriMesh, b: &TriMesh) -> f64 {
+    let bvh = Bvh::new(b);
+    let s: f64 = a
+        .vertices
+        .iter()
+        .map(|p| bvh.closest(p).unwrap().distance.powi(2))
+        .sum();
+    (s / a.vertices.len() as f64).sqrt()
+}
