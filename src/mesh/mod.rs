@@ -6,9 +6,11 @@
 pub mod bvh;
 pub mod geom;
 pub mod io;
+pub mod repair;
 pub mod smooth;
 mod trimesh;
 
 pub use bvh::{Bvh, Closest, hausdorff, hausdorff_one_sided};
+pub use repair::{RepairOptions, RepairReport, repair};
 pub use smooth::{FilterSpec, Taubin, Weights};
 pub use trimesh::{Aabb, Adjacency, MAX_ICOSPHERE_SUBDIVISIONS, Topology, TriMesh, edge_key};

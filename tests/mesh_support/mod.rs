@@ -62,3 +62,18 @@ pub fn rms_distance(a: &TriMesh, b: &TriMesh) -> f64 {
         .sum();
     (s / a.vertices.len() as f64).sqrt()
 }
+
+/// A unit sphere (icosphere level `s`) with a deliberate fold: the cap z > 0.85 is pushed down
+/// by 0.35 and widened 2.2 times, so that its rim cuts through the band of the sphere around
+/// it. Returns the folded surface; vertices with z < 0.3 are those of the plain sphere.
+pub fn folded_sphere(s: u32) -> TriMesh {
+    let mut m = TriMesh::icosphere(s).unwrap();
+    for p in &mut m.vertices {
+        if p.z > 0.85 {
+            p.x *= 2.2;
+            p.y *= 2.2;
+            p.z -= 0.35;
+        }
+    }
+    m
+}
