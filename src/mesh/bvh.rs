@@ -104,6 +104,11 @@ impl Bvh {
         }
     }
 
+    /// Corner positions of triangle `t` as stored in the tree.
+    pub fn corners(&self, t: usize) -> [Point3<f64>; 3] {
+        self.tris[t]
+    }
+
     /// Number of triangles in the tree.
     pub fn len(&self) -> usize {
         self.tris.len()

@@ -6,11 +6,13 @@
 pub mod bvh;
 pub mod geom;
 pub mod io;
+pub mod overlap;
 pub mod repair;
 pub mod smooth;
 mod trimesh;
 
 pub use bvh::{Bvh, Closest, hausdorff, hausdorff_one_sided};
+pub use overlap::{OverlapOptions, OverlapReport, Relation, resolve_overlap};
 pub use repair::{RepairOptions, RepairReport, repair};
 pub use smooth::{FilterSpec, Taubin, Weights};
 pub use trimesh::{Aabb, Adjacency, MAX_ICOSPHERE_SUBDIVISIONS, Topology, TriMesh, edge_key};
