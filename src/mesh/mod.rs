@@ -3,6 +3,7 @@
 //! repair, overlap resolution, geometric attachments and tetrahedral volume meshing. This
 //! module is the lowest layer of the crate and knows nothing of anatomy or dynamics.
 
+pub mod attach;
 pub mod bvh;
 pub mod geom;
 pub mod io;
@@ -11,6 +12,7 @@ pub mod repair;
 pub mod smooth;
 mod trimesh;
 
+pub use attach::{Attachment, Extrusion, Region, extrude_to_target};
 pub use bvh::{Bvh, Closest, hausdorff, hausdorff_one_sided};
 pub use overlap::{OverlapOptions, OverlapReport, Relation, resolve_overlap};
 pub use repair::{RepairOptions, RepairReport, repair};
