@@ -10,6 +10,7 @@ pub mod io;
 pub mod overlap;
 pub mod repair;
 pub mod smooth;
+pub mod tetra;
 mod trimesh;
 
 pub use attach::{Attachment, Extrusion, Region, extrude_to_target};
@@ -17,4 +18,5 @@ pub use bvh::{Bvh, Closest, hausdorff, hausdorff_one_sided};
 pub use overlap::{OverlapOptions, OverlapReport, Relation, resolve_overlap};
 pub use repair::{RepairOptions, RepairReport, repair};
 pub use smooth::{FilterSpec, Taubin, Weights};
+pub use tetra::{StuffOptions, TetMesh, TetQuality, stuff};
 pub use trimesh::{Aabb, Adjacency, MAX_ICOSPHERE_SUBDIVISIONS, Topology, TriMesh, edge_key};
