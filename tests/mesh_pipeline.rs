@@ -1,0 +1,82 @@
+//! The whole preparation pipeline: smoothing, repair, overlap; idempotent on clean input.
+
+mod mesh_support;
+
+use breathing_torso::mesh::pipeline::{is_inside, read_prepared, write_prepared};
+use breathing_torso::mesh::{PrepareOptions, TriMesh, hausdorff, prepare};
+use mesh_support::{folded_sphere, noisy_ellipsoid, rms_distance};
+use nalgebra::{Point3, Vector3};
+
+fn abdomen() -> TriMesh {
+    // pokes 5 mm through the skin in z
+    let (_, mut a) = noisy_ellipsoid(Vector3::new(0.10, 0.14, 0.125), 4, 0.01, 5);
+    a.translate(&Vector3::new(0.0, -0.1, 0.0));
+    a
+}
+
+#[test]
+fn noisy_skin_and_overlapping_abdomen_are_prepared() {
+    let (clean, skin) = noisy_ellipsoid(Vector3::new(0.15, 0.30, 0.12), 4, 0.03, 1);
+    let (out, rep) = prepare(skin.clone(), Some(abdomen()), &PrepareOptions::default()).unwrap();
+    let a = out.abdomen.as_ref().unwrap();
+    for m in [&out.skin, a] {
+        let t = m.topology();
+        assert!(t.is_closed() && t.is_consistently_oriented());
+        assert!(breathing_torso::mesh::repair::self_intersections(m).is_empty());
+    }
+    assert!(is_inside(a, &out.skin));
+    // noise reduced, shape kept: RMS distance to the clean skin falls, volume within 1 %
+    let (e0, e1) = (rms_distance(&skin, &clean), rms_distance(&out.skin, &clean));
+    assert!(e1 < 0.5 * e0, "{e0} -> {e1}");
+    assert!((out.skin.volume() / clean.volume() - 1.0).abs() < 0.01);
+    assert!(hausdorff(&out.skin, &clean) < 0.03 * 0.12);
+    let ov = rep.surfaces[1].overlap.as_ref().unwrap();
+    assert!(ov.penetrating_at_start > 0 && ov.vertices_moved > 0);
+    let md = rep.to_markdown();
+    assert!(md.contains("## skin") && md.contains("## abdomen"));
+}
+
+#[test]
+fn pipeline_is_idempotent_on_clean_input() {
+    let (_, skin) = noisy_ellipsoid(Vector3::new(0.15, 0.30, 0.12), 4, 0.03, 2);
+    let (once, _) = prepare(skin, Some(abdomen()), &PrepareOptions::default()).unwrap();
+    let (twice, rep) = prepare(
+        once.skin.clone(),
+        once.abdomen.clone(),
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    // the second pass finds the surfaces smooth, sound and apart: nothing changes
+    assert!(twice == once, "second pass changed the surfaces");
+    for s in &rep.surfaces {
+        assert!(s.smoothing.as_ref().unwrap().skipped, "{:?}", s.smoothing);
+        assert_eq!(
+            s.repair.collapsed_edges + s.repair.triangles_removed + s.repair.opposite_faces_removed,
+            0
+        );
+    }
+    assert_eq!(rep.surfaces[1].overlap.as_ref().unwrap().vertices_moved, 0);
+    // a clean generated surface is left exactly as it is, too
+    let clean = TriMesh::ellipsoid(&Point3::origin(), &Vector3::new(0.15, 0.30, 0.12), 4).unwrap();
+    let (out, rep2) = prepare(clean.clone(), None, &PrepareOptions::default()).unwrap();
+    assert!(out.skin == clean, "{:?}", rep2.surfaces[0]);
+}
+
+#[test]
+fn folded_skin_is_repaired_and_written() {
+    let mut skin = folded_sphere(4);
+    skin.scale(&Point3::origin(), &Vector3::new(0.15, 0.3, 0.15));
+    let (out, rep) = prepare(skin, None, &PrepareOptions::default()).unwrap();
+    assert!(rep.surfaces[0].repair.intersecting_pairs > 0);
+    assert_eq!(rep.surfaces[0].output.self_intersections, 0);
+    assert!(rep.surfaces[0].output.topology.is_closed());
+    let dir = std::env::temp_dir().join(format!("torso_prepared_{}", std::process::id()));
+    write_prepared(&dir, &out, &rep).unwrap();
+    let back = read_prepared(&dir).unwrap();
+    assert_eq!(back.skin.num_triangles(), out.skin.num_triangles());
+    assert!(back.abdomen.is_none());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert!(json["times"]["repair_ms"].as_f64().unwrap() >= 0.0);
+    assert!(prepare(TriMesh::default(), None, &PrepareOptions::default()).is_err());
+}
