@@ -1,5 +1,7 @@
 //! The `torso` command-line tool: one file per subcommand.
 
+pub mod mesh;
+
 use clap::{Parser, Subcommand};
 
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
@@ -16,6 +18,12 @@ pub struct Cli {
 pub enum Command {
     /// Print the library version.
     Version,
+    /// Prepare, inspect and volume-mesh subject surfaces.
+    Mesh {
+        /// The mesh subcommand.
+        #[command(subcommand)]
+        command: mesh::MeshCommand,
+    },
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -26,6 +34,7 @@ pub fn main() -> i32 {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
+        Command::Mesh { command } => mesh::run(command),
     };
     match result {
         Ok(()) => 0,
