@@ -122,3 +122,26 @@ fn a_short_surface_is_extended_to_its_target() {
     assert_eq!(e2.bottom_faces, 0);
     assert_eq!(again, m);
 }
+
+#[test]
+fn attachments_are_saved_and_loaded() {
+    use breathing_torso::mesh::attach::{load, save};
+    let m = TriMesh::icosphere(3).unwrap();
+    let a = Attachment::from_vertices("rectus-pelvis", &m, &[0, 1, 2]).unwrap();
+    let dir = std::env::temp_dir().join(format!("torso_att_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("attachments.json");
+    save(&p, std::slice::from_ref(&a)).unwrap();
+    assert_eq!(load(&p).unwrap(), vec![a]);
+    std::fs::write(&p, "[\n  {\"name\": \"x\",\n   \"region\": oops}\n]").unwrap();
+    match load(&p) {
+        Err(breathing_torso::Error::Parse { line, .. }) => assert_eq!(line, 3),
+        other => panic!("{other:?}"),
+    }
+    std::fs::write(
+        &p,
+        r#"[{"name":"x","region":{"Balls":{"points":[[0,0,0]],"radius":-1}}}]"#,
+    )
+    .unwrap();
+    assert!(load(&p).is_err());
+}

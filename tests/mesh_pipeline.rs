@@ -30,7 +30,7 @@ fn noisy_skin_and_overlapping_abdomen_are_prepared() {
     assert!(e1 < 0.5 * e0, "{e0} -> {e1}");
     assert!((out.skin.volume() / clean.volume() - 1.0).abs() < 0.01);
     assert!(hausdorff(&out.skin, &clean) < 0.03 * 0.12);
-    let ov = rep.surfaces[1].overlap.as_ref().unwrap();
+    let ov = &rep.surfaces[1].overlaps[0].report;
     assert!(ov.penetrating_at_start > 0 && ov.vertices_moved > 0);
     let md = rep.to_markdown();
     assert!(md.contains("## skin") && md.contains("## abdomen"));
@@ -55,7 +55,12 @@ fn pipeline_is_idempotent_on_clean_input() {
             0
         );
     }
-    assert_eq!(rep.surfaces[1].overlap.as_ref().unwrap().vertices_moved, 0);
+    assert!(
+        rep.surfaces[1]
+            .overlaps
+            .iter()
+            .all(|o| o.report.vertices_moved == 0)
+    );
     // a clean generated surface is left exactly as it is, too
     let clean = TriMesh::ellipsoid(&Point3::origin(), &Vector3::new(0.15, 0.30, 0.12), 4).unwrap();
     let (out, rep2) = prepare(clean.clone(), None, &PrepareOptions::default()).unwrap();
@@ -79,4 +84,66 @@ fn folded_skin_is_repaired_and_written() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     assert!(json["times"]["repair_ms"].as_f64().unwrap() >= 0.0);
     assert!(prepare(TriMesh::default(), None, &PrepareOptions::default()).is_err());
+}
+
+#[test]
+fn ribs_go_inside_the_skin_and_the_abdomen_out_of_the_ribs() {
+    use breathing_torso::mesh::overlap::penetrating_vertices;
+    use breathing_torso::mesh::pipeline::prepare_all;
+    use breathing_torso::mesh::{Bvh, Relation};
+    let skin = TriMesh::ellipsoid(&Point3::origin(), &Vector3::new(0.15, 0.30, 0.12), 4).unwrap();
+    let abd = TriMesh::ellipsoid(
+        &Point3::new(0.0, -0.1, 0.0),
+        &Vector3::new(0.10, 0.14, 0.10),
+        4,
+    )
+    .unwrap();
+    // a rib-like rod that pokes out of the skin at both ends and cuts 10 mm into the abdomen
+    let rib = TriMesh::ellipsoid(
+        &Point3::new(0.0, -0.05, 0.095),
+        &Vector3::new(0.2, 0.012, 0.012),
+        3,
+    )
+    .unwrap();
+    let (out, rep) = prepare_all(
+        skin,
+        Some(abd),
+        vec![("rib7_left".into(), rib)],
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    let (skin, abd, rib) = (&out.skin, out.abdomen.as_ref().unwrap(), &out.ribs[0].1);
+    assert!(is_inside(rib, skin));
+    assert!(is_inside(abd, skin));
+    let rb = Bvh::new(rib);
+    assert!(penetrating_vertices(abd, &rb, Relation::Outside, 0.0).is_empty());
+    assert!(rb.intersections_with(&Bvh::new(abd)).is_empty());
+    assert!(
+        rep.surfaces[2]
+            .overlaps
+            .iter()
+            .any(|o| o.report.vertices_moved > 0)
+    );
+    // the rib is shortened to the skin's chord along its axis (0.176 at its height), not
+    // squashed: it still spans most of that chord and keeps its thickness
+    let chord = 2.0 * 0.15 * (1.0f64 - (0.095f64 / 0.12).powi(2) - (0.05f64 / 0.3).powi(2)).sqrt();
+    let ext = rib.bounding_box().extent();
+    assert!(
+        ext.x > 0.8 * chord && ext.x < 1.1 * chord,
+        "{ext:?} vs chord {chord}"
+    );
+    assert!(ext.y > 0.02 && ext.z > 0.02, "{ext:?}");
+    assert!(
+        rep.surfaces[1]
+            .overlaps
+            .iter()
+            .any(|o| o.against == "rib7_left" && o.report.vertices_moved > 0)
+    );
+    for (name, m) in [("skin", skin), ("abdomen", abd), ("rib", rib)] {
+        let si = breathing_torso::mesh::repair::self_intersections(m).len();
+        assert!(
+            m.is_closed() && si == 0,
+            "{name}: {si} self-intersecting pairs"
+        );
+    }
 }

@@ -5,15 +5,17 @@ use std::path::PathBuf;
 
 use clap::Subcommand;
 
-use crate::mesh::pipeline::{MeshInfo, PrepareOptions, prepare, write_prepared};
+use crate::mesh::pipeline::{
+    MeshInfo, PrepareOptions, prepare_all, read_surface_dir, write_prepared,
+};
 use crate::mesh::{StuffOptions, Taubin, io, stuff};
 use crate::{Error, Result};
 
 /// Subcommands of `torso mesh`.
 #[derive(Subcommand, Debug)]
 pub enum MeshCommand {
-    /// Smooth, repair and resolve overlaps of a skin (and abdominal cavity) surface; writes
-    /// skin.obj, abdomen.obj, report.json and report.md into the output directory.
+    /// Smooth, repair and resolve overlaps of a skin (with abdominal cavity and ribs); writes
+    /// skin.obj, abdomen.obj, ribs/*.obj, report.json and report.md into the output directory.
     Prepare {
         /// Skin surface (OBJ, STL, OFF or VTK).
         #[arg(long)]
@@ -21,6 +23,9 @@ pub enum MeshCommand {
         /// Abdominal cavity surface, kept inside the skin.
         #[arg(long)]
         abdomen: Option<PathBuf>,
+        /// Directory of rib (bone) surfaces, kept inside the skin and out of the abdomen.
+        #[arg(long)]
+        ribs: Option<PathBuf>,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -70,6 +75,7 @@ pub fn run(cmd: MeshCommand) -> Result<()> {
         MeshCommand::Prepare {
             skin,
             abdomen,
+            ribs,
             out,
             no_smooth,
             lambda,
@@ -89,7 +95,8 @@ pub fn run(cmd: MeshCommand) -> Result<()> {
                 margin,
                 ..PrepareOptions::default()
             };
-            let (prepared, report) = prepare(skin, abdomen, &opts)?;
+            let ribs = ribs.map(read_surface_dir).transpose()?.unwrap_or_default();
+            let (prepared, report) = prepare_all(skin, abdomen, ribs, &opts)?;
             write_prepared(&out, &prepared, &report)?;
             print!("{}", report.to_markdown());
             println!("written to {}", out.display());

@@ -107,6 +107,7 @@ impl Attachment {
                 format!("[0, {})", mesh.vertices.len()),
             ));
         }
+        mesh.validate()?;
         let adj = mesh.adjacency();
         let (mut sum, mut count) = (0.0, 0usize);
         for &i in indices {
@@ -143,6 +144,52 @@ impl Attachment {
             .filter(|&i| self.contains(&mesh.vertices[i as usize]))
             .collect()
     }
+}
+
+/// Writes attachments as a JSON array (the `attachments.json` of a prepared directory).
+pub fn save(path: impl AsRef<std::path::Path>, attachments: &[Attachment]) -> Result<()> {
+    let path = path.as_ref();
+    let json = serde_json::to_string_pretty(attachments)
+        .map_err(|e| Error::State(format!("attachments: {e}")))?;
+    std::fs::write(path, json).map_err(|e| Error::io(path, e))
+}
+
+/// Reads attachments written by [`save`]; malformed JSON is reported with its line and
+/// column.
+pub fn load(path: impl AsRef<std::path::Path>) -> Result<Vec<Attachment>> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let list: Vec<Attachment> = serde_json::from_str(&text).map_err(|e| Error::Parse {
+        path: path.display().to_string(),
+        line: e.line(),
+        column: e.column(),
+        message: e.to_string(),
+    })?;
+    for a in &list {
+        let ok = match &a.region {
+            Region::Balls { points, radius } => {
+                radius.is_finite()
+                    && *radius > 0.0
+                    && points
+                        .iter()
+                        .all(|p| p.coords.iter().all(|c| c.is_finite()))
+            }
+            Region::Hull { planes, tolerance } => {
+                tolerance.is_finite()
+                    && planes
+                        .iter()
+                        .all(|(n, d)| d.is_finite() && n.iter().all(|c| c.is_finite()))
+            }
+        };
+        if !ok {
+            return Err(Error::invalid(
+                format!("attachment {:?} in {}", a.name, path.display()),
+                "non-finite or non-positive size",
+                "finite points, planes and a positive radius",
+            ));
+        }
+    }
+    Ok(list)
 }
 
 fn best_fit_normal(points: &[Point3<f64>]) -> Vector3<f64> {
@@ -299,6 +346,7 @@ pub fn extrude_to_target(
     target: &[Point3<f64>],
     theta_deg: f64,
 ) -> Result<Extrusion> {
+    mesh.validate()?;
     let d = dir
         .try_normalize(1e-300)
         .ok_or_else(|| Error::invalid("direction", format!("{dir:?}"), "non-zero"))?;
@@ -479,7 +527,7 @@ mod tests {
         for p in &pts {
             for (n, d) in &planes {
                 assert!(
-                    n.dot(&p.coords) - d <= 1e-9,
+                    n.dot(&p.coords) - d <= 1e-6,
                     "{p:?} outside by {}",
                     n.dot(&p.coords) - d
                 );

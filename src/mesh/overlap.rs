@@ -99,9 +99,51 @@ fn violation(
     Some(c.point + n * (sign * margin * 1.05))
 }
 
+/// Whether `p` keeps `relation` to `fixed` with clearance `margin`.
+fn satisfied(fixed: &Bvh, p: &nalgebra::Point3<f64>, relation: Relation, margin: f64) -> bool {
+    violation(fixed, p, relation, margin).is_none()
+}
+
+/// The first point on the segment from `p` towards `centre` (the moving surface's centroid,
+/// the inward direction of a star-shaped surface) that keeps `relation` to `fixed` with 1.05
+/// times the margin: 32 even steps, then bisection. None when no such point exists.
+fn inward_target(
+    fixed: &Bvh,
+    p: &nalgebra::Point3<f64>,
+    centre: &nalgebra::Point3<f64>,
+    relation: Relation,
+    margin: f64,
+) -> Option<nalgebra::Point3<f64>> {
+    let at = |t: f64| p + (centre - p) * t;
+    let m = margin * 1.05;
+    let steps = 32;
+    let mut lo = 0.0;
+    let mut hi = None;
+    for k in 1..=steps {
+        let t = k as f64 / steps as f64;
+        if satisfied(fixed, &at(t), relation, m) {
+            hi = Some(t);
+            break;
+        }
+        lo = t;
+    }
+    let mut hi = hi?;
+    for _ in 0..20 {
+        let mid = 0.5 * (lo + hi);
+        if satisfied(fixed, &at(mid), relation, m) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(at(hi))
+}
+
 /// Moves vertices of `moving` until it satisfies `relation` to the closed surface `fixed`
-/// with the given margin: each round pushes every violating vertex (and every vertex of a
-/// triangle crossing `fixed`) to the margin along `fixed`'s normal at its closest point,
+/// with the given margin: each round pushes every violating vertex inward, along the ray to
+/// the moving surface's centroid, to the first point that keeps the margin (or, when that
+/// ray finds none, to the margin along `fixed`'s normal at its closest point); vertices of
+/// triangles still crossing `fixed` move a margin further away from it;
 /// then smooths `smoothing_rings` rings around the pushed vertices (which hold still) with
 /// lambda|mu = 0.5|-0.53, N = 3. Fails when violations remain after `max_iterations`.
 pub fn resolve_overlap(
@@ -109,11 +151,14 @@ pub fn resolve_overlap(
     fixed: &TriMesh,
     opts: &OverlapOptions,
 ) -> Result<OverlapReport> {
+    moving.validate()?;
+    fixed.validate()?;
     if !(opts.margin.is_finite() && opts.margin >= 0.0) {
         return Err(Error::invalid("margin", opts.margin, "[0, inf)"));
     }
     let bvh = Bvh::new(fixed);
     let start = moving.vertices.clone();
+    let centre = moving.centroid();
     let adj = moving.adjacency();
     let smooth = Taubin {
         iterations: 3,
@@ -151,16 +196,21 @@ pub fn resolve_overlap(
         let mut free = vec![false; moving.vertices.len()];
         for &i in &bad {
             let p = moving.vertices[i as usize];
-            let target = violation(&bvh, &p, opts.relation, opts.margin).unwrap_or_else(|| {
-                // a vertex of a crossing triangle that itself keeps its clearance: nudge it
-                let n = moving.vertex_normals()[i as usize];
-                let s = if opts.relation == Relation::Inside {
-                    -1.0
-                } else {
-                    1.0
-                };
-                p + n * (s * opts.margin)
-            });
+            let target = match violation(&bvh, &p, opts.relation, opts.margin) {
+                Some(fallback) => {
+                    inward_target(&bvh, &p, &centre, opts.relation, opts.margin).unwrap_or(fallback)
+                }
+                None => {
+                    // a vertex of a crossing triangle that itself keeps its clearance: move
+                    // it a margin further away from the fixed surface
+                    match bvh.closest(&p) {
+                        Some(c) if c.distance > 0.0 => {
+                            p + (p - c.point) * (opts.margin / c.distance)
+                        }
+                        _ => p,
+                    }
+                }
+            };
             moving.vertices[i as usize] = target;
             free[i as usize] = true;
             ever[i as usize] = true;

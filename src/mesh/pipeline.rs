@@ -8,7 +8,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use super::overlap::{OverlapOptions, OverlapReport, Relation, resolve_overlap};
-use super::repair::{RepairOptions, RepairReport, repair, self_intersections};
+use super::repair::{
+    RepairOptions, RepairReport, remove_self_intersections, repair, self_intersections,
+};
 use super::{Bvh, Taubin, Topology, TriMesh, hausdorff, io};
 use crate::{Error, Result};
 
@@ -137,10 +139,24 @@ pub struct SurfaceReport {
     pub smoothing: Option<SmoothReport>,
     /// Repair.
     pub repair: RepairReport,
-    /// Overlap resolution against the skin (abdomen only).
-    pub overlap: Option<OverlapReport>,
+    /// Overlap resolution steps in which this surface moved against another.
+    pub overlaps: Vec<OverlapStep>,
     /// Measures of the output.
     pub output: MeshInfo,
+}
+
+/// One overlap resolution of a surface against a fixed one.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct OverlapStep {
+    /// Name of the fixed surface.
+    pub against: String,
+    /// Required relation to it.
+    pub relation: Relation,
+    /// What was done.
+    pub report: OverlapReport,
+    /// Self-intersecting pairs the pushing created (a thin part squeezed flat), removed
+    /// again by [`super::repair::remove_self_intersections`] before the next round.
+    pub self_intersections_removed: usize,
 }
 
 /// Wall time of each stage [ms].
@@ -168,8 +184,10 @@ pub struct PrepareReport {
 pub struct Prepared {
     /// The skin.
     pub skin: TriMesh,
-    /// The abdominal cavity, inside the skin.
+    /// The abdominal cavity, inside the skin and outside the ribs.
     pub abdomen: Option<TriMesh>,
+    /// Named rib (or other bone) surfaces, inside the skin.
+    pub ribs: Vec<(String, TriMesh)>,
 }
 
 fn check_input(name: &str, m: &TriMesh) -> Result<()> {
@@ -180,21 +198,45 @@ fn check_input(name: &str, m: &TriMesh) -> Result<()> {
     Ok(())
 }
 
-/// Runs smoothing, repair and (with an abdomen) overlap resolution; see the module doc.
+/// Runs smoothing, repair and (with an abdomen) overlap resolution on a skin and an
+/// optional abdominal cavity; see [`prepare_all`].
 pub fn prepare(
     skin: TriMesh,
     abdomen: Option<TriMesh>,
+    opts: &PrepareOptions,
+) -> Result<(Prepared, PrepareReport)> {
+    prepare_all(skin, abdomen, Vec::new(), opts)
+}
+
+/// Rounds of the overlap stage with ribs (each round: ribs into the skin, abdomen out of
+/// the ribs, abdomen into the skin).
+const OVERLAP_ROUNDS: usize = 4;
+
+/// Runs the pipeline on a skin, an optional abdominal cavity and named rib surfaces: every
+/// surface is smoothed (unless already smooth) and repaired; then ribs are moved inside the
+/// skin, the abdomen out of every rib and inside the skin, repeated until a round moves
+/// nothing.
+pub fn prepare_all(
+    skin: TriMesh,
+    abdomen: Option<TriMesh>,
+    ribs: Vec<(String, TriMesh)>,
     opts: &PrepareOptions,
 ) -> Result<(Prepared, PrepareReport)> {
     check_input("skin", &skin)?;
     if let Some(a) = &abdomen {
         check_input("abdomen", a)?;
     }
+    for (n, m) in &ribs {
+        check_input(n, m)?;
+    }
     let mut times = StageTimes::default();
+    let has_abdomen = abdomen.is_some();
     let mut surfaces: Vec<(String, TriMesh)> = vec![("skin".into(), skin)];
     if let Some(a) = abdomen {
         surfaces.push(("abdomen".into(), a));
     }
+    let first_rib = surfaces.len();
+    surfaces.extend(ribs);
     let mut reports: Vec<SurfaceReport> = surfaces
         .iter()
         .map(|(n, m)| {
@@ -204,7 +246,7 @@ pub fn prepare(
                 input: info.clone(),
                 smoothing: None,
                 repair: RepairReport::default(),
-                overlap: None,
+                overlaps: Vec::new(),
                 output: info,
             }
         })
@@ -212,38 +254,7 @@ pub fn prepare(
     let t0 = Instant::now();
     if let Some(taubin) = &opts.taubin {
         for ((_, m), rep) in surfaces.iter_mut().zip(&mut reports) {
-            let before = m.clone();
-            let mut smoothed = m.clone();
-            taubin.smooth(&mut smoothed)?;
-            let edge = before.mean_edge_length().max(f64::MIN_POSITIVE);
-            // shape change only: distance of the smoothed vertices to the input surface
-            // (the umbrella operator also slides vertices along the surface, which is harmless)
-            let input = Bvh::new(&before);
-            let rms = (smoothed
-                .vertices
-                .iter()
-                .filter_map(|p| input.closest(p))
-                .map(|c| c.distance.powi(2))
-                .sum::<f64>()
-                / before.vertices.len().max(1) as f64)
-                .sqrt()
-                / edge;
-            let skipped = rms < opts.smooth_threshold;
-            if !skipped {
-                *m = smoothed;
-            }
-            let v0 = before.volume();
-            rep.smoothing = Some(SmoothReport {
-                taubin: *taubin,
-                volume_change: if v0 != 0.0 {
-                    m.volume() / v0 - 1.0
-                } else {
-                    0.0
-                },
-                hausdorff: hausdorff(&before, m),
-                rms_displacement: rms,
-                skipped,
-            });
+            rep.smoothing = Some(smooth_stage(m, taubin, opts.smooth_threshold)?);
         }
     }
     times.smoothing_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -255,33 +266,114 @@ pub fn prepare(
     }
     times.repair_ms = t1.elapsed().as_secs_f64() * 1e3;
     let t2 = Instant::now();
-    if surfaces.len() > 1 {
-        let (first, rest) = surfaces.split_at_mut(1);
-        let skin = &first[0].1;
-        let abd = &mut rest[0].1;
-        let mut oo = OverlapOptions::for_mesh(abd, Relation::Inside);
-        if let Some(m) = opts.margin {
-            oo.margin = m;
+    let mut steps: Vec<(usize, usize, Relation)> = Vec::new();
+    for r in first_rib..surfaces.len() {
+        steps.push((r, 0, Relation::Inside));
+    }
+    if has_abdomen {
+        for r in first_rib..surfaces.len() {
+            steps.push((1, r, Relation::Outside));
         }
-        reports[1].overlap = Some(
-            resolve_overlap(abd, skin, &oo)
-                .map_err(|e| Error::State(format!("abdomen inside the skin: {e}")))?,
-        );
+        steps.push((1, 0, Relation::Inside));
+    }
+    for round in 0..OVERLAP_ROUNDS {
+        let mut moved = 0;
+        for &(m, f, relation) in &steps {
+            let fixed = surfaces[f].clone();
+            let name = surfaces[m].0.clone();
+            let moving = &mut surfaces[m].1;
+            let mut oo = OverlapOptions::for_mesh(moving, relation);
+            if let Some(margin) = opts.margin {
+                oo.margin = margin;
+            }
+            let report = resolve_overlap(moving, &fixed.1, &oo).map_err(|e| {
+                let rel = if relation == Relation::Inside {
+                    "inside"
+                } else {
+                    "outside"
+                };
+                Error::State(format!("{name} {rel} the {}: {e}", fixed.0))
+            })?;
+            moved += report.vertices_moved;
+            let mut removed = 0;
+            if report.vertices_moved > 0 {
+                let si = remove_self_intersections(moving, 6);
+                if si.pairs_left > 0 {
+                    return Err(Error::State(format!(
+                        "{name}: {} self-intersecting pairs left after moving it against the {}",
+                        si.pairs_left, fixed.0
+                    )));
+                }
+                removed = si.pairs_found;
+                moving.remove_unreferenced_vertices();
+            }
+            if round == 0 || report.vertices_moved > 0 {
+                reports[m].overlaps.push(OverlapStep {
+                    against: fixed.0.clone(),
+                    relation,
+                    report,
+                    self_intersections_removed: removed,
+                });
+            }
+        }
+        if moved == 0 {
+            break;
+        }
     }
     times.overlap_ms = t2.elapsed().as_secs_f64() * 1e3;
     for ((_, m), rep) in surfaces.iter().zip(&mut reports) {
         rep.output = MeshInfo::of(m);
     }
+    let ribs = surfaces.split_off(first_rib);
     let mut it = surfaces.into_iter().map(|(_, m)| m);
     let skin = it.next().unwrap_or_default();
     let abdomen = it.next();
     Ok((
-        Prepared { skin, abdomen },
+        Prepared {
+            skin,
+            abdomen,
+            ribs,
+        },
         PrepareReport {
             surfaces: reports,
             times,
         },
     ))
+}
+
+/// Smooths `m` unless the filter would barely change its shape (see
+/// [`PrepareOptions::smooth_threshold`]).
+fn smooth_stage(m: &mut TriMesh, taubin: &Taubin, threshold: f64) -> Result<SmoothReport> {
+    let before = m.clone();
+    let mut smoothed = m.clone();
+    taubin.smooth(&mut smoothed)?;
+    let edge = before.mean_edge_length().max(f64::MIN_POSITIVE);
+    // shape change only: distance of the smoothed vertices to the input surface (the
+    // umbrella operator also slides vertices along the surface, which is harmless)
+    let input = Bvh::new(&before);
+    let sum: f64 = smoothed
+        .vertices
+        .iter()
+        .filter_map(|p| input.closest(p))
+        .map(|c| c.distance.powi(2))
+        .sum();
+    let rms = (sum / before.vertices.len().max(1) as f64).sqrt() / edge;
+    let skipped = rms < threshold;
+    if !skipped {
+        *m = smoothed;
+    }
+    let v0 = before.volume();
+    Ok(SmoothReport {
+        taubin: *taubin,
+        volume_change: if v0 != 0.0 {
+            m.volume() / v0 - 1.0
+        } else {
+            0.0
+        },
+        hausdorff: hausdorff(&before, m),
+        rms_displacement: rms,
+        skipped,
+    })
 }
 
 impl PrepareReport {
@@ -343,16 +435,23 @@ impl PrepareReport {
                 rp.triangles_added,
                 rp.intersecting_pairs_left
             );
-            if let Some(o) = &r.overlap {
+            for o in &r.overlaps {
+                let rel = if o.relation == Relation::Inside {
+                    "inside"
+                } else {
+                    "outside"
+                };
+                let p = &o.report;
                 let _ = writeln!(
                     s,
-                    "Overlap with the skin: {} penetrating vertices and {} crossing pairs at the start; \
+                    "Overlap, {rel} the {}: {} violating vertices and {} crossing pairs at the start; \
                      {} vertices moved (at most {:.3e}) in {} rounds.\n",
-                    o.penetrating_at_start,
-                    o.crossing_pairs_at_start,
-                    o.vertices_moved,
-                    o.max_displacement,
-                    o.iterations
+                    o.against,
+                    p.penetrating_at_start,
+                    p.crossing_pairs_at_start,
+                    p.vertices_moved,
+                    p.max_displacement,
+                    p.iterations
                 );
             }
         }
@@ -360,7 +459,8 @@ impl PrepareReport {
     }
 }
 
-/// Writes `skin.obj`, `abdomen.obj` (if any), `report.json` and `report.md` into `dir`
+/// Writes `skin.obj`, `abdomen.obj` (if any), `ribs/<name>.obj`, `report.json` and
+/// `report.md` into `dir`
 /// (created if missing): the layout a prepared subject mesh directory has.
 pub fn write_prepared(
     dir: impl AsRef<Path>,
@@ -372,6 +472,13 @@ pub fn write_prepared(
     io::write(&prepared.skin, dir.join("skin.obj"))?;
     if let Some(a) = &prepared.abdomen {
         io::write(a, dir.join("abdomen.obj"))?;
+    }
+    if !prepared.ribs.is_empty() {
+        let rd = dir.join("ribs");
+        std::fs::create_dir_all(&rd).map_err(|e| Error::io(&rd, e))?;
+        for (name, m) in &prepared.ribs {
+            io::write(m, rd.join(format!("{name}.obj")))?;
+        }
     }
     let json = serde_json::to_string_pretty(report)
         .map_err(|e| Error::State(format!("report serialisation: {e}")))?;
@@ -391,7 +498,40 @@ pub fn read_prepared(dir: impl AsRef<Path>) -> Result<Prepared> {
     } else {
         None
     };
-    Ok(Prepared { skin, abdomen })
+    let rd = dir.join("ribs");
+    let ribs = if rd.is_dir() {
+        read_surface_dir(&rd)?
+    } else {
+        Vec::new()
+    };
+    Ok(Prepared {
+        skin,
+        abdomen,
+        ribs,
+    })
+}
+
+/// Reads every surface file (obj, stl, off, vtk) of a directory, sorted by file name, named
+/// by its file stem.
+pub fn read_surface_dir(dir: impl AsRef<Path>) -> Result<Vec<(String, TriMesh)>> {
+    let dir = dir.as_ref();
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| Error::io(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| io::Format::from_path(p).is_ok())
+        .collect();
+    files.sort();
+    files
+        .into_iter()
+        .map(|p| {
+            let name = p
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("surface")
+                .to_string();
+            io::read(&p).map(|m| (name, m))
+        })
+        .collect()
 }
 
 /// Whether every vertex of `inner` lies inside `outer` (ray parity).

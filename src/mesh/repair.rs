@@ -74,6 +74,7 @@ pub struct RepairReport {
 /// Runs the whole repair: short-edge collapse, sliver flips, opposite-pair removal, then
 /// self-intersection removal. Fails when intersections remain after `max_rounds`.
 pub fn repair(mesh: &mut TriMesh, opts: &RepairOptions) -> Result<RepairReport> {
+    mesh.validate()?;
     opts.validate()?;
     let mut rep = RepairReport::default();
     if opts.eps_edge > 0.0 {

@@ -186,6 +186,7 @@ impl Taubin {
     /// Smooths the vertices with `free[i] == true`; the others stay where they are but still
     /// act as neighbours. Boundary vertices of an open surface are always held.
     pub fn smooth_subset(&self, mesh: &mut TriMesh, free: &[bool]) -> Result<()> {
+        mesh.validate()?;
         self.validate()?;
         if free.len() != mesh.vertices.len() {
             return Err(Error::invalid(

@@ -164,6 +164,7 @@ impl Lattice {
 
 /// Fills the closed surface with tetrahedra by isosurface stuffing.
 pub fn stuff(surface: &TriMesh, opts: &StuffOptions) -> Result<TetMesh> {
+    surface.validate()?;
     let h = opts.spacing;
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::invalid("spacing", h, "(0, inf)"));
