@@ -74,3 +74,19 @@ fn a_surface_is_pushed_out_of_another() {
         }
     }
 }
+
+#[test]
+fn an_enclosed_surface_cannot_be_pushed_out() {
+    let small = TriMesh::ellipsoid(&Point3::origin(), &Vector3::new(0.05, 0.05, 0.05), 3).unwrap();
+    let mut big = TriMesh::ellipsoid(&Point3::origin(), &Vector3::new(0.2, 0.2, 0.2), 3).unwrap();
+    let opts = OverlapOptions::for_mesh(&big, Relation::Outside);
+    assert!(matches!(
+        resolve_overlap(&mut big, &small, &opts),
+        Err(breathing_torso::Error::State(_))
+    ));
+    let bad = OverlapOptions {
+        margin: f64::NAN,
+        ..opts
+    };
+    assert!(resolve_overlap(&mut big, &small, &bad).is_err());
+}

@@ -12,12 +12,12 @@ use nalgebra::Point3;
 use super::TriMesh;
 use crate::{Error, Result};
 
-/// Surface file formats known to [`read`] and [`write`].
+/// Surface file formats known to [`read()`] and [`write()`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
     /// Wavefront OBJ (`v` and `f` records).
     Obj,
-    /// Binary STL (written by [`write`]; reading detects binary or ASCII).
+    /// Binary STL (written by [`write()`]; reading detects binary or ASCII).
     Stl,
     /// ASCII STL.
     StlAscii,

@@ -181,17 +181,23 @@ pub fn resolve_overlap(
         }
         if bad.is_empty() {
             rep.iterations = it;
+            if opts.relation == Relation::Outside {
+                // pushing can wrap the moving surface around the whole fixed one
+                let mb = Bvh::new(moving);
+                if fixed.vertices.iter().any(|p| mb.contains(p)) {
+                    return Err(Error::State(
+                        "the fixed surface lies inside the moving one: pushing cannot separate them".into(),
+                    ));
+                }
+            }
             break;
         }
         if it == opts.max_iterations {
-            return Err(Error::Numerical {
-                time: 0.0,
-                reason: format!(
-                    "{} vertices still violate the overlap constraint after {} rounds",
-                    bad.len(),
-                    opts.max_iterations
-                ),
-            });
+            return Err(Error::State(format!(
+                "{} vertices still violate the overlap constraint after {} rounds",
+                bad.len(),
+                opts.max_iterations
+            )));
         }
         let mut free = vec![false; moving.vertices.len()];
         for &i in &bad {

@@ -159,7 +159,7 @@ pub struct OverlapStep {
     pub self_intersections_removed: usize,
 }
 
-/// Wall time of each stage [ms].
+/// Wall time of each stage (ms).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct StageTimes {
     /// Smoothing of all surfaces.

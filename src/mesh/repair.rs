@@ -91,13 +91,10 @@ pub fn repair(mesh: &mut TriMesh, opts: &RepairOptions) -> Result<RepairReport> 
     rep.seed_triangle = si.seed;
     rep.seed_fallback = si.seed_fallback;
     if si.pairs_left > 0 {
-        return Err(Error::Numerical {
-            time: 0.0,
-            reason: format!(
-                "{} self-intersecting triangle pairs remain after {} removal rounds",
-                si.pairs_left, opts.max_rounds
-            ),
-        });
+        return Err(Error::State(format!(
+            "{} self-intersecting triangle pairs remain after {} removal rounds",
+            si.pairs_left, opts.max_rounds
+        )));
     }
     Ok(rep)
 }

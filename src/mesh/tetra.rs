@@ -37,9 +37,9 @@ pub struct TetQuality {
     pub tets: usize,
     /// Number of vertices.
     pub vertices: usize,
-    /// Smallest dihedral angle [deg].
+    /// Smallest dihedral angle (degrees).
     pub min_dihedral_deg: f64,
-    /// Largest dihedral angle [deg].
+    /// Largest dihedral angle (degrees).
     pub max_dihedral_deg: f64,
     /// Largest radius-edge ratio (circumradius / shortest edge; 0.612 for a regular tet).
     pub max_radius_edge: f64,
@@ -624,7 +624,7 @@ impl TetMesh {
     }
 }
 
-/// The six interior dihedral angles of a tetrahedron [deg].
+/// The six interior dihedral angles of a tetrahedron (degrees).
 pub fn dihedral_angles(p: &[Point3<f64>; 4]) -> [f64; 6] {
     // face normals (outward-agnostic): the face opposite vertex k
     let n = |a: usize, b: usize, c: usize| (p[b] - p[a]).cross(&(p[c] - p[a]));
