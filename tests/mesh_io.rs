@@ -156,3 +156,45 @@ fn vtk_51_offsets_layout() {
     let m = io::parse_vtk(vtk, "q.vtk").unwrap();
     assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
 }
+
+#[test]
+fn truncated_and_corrupted_files_never_panic() {
+    let m = TriMesh::ellipsoid(&Point3::origin(), &Vector3::new(1.0, 2.0, 3.0), 1).unwrap();
+    let texts = [
+        ("obj", io::to_obj(&m)),
+        ("off", io::to_off(&m)),
+        ("vtk", io::to_vtk(&m)),
+        ("stl", io::to_stl_ascii(&m)),
+    ];
+    let mut state = 99u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    for (kind, text) in &texts {
+        let bytes = text.as_bytes();
+        for cut in (0..bytes.len()).step_by(7) {
+            let mut b = bytes[..cut].to_vec();
+            if cut % 3 == 0 && !b.is_empty() {
+                let i = (next() as usize) % b.len();
+                b[i] = b"x9 -/\n#"[(next() % 7) as usize];
+            }
+            let t = String::from_utf8_lossy(&b);
+            let r = match *kind {
+                "obj" => io::parse_obj(&t, "f"),
+                "off" => io::parse_off(&t, "f"),
+                "vtk" => io::parse_vtk(&t, "f"),
+                _ => io::parse_stl(&b, "f", 0.0),
+            };
+            if let Ok(mesh) = r {
+                mesh.validate().unwrap();
+            }
+        }
+    }
+    let bin = io::to_stl_binary(&m);
+    for cut in 0..bin.len().min(400) {
+        let _ = io::parse_stl(&bin[..cut], "f", 1e-3);
+    }
+}
