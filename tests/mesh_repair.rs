@@ -45,11 +45,12 @@ fn fold_is_removed_and_the_rest_kept() {
         let d = kept.closest(p).unwrap().distance;
         assert!(d < 1e-12, "{p:?} moved {d}; {rep:?}");
     }
-    // the fold (z > 0.5 after pushing) is replaced by a membrane spanning the cut near
-    // z = 0.5, so the result stays within about half a radius of the unfolded sphere, and
-    // everything it adds lies within the folded surface's bounding box
+    // the fold (z > 0.5 after pushing) is cut away and the hole closed by a thin-plate patch
+    // that continues the sphere's curvature from the cut near z = 0.5 (a flat membrane
+    // would leave 0.5 to the pole; the patch measured 0.21), and everything it adds lies
+    // within the folded surface's bounding box
     let h = hausdorff(&m, &sphere);
-    assert!(h < 0.55, "Hausdorff to the sphere {h}");
+    assert!(h < 0.3, "Hausdorff to the sphere {h}");
     let bb = folded.bounding_box();
     assert!(m.vertices.iter().all(|p| bb.distance_squared(p) == 0.0));
     // only the fold and what lies beyond its cut went: the cap above z = 0.5 is 25 % of the

@@ -516,8 +516,9 @@ pub fn boundary_loops(mesh: &TriMesh) -> Vec<Vec<u32>> {
 
 /// Closes every boundary loop with a patch of concentric rings shrinking to the loop's
 /// centre (about one ring per mean edge length of the loop's radius), then relaxes the new
-/// vertices with 100 umbrella steps (a discrete membrane spanning the loop). Returns the
-/// number of triangles added.
+/// vertices with 100 umbrella steps (a discrete membrane spanning the loop) and fairs them
+/// with the bi-Laplacian so that the patch continues the curvature around the hole. Returns
+/// the number of triangles added.
 pub fn fill_holes(mesh: &mut TriMesh) -> usize {
     let loops = boundary_loops(mesh);
     let first_new = mesh.vertices.len();
@@ -564,8 +565,85 @@ pub fn fill_holes(mesh: &mut TriMesh) -> usize {
     let added = mesh.triangles.len() - before;
     if added > 0 {
         relax(mesh, first_new, 100);
+        fair(mesh, first_new, FAIRING_STEPS);
     }
     added
+}
+
+/// Largest number of conjugate-gradient iterations of the hole-patch fairing.
+const FAIRING_STEPS: usize = 1000;
+
+/// Bi-Laplacian (thin-plate) fairing of the vertices from index `first` on, the others fixed:
+/// solves L^2 x = 0 on the patch with the graph Laplacian (L v)_i = deg_i v_i - sum_j v_j by
+/// conjugate gradients (L^2 restricted to the patch is symmetric positive definite), so the
+/// patch continues the curvature of the surface around the hole where a membrane (L x = 0)
+/// would span it flat. Starts from the membrane solution.
+fn fair(mesh: &mut TriMesh, first: usize, max_iter: usize) {
+    type V = nalgebra::Vector3<f64>;
+    let n = mesh.vertices.len();
+    if first >= n {
+        return;
+    }
+    let adj = mesh.adjacency();
+    let nb = &adj.vertex_neighbours;
+    let lap = |v: &[V], out: &mut [V]| {
+        for i in 0..n {
+            let mut s = v[i] * nb[i].len() as f64;
+            for &j in &nb[i] {
+                s -= v[j as usize];
+            }
+            out[i] = s;
+        }
+    };
+    // M x_p = L L restricted to the patch, applied to a vector living on the patch
+    let apply = |xp: &[V], tmp: &mut Vec<V>, tmp2: &mut Vec<V>| -> Vec<V> {
+        tmp.iter_mut().for_each(|v| *v = V::zeros());
+        tmp[first..].copy_from_slice(xp);
+        lap(tmp, tmp2);
+        lap(tmp2, tmp);
+        tmp[first..].to_vec()
+    };
+    let mut t1 = vec![V::zeros(); n];
+    let mut t2 = vec![V::zeros(); n];
+    // right-hand side b = -(L L [0_p, x_b])_p
+    let mut fixed: Vec<V> = mesh.vertices.iter().map(|p| p.coords).collect();
+    fixed[first..].iter_mut().for_each(|v| *v = V::zeros());
+    lap(&fixed, &mut t1);
+    lap(&t1, &mut t2);
+    let b: Vec<V> = t2[first..].iter().map(|v| -v).collect();
+    let dot = |a: &[V], c: &[V]| a.iter().zip(c).map(|(x, y)| x.dot(y)).sum::<f64>();
+    let mut x: Vec<V> = mesh.vertices[first..].iter().map(|p| p.coords).collect();
+    let ax = apply(&x, &mut t1, &mut t2);
+    let mut r: Vec<V> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
+    let mut p = r.clone();
+    let mut rr = dot(&r, &r);
+    let stop = 1e-24 * dot(&b, &b).max(1e-300);
+    for _ in 0..max_iter {
+        if rr <= stop {
+            break;
+        }
+        let ap = apply(&p, &mut t1, &mut t2);
+        let pap = dot(&p, &ap);
+        if pap <= 0.0 {
+            break;
+        }
+        let alpha = rr / pap;
+        for k in 0..x.len() {
+            x[k] += alpha * p[k];
+            r[k] -= alpha * ap[k];
+        }
+        let rr_new = dot(&r, &r);
+        let beta = rr_new / rr;
+        rr = rr_new;
+        for k in 0..p.len() {
+            p[k] = r[k] + beta * p[k];
+        }
+    }
+    if x.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+        for (k, v) in x.into_iter().enumerate() {
+            mesh.vertices[first + k] = Point3::from(v);
+        }
+    }
 }
 
 /// Plain umbrella relaxation of the vertices from index `first` on (others fixed).
