@@ -147,3 +147,31 @@ fn ribs_go_inside_the_skin_and_the_abdomen_out_of_the_ribs() {
         );
     }
 }
+
+#[test]
+fn an_open_scan_is_closed_by_the_pipeline() {
+    let (clean, mut skin) = noisy_ellipsoid(Vector3::new(0.15, 0.30, 0.12), 4, 0.03, 4);
+    // cut neck and waist openings, as a trunk scan has
+    let keep: Vec<bool> = (0..skin.num_triangles())
+        .map(|t| skin.face_centroid(t).y.abs() < 0.27)
+        .collect();
+    let mut k = 0;
+    skin.triangles.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    skin.remove_unreferenced_vertices();
+    assert!(skin.topology().boundary_edges > 0);
+    let (out, rep) = prepare(skin, None, &PrepareOptions::default()).unwrap();
+    assert!(rep.surfaces[0].holes_closed > 0);
+    let t = out.skin.topology();
+    assert!(t.is_closed() && t.is_consistently_oriented(), "{t:?}");
+    assert!(breathing_torso::mesh::repair::self_intersections(&out.skin).is_empty());
+    // the capped openings stay near the ellipsoid's ends (the caps are faired, not flat)
+    assert!(
+        hausdorff(&out.skin, &clean) < 0.03,
+        "{}",
+        hausdorff(&out.skin, &clean)
+    );
+    assert!((out.skin.volume() / clean.volume() - 1.0).abs() < 0.02);
+}

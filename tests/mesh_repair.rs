@@ -140,3 +140,30 @@ fn opposite_and_duplicate_faces_are_removed() {
     assert!(m.is_closed());
     assert!(hausdorff(&m, &sphere) < 0.2);
 }
+
+#[test]
+fn openings_of_an_open_surface_stay_open() {
+    // a folded sphere with its bottom cap cut away (an open scan-like surface)
+    let mut m = folded_sphere(4);
+    let keep: Vec<bool> = (0..m.num_triangles())
+        .map(|t| m.face_centroid(t).z > -0.9)
+        .collect();
+    let mut k = 0;
+    m.triangles.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    m.remove_unreferenced_vertices();
+    let open_edges = m.topology().boundary_edges;
+    assert!(open_edges > 0 && !self_intersections(&m).is_empty());
+    let r = remove_self_intersections(&mut m, 6);
+    assert_eq!(r.pairs_left, 0);
+    assert!(self_intersections(&m).is_empty());
+    let top = m.topology();
+    assert_eq!(
+        top.boundary_edges, open_edges,
+        "the bottom opening is kept as it was"
+    );
+    assert!(top.is_edge_manifold() && top.is_consistently_oriented());
+    assert!(m.vertices.iter().map(|p| p.z).fold(f64::INFINITY, f64::min) < -0.85);
+}

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use super::overlap::{OverlapOptions, OverlapReport, Relation, resolve_overlap};
 use super::repair::{
-    RepairOptions, RepairReport, remove_self_intersections, repair, self_intersections,
+    RepairOptions, RepairReport, fill_holes, remove_self_intersections, repair, self_intersections,
 };
 use super::{Bvh, Taubin, Topology, TriMesh, hausdorff, io};
 use crate::{Error, Result};
@@ -27,6 +27,9 @@ pub struct PrepareOptions {
     /// under this fraction of its mean edge length counts as already smooth and is left as it is; this
     /// makes the pipeline idempotent (a low-pass filter's pass-band gain is not exactly 1).
     pub smooth_threshold: f64,
+    /// Close the openings of open surfaces (a trunk scan open at neck, arms and waist) with
+    /// faired patches before repair, so that volumes and inside tests are defined.
+    pub close_holes: bool,
 }
 
 impl Default for PrepareOptions {
@@ -38,6 +41,7 @@ impl Default for PrepareOptions {
             repair: None,
             margin: None,
             smooth_threshold: 0.05,
+            close_holes: true,
         }
     }
 }
@@ -137,6 +141,8 @@ pub struct SurfaceReport {
     pub input: MeshInfo,
     /// Smoothing, if run.
     pub smoothing: Option<SmoothReport>,
+    /// Triangles added to close the surface's own openings.
+    pub holes_closed: usize,
     /// Repair.
     pub repair: RepairReport,
     /// Overlap resolution steps in which this surface moved against another.
@@ -245,6 +251,7 @@ pub fn prepare_all(
                 name: n.clone(),
                 input: info.clone(),
                 smoothing: None,
+                holes_closed: 0,
                 repair: RepairReport::default(),
                 overlaps: Vec::new(),
                 output: info,
@@ -260,6 +267,9 @@ pub fn prepare_all(
     times.smoothing_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
     for ((name, m), rep) in surfaces.iter_mut().zip(&mut reports) {
+        if opts.close_holes && m.topology().boundary_edges > 0 {
+            rep.holes_closed = fill_holes(m);
+        }
         let ro = opts.repair.unwrap_or_else(|| RepairOptions::for_mesh(m));
         rep.repair =
             repair(m, &ro).map_err(|e| Error::State(format!("repair of the {name}: {e}")))?;
@@ -421,6 +431,9 @@ impl PrepareReport {
                     100.0 * sm.volume_change,
                     sm.hausdorff
                 );
+            }
+            if r.holes_closed > 0 {
+                let _ = writeln!(s, "Openings closed with {} triangles.\n", r.holes_closed);
             }
             let rp = &r.repair;
             let _ = writeln!(

@@ -347,8 +347,8 @@ pub fn seed_triangle(mesh: &TriMesh, bad: &[bool]) -> Option<u32> {
 
 /// Removes self-intersections: marks intersecting triangles (widened by one ring per round),
 /// grows the valid region from [`seed_triangle`] over manifold edges without entering marked
-/// triangles, drops everything the growth did not reach, and closes the holes with
-/// [`fill_holes`]. When the region grown from the seed of eq. 5 covers less than half of the
+/// triangles, drops everything the growth did not reach, and closes the holes this made
+/// with the patches of [`fill_holes`] (openings the surface had before stay open). When the region grown from the seed of eq. 5 covers less than half of the
 /// sound area (a folded part can lie nearest the centre of mass), the largest sound
 /// component is kept instead. Repeats until no intersection is left or `max_rounds` is spent.
 pub fn remove_self_intersections(mesh: &mut TriMesh, max_rounds: usize) -> IntersectionRemoval {
@@ -397,6 +397,7 @@ pub fn remove_self_intersections(mesh: &mut TriMesh, max_rounds: usize) -> Inter
             }
         }
         out.seed = Some(seed);
+        let was_boundary = adj.boundary_vertices();
         let before = mesh.triangles.len();
         let mut k = 0;
         mesh.triangles.retain(|_| {
@@ -404,8 +405,19 @@ pub fn remove_self_intersections(mesh: &mut TriMesh, max_rounds: usize) -> Inter
             keep[k - 1]
         });
         out.removed += before - mesh.triangles.len();
-        mesh.remove_unreferenced_vertices();
-        out.added += fill_holes(mesh);
+        let map = mesh.remove_unreferenced_vertices();
+        // close the holes the removal made, not the surface's own openings
+        let mut on_old_boundary = vec![false; mesh.vertices.len()];
+        for (old, &new) in map.iter().enumerate() {
+            if new != u32::MAX && was_boundary[old] {
+                on_old_boundary[new as usize] = true;
+            }
+        }
+        let loops: Vec<Vec<u32>> = boundary_loops(mesh)
+            .into_iter()
+            .filter(|l| l.iter().any(|&v| !on_old_boundary[v as usize]))
+            .collect();
+        out.added += fill_loops(mesh, loops);
         pairs = self_intersections(mesh);
         round += 1;
     }
@@ -521,6 +533,11 @@ pub fn boundary_loops(mesh: &TriMesh) -> Vec<Vec<u32>> {
 /// the number of triangles added.
 pub fn fill_holes(mesh: &mut TriMesh) -> usize {
     let loops = boundary_loops(mesh);
+    fill_loops(mesh, loops)
+}
+
+/// [`fill_holes`] for the given loops only.
+fn fill_loops(mesh: &mut TriMesh, loops: Vec<Vec<u32>>) -> usize {
     let first_new = mesh.vertices.len();
     let before = mesh.triangles.len();
     for lp in loops {
