@@ -8,7 +8,7 @@ use clap::Subcommand;
 use crate::mesh::pipeline::{
     MeshInfo, PrepareOptions, prepare_all, read_surface_dir, write_prepared,
 };
-use crate::mesh::{StuffOptions, Taubin, io, stuff};
+use crate::mesh::{StuffOptions, Taubin, Weights, io, stuff};
 use crate::{Error, Result};
 
 /// Subcommands of `torso mesh`.
@@ -44,6 +44,12 @@ pub enum MeshCommand {
         /// Clearance between abdomen and skin, in file units (default: half an edge).
         #[arg(long)]
         margin: Option<f64>,
+        /// Use cotangent instead of umbrella Laplacian weights.
+        #[arg(long)]
+        cotangent: bool,
+        /// Leave the openings of open surfaces open (inside tests then need closed surfaces).
+        #[arg(long)]
+        keep_open: bool,
     },
     /// Print counts, volume, area, closedness and self-intersections of a surface file.
     Info {
@@ -82,17 +88,19 @@ pub fn run(cmd: MeshCommand) -> Result<()> {
             k_pb,
             iterations,
             margin,
+            cotangent,
+            keep_open,
         } => {
             let skin = io::read(&skin)?;
             let abdomen = abdomen.map(io::read).transpose()?;
-            let taubin = if no_smooth {
-                None
-            } else {
-                Some(Taubin::from_pass_band(lambda, k_pb, iterations)?)
-            };
+            let mut taubin = Taubin::from_pass_band(lambda, k_pb, iterations)?;
+            if cotangent {
+                taubin.weights = Weights::Cotangent;
+            }
             let opts = PrepareOptions {
-                taubin,
+                taubin: (!no_smooth).then_some(taubin),
                 margin,
+                close_holes: !keep_open,
                 ..PrepareOptions::default()
             };
             let ribs = ribs.map(read_surface_dir).transpose()?.unwrap_or_default();
