@@ -101,8 +101,8 @@ pub fn repair(mesh: &mut TriMesh, opts: &RepairOptions) -> Result<RepairReport> 
 
 /// Collapses every edge shorter than `eps_e` to its midpoint (v_i = (v_i + v_j) / 2, faces of
 /// v_j renumbered to v_i), skipping collapses that would pinch the surface (link condition:
-/// the two end vertices share exactly the vertices opposite the edge). Returns the number of
-/// collapses.
+/// the two end vertices share exactly the vertices opposite the edge) or that would make
+/// the joined star intersect its surroundings. Returns the number of collapses.
 pub fn collapse_short_edges(mesh: &mut TriMesh, eps_e: f64) -> usize {
     let mut total = 0;
     for _ in 0..32 {
@@ -138,8 +138,11 @@ pub fn collapse_short_edges(mesh: &mut TriMesh, eps_e: f64) -> usize {
             if common != adj.faces_of_edge(i, j).len() {
                 continue;
             }
-            mesh.vertices[i as usize] =
-                nalgebra::center(&mesh.vertices[i as usize], &mesh.vertices[j as usize]);
+            let mid = nalgebra::center(&mesh.vertices[i as usize], &mesh.vertices[j as usize]);
+            if collapse_intersects(mesh, &adj, i, j, &mid) {
+                continue;
+            }
+            mesh.vertices[i as usize] = mid;
             map[j as usize] = i;
             for v in ni.iter().chain(nj.iter()).chain([&i, &j]) {
                 locked[*v as usize] = true;
@@ -161,6 +164,63 @@ pub fn collapse_short_edges(mesh: &mut TriMesh, eps_e: f64) -> usize {
     total
 }
 
+/// Whether collapsing edge (i, j) to `mid` would make a triangle of the joined star
+/// intersect another triangle of the star or of its surroundings (two-ring).
+fn collapse_intersects(
+    mesh: &TriMesh,
+    adj: &super::Adjacency,
+    i: u32,
+    j: u32,
+    mid: &Point3<f64>,
+) -> bool {
+    let pos = |v: u32| {
+        if v == i || v == j {
+            *mid
+        } else {
+            mesh.vertices[v as usize]
+        }
+    };
+    let rename = |t: [u32; 3]| t.map(|v| if v == j { i } else { v });
+    let mut star: Vec<usize> = adj.vertex_faces[i as usize]
+        .iter()
+        .chain(&adj.vertex_faces[j as usize])
+        .map(|&f| f as usize)
+        .collect();
+    star.sort_unstable();
+    star.dedup();
+    let changed: Vec<[u32; 3]> = star
+        .iter()
+        .map(|&f| rename(mesh.triangles[f]))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+        .collect();
+    let mut near: Vec<usize> = Vec::new();
+    for &v in adj.vertex_neighbours[i as usize]
+        .iter()
+        .chain(&adj.vertex_neighbours[j as usize])
+    {
+        near.extend(adj.vertex_faces[v as usize].iter().map(|&f| f as usize));
+    }
+    near.sort_unstable();
+    near.dedup();
+    near.retain(|f| star.binary_search(f).is_err());
+    let corners = |t: &[u32; 3]| t.map(pos);
+    for (a, ta) in changed.iter().enumerate() {
+        let ca = corners(ta);
+        for tb in changed.iter().skip(a + 1) {
+            if super::geom::triangles_intersect(&ca, ta, &corners(tb), tb) {
+                return true;
+            }
+        }
+        for &f in &near {
+            let tf = mesh.triangles[f];
+            if super::geom::triangles_intersect(&ca, ta, &corners(&tf), &tf) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
 fn min_angle(p: &[Point3<f64>; 3]) -> f64 {
     (0..3)
         .map(|k| {
@@ -173,8 +233,8 @@ fn min_angle(p: &[Point3<f64>; 3]) -> f64 {
 /// Flips, for every triangle f_k = (v_h, v_i, v_j) with an angle under `eps_alpha_deg`, its
 /// longest edge (v_i, v_j) with the neighbour f_m = (v_g, v_j, v_i): f_k becomes (v_h, v_i,
 /// v_g) and f_m becomes (v_g, v_j, v_h) (section 3.5). A flip is made only when the edge
-/// (v_h, v_g) does not exist yet, neither new triangle turns over, and the smallest angle
-/// improves. Returns the number of flips.
+/// (v_h, v_g) does not exist yet, neither new triangle turns over, the smallest angle
+/// improves, and neither new triangle intersects a triangle of its two-ring. Returns the number of flips.
 pub fn flip_slivers(mesh: &mut TriMesh, eps_alpha_deg: f64) -> usize {
     let eps = eps_alpha_deg.to_radians();
     let mut total = 0;
@@ -235,10 +295,19 @@ pub fn flip_slivers(mesh: &mut TriMesh, eps_alpha_deg: f64) -> usize {
             if after <= before {
                 continue;
             }
+            if creates_intersection(mesh, &adj, &[(k, nk), (m, nm)]) {
+                continue;
+            }
             mesh.triangles[k] = nk;
             mesh.triangles[m] = nm;
             touched[k] = true;
             touched[m] = true;
+            // keep the vertex-to-face lists current for the checks of later flips
+            let vf = &mut adj.vertex_faces;
+            vf[vj as usize].retain(|&f| f as usize != k);
+            vf[vg as usize].push(k as u32);
+            vf[vi as usize].retain(|&f| f as usize != m);
+            vf[vh as usize].push(m as u32);
             for (a, b) in [(vh, vg), (vg, vh)] {
                 let nb = &mut adj.vertex_neighbours[a as usize];
                 if let Err(pos) = nb.binary_search(&b) {
@@ -253,6 +322,47 @@ pub fn flip_slivers(mesh: &mut TriMesh, eps_alpha_deg: f64) -> usize {
         total += done;
     }
     total
+}
+
+/// Whether replacing triangles `changes` (index, new corners) would make one of them
+/// intersect a triangle around it (the faces of the two-ring of the new corners).
+fn creates_intersection(
+    mesh: &TriMesh,
+    adj: &super::Adjacency,
+    changes: &[(usize, [u32; 3])],
+) -> bool {
+    let mut near: Vec<u32> = Vec::new();
+    for (_, tri) in changes {
+        for &v in tri {
+            for &w in adj.vertex_neighbours[v as usize]
+                .iter()
+                .chain(std::iter::once(&v))
+            {
+                near.extend_from_slice(&adj.vertex_faces[w as usize]);
+            }
+        }
+    }
+    near.sort_unstable();
+    near.dedup();
+    let corners = |t: &[u32; 3]| t.map(|i| mesh.vertices[i as usize]);
+    for &(_, tri) in changes {
+        let ck = corners(&tri);
+        for &f in &near {
+            let f = f as usize;
+            if changes.iter().any(|c| c.0 == f) {
+                continue;
+            }
+            let tf = mesh.triangles[f];
+            if super::geom::triangles_intersect(&ck, &tri, &corners(&tf), &tf) {
+                return true;
+            }
+        }
+    }
+    // the two new triangles against each other
+    if let [(_, a), (_, b)] = changes {
+        return super::geom::triangles_intersect(&corners(a), a, &corners(b), b);
+    }
+    false
 }
 
 /// Removes triangle pairs on the same three vertices: opposite pairs (reversed order) are
