@@ -167,3 +167,25 @@ fn openings_of_an_open_surface_stay_open() {
     assert!(top.is_edge_manifold() && top.is_consistently_oriented());
     assert!(m.vertices.iter().map(|p| p.z).fold(f64::INFINITY, f64::min) < -0.85);
 }
+
+#[test]
+fn sliver_fans_are_flipped_without_creating_intersections() {
+    let mut m =
+        mesh_support::uv_ellipsoid(nalgebra::Vector3::new(0.16, 0.32, 0.12), 250, 60, 0.01, 8);
+    let top = m.topology();
+    assert!(top.is_closed() && top.is_consistently_oriented(), "{top:?}");
+    assert!(self_intersections(&m).is_empty());
+    let before = min_angle_deg(&m);
+    let v0 = m.volume();
+    let opts = RepairOptions::for_mesh(&m);
+    let rep = repair(&mut m, &opts).unwrap();
+    assert!(rep.flipped_edges > 50, "{rep:?}");
+    assert_eq!(
+        rep.intersecting_pairs, 0,
+        "flips and collapses must not create intersections"
+    );
+    assert!(self_intersections(&m).is_empty());
+    assert!(m.is_closed() && m.is_consistently_oriented());
+    assert!(min_angle_deg(&m) >= before);
+    assert!((m.volume() / v0 - 1.0).abs() < 1e-3);
+}

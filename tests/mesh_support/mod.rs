@@ -77,3 +77,42 @@ pub fn folded_sphere(s: u32) -> TriMesh {
     }
     m
 }
+
+/// A latitude-longitude ellipsoid (`nlon` meridians, `nlat` bands) with radial noise of
+/// relative amplitude `amp`: its pole fans are made of slivers, as in many scanned or
+/// exported surfaces.
+pub fn uv_ellipsoid(r: Vector3<f64>, nlon: usize, nlat: usize, amp: f64, seed: u64) -> TriMesh {
+    let mut rng = Rng(seed);
+    let mut m = TriMesh {
+        vertices: vec![Point3::new(0.0, r.y, 0.0)],
+        triangles: vec![],
+    };
+    for i in 1..nlat {
+        let th = std::f64::consts::PI * i as f64 / nlat as f64;
+        for j in 0..nlon {
+            let ph = 2.0 * std::f64::consts::PI * j as f64 / nlon as f64;
+            let s = 1.0 + amp * rng.signed();
+            m.vertices.push(Point3::new(
+                r.x * th.sin() * ph.cos() * s,
+                r.y * th.cos() * s,
+                r.z * th.sin() * ph.sin() * s,
+            ));
+        }
+    }
+    m.vertices.push(Point3::new(0.0, -r.y, 0.0));
+    let south = (m.vertices.len() - 1) as u32;
+    let idx = |i: usize, j: usize| (1 + (i - 1) * nlon + j % nlon) as u32;
+    for j in 0..nlon {
+        m.triangles.push([0, idx(1, j + 1), idx(1, j)]);
+        m.triangles
+            .push([south, idx(nlat - 1, j), idx(nlat - 1, j + 1)]);
+    }
+    for i in 1..nlat - 1 {
+        for j in 0..nlon {
+            let (a0, a1, b0, b1) = (idx(i, j), idx(i, j + 1), idx(i + 1, j), idx(i + 1, j + 1));
+            m.triangles.push([a0, a1, b1]);
+            m.triangles.push([a0, b1, b0]);
+        }
+    }
+    m
+}
