@@ -45,28 +45,99 @@ fn main() {
         .unwrap_or(5);
     // Icospheres come in 20 x 4^s triangles: two inputs bracket the 50,000-triangle target,
     // a level-5 skin with a level-5 abdominal cavity (40,960 triangles) and a level-6 skin
-    // with a level-4 cavity (87,040 triangles).
-    run_case(5, 5, repeats);
-    run_case(6, 4, repeats);
-}
-
-fn run_case(skin_level: u32, abdomen_level: u32, repeats: usize) {
-    let skin = noisy(
-        Vector3::new(0.16, 0.32, 0.12),
-        Vector3::zeros(),
-        skin_level,
-        0.02,
-        1,
-    );
+    // with a level-4 cavity (87,040 triangles); a third has a 50,000-triangle
+    // latitude-longitude skin.
+    let skin = noisy(Vector3::new(0.16, 0.32, 0.12), Vector3::zeros(), 5, 0.02, 1);
     let abdomen = noisy(
         Vector3::new(0.11, 0.14, 0.125),
         Vector3::new(0.0, -0.1, 0.0),
-        abdomen_level,
+        5,
         0.01,
         2,
     );
+    run_case(
+        "icosphere skin (level 5) + abdomen (level 5)",
+        skin,
+        abdomen,
+        repeats,
+    );
+    let skin = noisy(Vector3::new(0.16, 0.32, 0.12), Vector3::zeros(), 6, 0.02, 1);
+    let abdomen = noisy(
+        Vector3::new(0.11, 0.14, 0.125),
+        Vector3::new(0.0, -0.1, 0.0),
+        4,
+        0.01,
+        2,
+    );
+    run_case(
+        "icosphere skin (level 6) + abdomen (level 4)",
+        skin,
+        abdomen,
+        repeats,
+    );
+    // exactly 50,000 skin triangles, with the sliver pole fans of a latitude-longitude mesh
+    let skin = uv(Vector3::new(0.16, 0.32, 0.12), 250, 101, 0.01, 3);
+    let abdomen = noisy(
+        Vector3::new(0.11, 0.14, 0.125),
+        Vector3::new(0.0, -0.1, 0.0),
+        4,
+        0.01,
+        2,
+    );
+    run_case(
+        "latitude-longitude skin (50,000) + abdomen (level 4)",
+        skin,
+        abdomen,
+        repeats,
+    );
+}
+
+/// A noisy latitude-longitude ellipsoid: 2 nlon (nlat - 1) triangles.
+fn uv(r: Vector3<f64>, nlon: usize, nlat: usize, amp: f64, seed: u64) -> TriMesh {
+    let mut s = seed;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let mut m = TriMesh {
+        vertices: vec![Point3::new(0.0, r.y, 0.0)],
+        triangles: vec![],
+    };
+    for i in 1..nlat {
+        let th = std::f64::consts::PI * i as f64 / nlat as f64;
+        for j in 0..nlon {
+            let ph = 2.0 * std::f64::consts::PI * j as f64 / nlon as f64;
+            let k = 1.0 + amp * rnd();
+            m.vertices.push(Point3::new(
+                r.x * th.sin() * ph.cos() * k,
+                r.y * th.cos() * k,
+                r.z * th.sin() * ph.sin() * k,
+            ));
+        }
+    }
+    m.vertices.push(Point3::new(0.0, -r.y, 0.0));
+    let south = (m.vertices.len() - 1) as u32;
+    let idx = |i: usize, j: usize| (1 + (i - 1) * nlon + j % nlon) as u32;
+    for j in 0..nlon {
+        m.triangles.push([0, idx(1, j + 1), idx(1, j)]);
+        m.triangles
+            .push([south, idx(nlat - 1, j), idx(nlat - 1, j + 1)]);
+    }
+    for i in 1..nlat - 1 {
+        for j in 0..nlon {
+            let (a0, a1, b0, b1) = (idx(i, j), idx(i, j + 1), idx(i + 1, j), idx(i + 1, j + 1));
+            m.triangles.push([a0, a1, b1]);
+            m.triangles.push([a0, b1, b0]);
+        }
+    }
+    m
+}
+
+fn run_case(label: &str, skin: TriMesh, abdomen: TriMesh, repeats: usize) {
     println!(
-        "\nskin {} triangles, abdomen {} triangles, together {}",
+        "\n{label}: skin {} triangles, abdomen {} triangles, together {}",
         skin.num_triangles(),
         abdomen.num_triangles(),
         skin.num_triangles() + abdomen.num_triangles()
