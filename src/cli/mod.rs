@@ -3,6 +3,7 @@
 pub mod common;
 pub mod simulate;
 pub mod skin;
+pub mod mesh;
 
 use clap::{Parser, Subcommand};
 
@@ -35,6 +36,12 @@ pub enum Command {
     ExportObj(skin::ExportObjArgs),
     /// Render the skin and markers at rest and at end-inspiration as a PNG.
     RenderSkin(skin::RenderSkinArgs),
+    /// Prepare, inspect and volume-mesh subject surfaces.
+    Mesh {
+        /// The mesh subcommand.
+        #[command(subcommand)]
+        command: mesh::MeshCommand,
+    },
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -51,6 +58,7 @@ pub fn main() -> i32 {
         Command::SynthSpirometry(a) => validate::run_synth(&a),
         Command::ExportObj(a) => skin::export_obj(&a),
         Command::RenderSkin(a) => skin::render_skin(&a),
+        Command::Mesh { command } => mesh::run(command),
     };
     match result {
         Ok(()) => 0,
