@@ -264,8 +264,10 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
             paths.push(path);
         }
     }
+    // Keep evenly spaced fibres so that the elements number about the thesis's count.
     let segments: usize = paths.iter().map(|p| p.len() - 1).sum();
-    let _ = f;
+    let keep_every = (segments as f64 / count(group, f) as f64).round().max(1.0) as usize;
+    let paths: Vec<Vec<usize>> = paths.into_iter().step_by(keep_every).collect();
     let force = DIAPHRAGM_FORCE / paths.len().max(1) as f64;
     for path in paths {
         let p = anchors[abdomen.anchor[path[0]] as usize].rest;
@@ -288,7 +290,6 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
             });
         }
     }
-    let _ = segments;
 }
 
 /// Height on the unit sphere above which the dome is central tendon (no muscle fibres).

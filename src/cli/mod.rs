@@ -1,9 +1,9 @@
 //! The `torso` command-line tool: one file per subcommand.
 
 pub mod common;
+pub mod mesh;
 pub mod simulate;
 pub mod skin;
-pub mod mesh;
 
 use clap::{Parser, Subcommand};
 

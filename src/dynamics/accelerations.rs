@@ -1,9 +1,14 @@
 //! Stage 3: anchor forces reduced to generalised forces, then accelerations.
 //!
-//! Rib r (one degree of freedom about its hinge): I_r theta'' = sum ((p - h) x F) . u
-//! + tau_gravity - k theta - d theta' + tau_preload. Sternum (free rigid body): m x'' = sum F +
-//! m g + F_preload; I_w w' = tau - w x I_w w with I_w = R I_0 R^T; q' = (0, w) q / 2. Free
-//! vertex j: m_j x'' = F_j + m_j g - gamma_j x' + F_preload (thesis eq. 2.1).
+//! ```text
+//! rib r (one degree of freedom about its hinge):
+//!     I_r theta'' = sum ((p - h) x F) . u + tau_gravity - k theta - d theta' + tau_preload
+//! sternum (free rigid body):
+//!     m x'' = sum F + m g + F_preload
+//!     I_w w' = tau - w x I_w w,  I_w = R I_0 R^T,  q' = (0, w) q / 2
+//! free vertex j (thesis eq. 2.1):
+//!     m_j x'' = F_j + m_j g - gamma_j x' + F_preload
+//! ```
 
 use super::Data;
 use super::model::{Model, RIBS};
