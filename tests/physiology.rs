@@ -151,3 +151,194 @@ fn tidal_volume_grows_with_each_amplitude() {
         }
     }
 }
+
+/// Holds constant inputs for `seconds` and returns the torso.
+fn hold(inputs: &[(MuscleGroup, f64)], seconds: f64) -> Torso {
+    let mut torso = Torso::new(Config::default()).unwrap();
+    for (g, a) in inputs {
+        torso.set_activation(*g, *a).unwrap();
+    }
+    torso.advance_to(seconds).unwrap();
+    torso
+}
+
+/// Mean rotation [rad] of ribs `levels` (both sides).
+fn rib_rotation(torso: &Torso, levels: std::ops::RangeInclusive<usize>) -> f64 {
+    let y = torso.state();
+    let n = levels.clone().count() as f64 * 2.0;
+    levels.map(|l| y[l - 1] + y[12 + l - 1]).sum::<f64>() / n
+}
+
+#[test]
+fn each_group_does_what_anatomy_says() {
+    use MuscleGroup::*;
+    // Diaphragm: dome down, belly forward, lower ribs up.
+    let mut t = hold(&[(Diaphragm, 0.3)], 3.0);
+    let dome = t.read(Quantity::DiaphragmDisplacement).unwrap();
+    let belly = t.read(Quantity::AbdomenDisplaced).unwrap();
+    let lower = rib_rotation(&t, 7..=10);
+    println!(
+        "diaphragm: dome {:.2} mm, belly {:.3} L, lower ribs {:.3} deg",
+        dome * 1e3,
+        belly,
+        lower.to_degrees()
+    );
+    assert!(dome < -1e-3 && belly > 0.02 && lower > 0.0);
+    // External intercostals lift the ribs; internal ones lower them.
+    let t = hold(&[(ExternalIntercostals, 0.3)], 3.0);
+    let up = rib_rotation(&t, 2..=10);
+    let t = hold(&[(InternalIntercostals, 0.3)], 3.0);
+    let down = rib_rotation(&t, 2..=10);
+    println!(
+        "intercostals: external {:.2} deg, internal {:.2} deg",
+        up.to_degrees(),
+        down.to_degrees()
+    );
+    assert!(up > 0.2f64.to_radians() && down < -0.2f64.to_radians());
+    // Abdominal muscles: belly in, dome up.
+    let mut t = hold(
+        &[
+            (TransversusAbdominis, 0.3),
+            (RectusAbdominis, 0.3),
+            (ExternalObliques, 0.3),
+            (InternalObliques, 0.3),
+        ],
+        3.0,
+    );
+    let dome = t.read(Quantity::DiaphragmDisplacement).unwrap();
+    let belly = t.read(Quantity::AbdomenDisplaced).unwrap();
+    println!(
+        "abdominals: dome {:.2} mm, belly {:.3} L",
+        dome * 1e3,
+        belly
+    );
+    assert!(dome > 1e-3 && belly < -0.02);
+}
+
+#[test]
+fn forced_breathing_turns_the_ribs_and_moves_the_sternum_ventrally() {
+    let config = Config {
+        drive: Drive::forced(),
+        ..Config::default()
+    };
+    let mut torso = Torso::new(config).unwrap();
+    let period = 1.0 / Drive::forced().frequency;
+    torso.advance_to(period).unwrap();
+    let (mut lo, mut hi) = ([f64::INFINITY; 24], [f64::NEG_INFINITY; 24]);
+    let mut best = (f64::NEG_INFINITY, 0.0, [0.0; 3]);
+    let steps = 100;
+    for i in 1..=steps {
+        torso
+            .advance_to(period * (1.0 + i as f64 / steps as f64))
+            .unwrap();
+        for r in 0..24 {
+            lo[r] = lo[r].min(torso.state()[r]);
+            hi[r] = hi[r].max(torso.state()[r]);
+        }
+        let lung = torso.read(Quantity::LungVolume).unwrap();
+        if lung > best.0 {
+            let s = [0u8, 1, 2].map(|a| torso.read(Quantity::SternumDisplacement(a)).unwrap());
+            best = (lung, torso.time(), s);
+        }
+    }
+    for level in 3..=7 {
+        let swing = (hi[level - 1] - lo[level - 1]).to_degrees();
+        println!("rib {level}: {swing:.2} deg");
+        assert!(
+            (1.0..=15.0).contains(&swing),
+            "rib {level} turns {swing} deg"
+        );
+    }
+    println!(
+        "sternum at end-inspiration: {:?} mm",
+        best.2.map(|v| v * 1e3)
+    );
+    assert!(best.2[0] > 0.0, "sternum moves dorsally");
+}
+
+#[test]
+fn inspiration_moves_ventral_rib_ends_cranially_and_ventrally() {
+    use breathing_torso::dynamics::kinematics::axis_rotation;
+    let torso = hold(
+        &[
+            (MuscleGroup::ExternalIntercostals, 0.4),
+            (MuscleGroup::Scalenes, 0.4),
+        ],
+        3.0,
+    );
+    let compiled = torso.compiled().clone();
+    for rib in compiled
+        .anatomy
+        .ribs
+        .iter()
+        .filter(|r| (2..=7).contains(&r.level))
+    {
+        let theta = torso.state()[rib.index()];
+        let end = rib.bone_end();
+        let moved = rib.head + axis_rotation(&rib.axis, theta) * (end - rib.head);
+        let d = moved - end;
+        assert!(
+            d.y > 0.0 && d.x > 0.0,
+            "rib {} {:?}: end moves {:?}",
+            rib.level,
+            rib.side,
+            d
+        );
+    }
+}
+
+#[test]
+fn symmetric_activation_gives_symmetric_motion() {
+    let config = Config {
+        drive: Drive::quiet(),
+        ..Config::default()
+    };
+    let mut torso = Torso::new(config).unwrap();
+    torso.advance_to(3.0).unwrap();
+    let y = torso.state();
+    let scale = y[..24].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for r in 0..12 {
+        let (right, left) = (y[r], y[12 + r]);
+        assert!(
+            (right - left).abs() <= 1e-9 * scale,
+            "rib {}: {right} vs {left}",
+            r + 1
+        );
+    }
+    let z = torso.read(Quantity::SternumDisplacement(2)).unwrap();
+    let x = torso.read(Quantity::SternumDisplacement(0)).unwrap().abs();
+    assert!(
+        z.abs() <= 1e-9 * x.max(1e-6),
+        "sternum drifts sideways by {z}"
+    );
+}
+
+#[test]
+fn passive_motion_dissipates_energy_and_returns_to_rest() {
+    // Perturb: breathe in for a second, then switch the drive off and watch.
+    let config = Config {
+        drive: Drive::forced(),
+        ..Config::default()
+    };
+    let mut torso = Torso::new(config).unwrap();
+    torso.advance_to(1.2).unwrap();
+    torso.set_drive(Drive::default()).unwrap();
+    let mut last = torso.mechanical_energy();
+    let start = last;
+    let mut worst_rise: f64 = 0.0;
+    for i in 1..=200 {
+        torso.advance_to(1.2 + 0.02 * i as f64).unwrap();
+        let e = torso.mechanical_energy();
+        worst_rise = worst_rise.max(e - last);
+        last = e;
+    }
+    // Energy above the rest state (the potentials carry constants).
+    let rest = Torso::new(Config::default()).unwrap().mechanical_energy();
+    let (start, last) = (start - rest, last - rest);
+    println!(
+        "energy above rest {start:.4e} J -> {last:.4e} J, largest rise between samples {worst_rise:.2e} J"
+    );
+    assert!(start > 0.0);
+    assert!(worst_rise <= 1e-6 * start, "energy rose by {worst_rise}");
+    assert!(last < 1e-3 * start, "energy left {last} of {start}");
+}

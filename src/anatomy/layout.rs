@@ -233,9 +233,39 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
     }
     let dir = &abdomen.sphere;
     let tendon = |v: usize| dir[v].y > CENTRAL_TENDON;
-    let mut paths: Vec<Vec<usize>> = Vec::new();
+    // One candidate fibre per rim vertex, indexed like the rim (ordered by azimuth from the
+    // dorsal midline); `None` where no fibre could be routed.
+    // Fibres of the left side are the mirror images of the right side's (z -> -z), so the
+    // layout is exactly symmetric.
+    let key = |d: &nalgebra::Vector3<f64>| {
+        (
+            (d.x * 1e9).round() as i64,
+            (d.y * 1e9).round() as i64,
+            (d.z * 1e9).round() as i64,
+        )
+    };
+    let by_dir: std::collections::HashMap<(i64, i64, i64), usize> =
+        dir.iter().enumerate().map(|(v, d)| (key(d), v)).collect();
+    let mirror_of = |v: usize| {
+        by_dir
+            .get(&key(&nalgebra::Vector3::new(dir[v].x, dir[v].y, -dir[v].z)))
+            .copied()
+    };
+    let mut paths: Vec<Option<Vec<usize>>> = Vec::new();
     for &r in &abdomen.rim {
         let r = r as usize;
+        if dir[r].z < -1e-12 {
+            let mirrored = mirror_of(r)
+                .and_then(|m| abdomen.rim.iter().position(|&q| q as usize == m))
+                .and_then(|i| paths.get(i).cloned().flatten())
+                .and_then(|p: Vec<usize>| {
+                    p.iter()
+                        .map(|&v| mirror_of(v))
+                        .collect::<Option<Vec<usize>>>()
+                });
+            paths.push(mirrored);
+            continue;
+        }
         let az0 = azimuth(dir[r].x, dir[r].z, 0.0);
         let mut path = vec![r];
         let mut cur = r;
@@ -250,24 +280,39 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
                             .rem_euclid(std::f64::consts::TAU);
                         d.min(std::f64::consts::TAU - d) - 2.0 * (dir[v].y - dir[cur].y)
                     };
-                    cost(a).total_cmp(&cost(b))
+                    let (ca, cb) = (cost(a), cost(b));
+                    if (ca - cb).abs() > 1e-12 {
+                        ca.total_cmp(&cb)
+                    } else {
+                        // Mirror-symmetric tie-break: lean away from the midline.
+                        let side = dir[r].z.signum();
+                        (-side * dir[a].z).total_cmp(&(-side * dir[b].z))
+                    }
                 });
+            // A fibre on the midline stays on it: stepping off it would pick one side.
+            let on_midline = |v: usize| dir[v].z.abs() < 1e-9;
             match next {
-                Some(v) => {
+                Some(v) if !on_midline(cur) || on_midline(v) => {
                     path.push(v);
                     cur = v;
                 }
-                None => break,
+                _ => break,
             }
         }
-        if path.len() >= 2 {
-            paths.push(path);
-        }
+        paths.push((path.len() >= 2).then_some(path));
     }
     // Keep evenly spaced fibres so that the elements number about the thesis's count.
-    let segments: usize = paths.iter().map(|p| p.len() - 1).sum();
+    let segments: usize = paths.iter().flatten().map(|p| p.len() - 1).sum();
     let keep_every = (segments as f64 / count(group, f) as f64).round().max(1.0) as usize;
-    let paths: Vec<Vec<usize>> = paths.into_iter().step_by(keep_every).collect();
+    // Paths follow the rim ordered by azimuth from the dorsal midline; keep them by their
+    // distance from it in either direction, so that the selection is left-right symmetric.
+    let n_paths = paths.len();
+    let paths: Vec<Vec<usize>> = paths
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i.min(&(n_paths - i)) % keep_every == 0)
+        .filter_map(|(_, p)| p)
+        .collect();
     let force = DIAPHRAGM_FORCE / paths.len().max(1) as f64;
     for path in paths {
         let p = anchors[abdomen.anchor[path[0]] as usize].rest;
@@ -294,6 +339,28 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
 
 /// Height on the unit sphere above which the dome is central tendon (no muscle fibres).
 pub const CENTRAL_TENDON: f64 = 0.85;
+
+/// The mirror image (z -> -z) of anchor `n`: an existing anchor at the mirrored position on the
+/// mirrored body if there is one, else a new one.
+fn mirror_anchor(n: u32, anchors: &mut Vec<Anchor>) -> u32 {
+    let a = anchors[n as usize];
+    let body = match a.body {
+        Body::Rib(i) => Body::Rib(if i < 12 { i + 12 } else { i - 12 }),
+        other => other,
+    };
+    let p = Point3::new(a.rest.x, a.rest.y, -a.rest.z);
+    let same = |b: &Anchor| {
+        let kind_matches = match (b.body, body) {
+            (Body::Vertex(_), Body::Vertex(_)) => true,
+            (x, y) => x == y,
+        };
+        kind_matches && (b.rest - p).norm() < 1e-12
+    };
+    match anchors.iter().position(same) {
+        Some(i) => i as u32,
+        None => push_anchor(anchors, body, p),
+    }
+}
 
 /// The abdominal wall muscles as chains of elements through the wall's vertices, so that
 /// tension presses the wall inward where it is curved:
@@ -330,16 +397,23 @@ fn abdominals(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, p)| {
             (lo.min(p.y), hi.max(p.y))
         });
-    let nearest = |psi: f64, y: f64| -> u32 {
+    // Nearest wall vertex to (azimuth, height); between mirror-image candidates at equal
+    // distance, the one on `side` wins, so that left and right chains mirror each other.
+    let nearest = |psi: f64, y: f64, side: Side| -> u32 {
+        let cost = |p: &Point3<f64>| {
+            let d = (azimuth(p.x, p.z, axis_x) - psi).rem_euclid(std::f64::consts::TAU);
+            let d = d.min(std::f64::consts::TAU - d);
+            (d * 0.12).powi(2) + (p.y - y).powi(2)
+        };
         wall_pts
             .iter()
             .min_by(|(_, p), (_, q)| {
-                let cost = |p: &Point3<f64>| {
-                    let d = (azimuth(p.x, p.z, axis_x) - psi).rem_euclid(std::f64::consts::TAU);
-                    let d = d.min(std::f64::consts::TAU - d);
-                    (d * 0.12).powi(2) + (p.y - y).powi(2)
-                };
-                cost(p).total_cmp(&cost(q))
+                let (cp, cq) = (cost(p), cost(q));
+                if (cp - cq).abs() > 1e-12 {
+                    cp.total_cmp(&cq)
+                } else {
+                    (-side.sign() * p.z).total_cmp(&(-side.sign() * q.z))
+                }
             })
             .map(|(a, _)| *a)
             .unwrap_or(wall[0])
@@ -366,6 +440,20 @@ fn abdominals(
         let mut chains: Vec<(Side, Vec<u32>)> = Vec::new();
         for side in [Side::Right, Side::Left] {
             for lane in 0..lanes {
+                if side == Side::Left {
+                    // The left chains are the mirror images of the right ones (z -> -z).
+                    if let Some((_, right)) = chains
+                        .iter()
+                        .filter(|(s, _)| *s == Side::Right)
+                        .nth(lane)
+                        .cloned()
+                    {
+                        let mirrored: Vec<u32> =
+                            right.iter().map(|&n| mirror_anchor(n, anchors)).collect();
+                        chains.push((Side::Left, mirrored));
+                    }
+                    continue;
+                }
                 let l = lane as f64;
                 let mut nodes = Vec::new();
                 // Interior samples s in (0, 1) along the chain's path on the wall.
@@ -375,11 +463,11 @@ fn abdominals(
                     MuscleGroup::RectusAbdominis => {
                         let psi = mirror(ventral - 0.12 - 0.12 * l, side);
                         let z = side.sign() * (0.02 + 0.025 * l);
-                        let base = anchors[nearest(psi, ymin) as usize].rest;
+                        let base = anchors[nearest(psi, ymin, side) as usize].rest;
                         let pubis = Point3::new(base.x, abdomen.floor_y + 0.04, z);
                         nodes.push(push_anchor(anchors, Body::Ground, pubis));
                         for s in interior(segments) {
-                            nodes.push(nearest(psi, h(0.05 + 0.9 * s)));
+                            nodes.push(nearest(psi, h(0.05 + 0.9 * s), side));
                         }
                         let rib = &ribs[rib_index(6 + lane, side)];
                         let top = rib
@@ -392,17 +480,17 @@ fn abdominals(
                     MuscleGroup::TransversusAbdominis => {
                         // Hoops from the thoracolumbar fascia round to the linea alba.
                         let y = h(0.15 + 0.22 * l);
-                        let back = anchors[nearest(mirror(0.7, side), y) as usize].rest;
+                        let back = anchors[nearest(mirror(0.7, side), y, side) as usize].rest;
                         nodes.push(push_anchor(
                             anchors,
                             Body::Ground,
                             Point3::new(back.x - 0.01, y, back.z),
                         ));
                         for s in interior(segments) {
-                            nodes.push(nearest(mirror(0.7 + (ventral - 0.75) * s, side), y));
+                            nodes.push(nearest(mirror(0.7 + (ventral - 0.75) * s, side), y, side));
                         }
                         // The linea alba: the midline vertex, shared with the other side's hoop.
-                        nodes.push(nearest(ventral, y));
+                        nodes.push(nearest(ventral, y, side));
                     }
                     MuscleGroup::ExternalObliques | MuscleGroup::InternalObliques => {
                         let external = group == MuscleGroup::ExternalObliques;
@@ -430,9 +518,10 @@ fn abdominals(
                             nodes.push(nearest(
                                 mirror(psi0 + (ventral - 0.08 - psi0) * s, side),
                                 h(t0 + (t1 - t0) * s),
+                                side,
                             ));
                         }
-                        nodes.push(nearest(ventral, h(t1)));
+                        nodes.push(nearest(ventral, h(t1), side));
                     }
                     _ => {}
                 }

@@ -105,44 +105,94 @@ pub fn build(
     for i in 1..m - 1 {
         tris.push([r0[0], r0[i + 1], r0[i]]);
     }
-    // Tube: ring k above ring k+1; points run dorsal -> right -> ventral -> left.
+    // Tube: ring k above ring k+1; points run dorsal -> right -> ventral -> left. Each quad's
+    // diagonal is mirrored between the two halves so that the surface is left-right symmetric.
     for k in 0..RINGS - 1 {
         let (a, b) = (&rings[k], &rings[k + 1]);
         for i in 0..m {
             let j = (i + 1) % m;
-            tris.push([a[i], a[j], b[i]]);
-            tris.push([a[j], b[j], b[i]]);
+            if i < m / 2 {
+                tris.push([a[i], a[j], b[i]]);
+                tris.push([a[j], b[j], b[i]]);
+            } else {
+                tris.push([a[i], b[j], b[i]]);
+                tris.push([a[i], a[j], b[j]]);
+            }
         }
     }
-    // Band: zip ring 7 and the rim loop by azimuth about the cavity axis.
+    // Band: zip ring 7 and the rim loop by azimuth about the cavity axis over the right half
+    // (dorsal to ventral midline), then mirror it onto the left half.
     let last = &rings[RINGS - 1];
+    // Azimuth on the right half, with points on the midline pinned to 0 (dorsal) or pi.
     let az = |i: u32| {
         let p = anchors[i as usize].rest;
-        super::abdomen::azimuth(p.x, p.z, abdomen.axis_x)
+        if p.z.abs() < 1e-12 {
+            if p.x < abdomen.axis_x { 0.0 } else { PI }
+        } else {
+            super::abdomen::azimuth(p.x, p.z, abdomen.axis_x)
+        }
     };
-    let mut upper: Vec<(f64, u32)> = last.iter().map(|&i| (az(i), i)).collect();
+    let on_right = |(_, i): &(f64, u32)| anchors[*i as usize].rest.z > -1e-12;
+    let mut upper: Vec<(f64, u32)> = last.iter().map(|&i| (az(i), i)).filter(on_right).collect();
     let mut lower: Vec<(f64, u32)> = abdomen
         .rim
         .iter()
         .map(|&v| (az(abdomen.anchor[v as usize]), abdomen.anchor[v as usize]))
+        .filter(on_right)
         .collect();
     upper.sort_by(|a, b| a.0.total_cmp(&b.0));
     lower.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut band = Vec::new();
     let (nu, nl) = (upper.len(), lower.len());
     let (mut i, mut j) = (0usize, 0usize);
-    while i < nu || j < nl {
-        let (ui, un) = (upper[i % nu], upper[(i + 1) % nu]);
-        let (li, ln) = (lower[j % nl], lower[(j + 1) % nl]);
-        let next_u = if i + 1 < nu { un.0 } else { un.0 + 2.0 * PI };
-        let next_l = if j + 1 < nl { ln.0 } else { ln.0 + 2.0 * PI };
-        if j >= nl || (i < nu && next_u <= next_l) {
-            tris.push([ui.1, un.1, li.1]);
+    while i + 1 < nu || j + 1 < nl {
+        let advance_upper = j + 1 >= nl || (i + 1 < nu && upper[i + 1].0 <= lower[j + 1].0);
+        if advance_upper {
+            band.push([upper[i].1, upper[i + 1].1, lower[j].1]);
             i += 1;
         } else {
-            tris.push([ui.1, ln.1, li.1]);
+            band.push([upper[i].1, lower[j + 1].1, lower[j].1]);
             j += 1;
         }
     }
+    // Mirror: ring point i <-> m - i; rim vertices by position.
+    let mirror = |v: u32| -> u32 {
+        if let Some(i) = last.iter().position(|&q| q == v) {
+            return last[(m - i) % m];
+        }
+        let p = anchors[v as usize].rest;
+        abdomen
+            .rim
+            .iter()
+            .map(|&r| abdomen.anchor[r as usize])
+            .find(|&q| {
+                let o = anchors[q as usize].rest;
+                (o.x - p.x).abs() < 1e-12 && (o.y - p.y).abs() < 1e-12 && (o.z + p.z).abs() < 1e-12
+            })
+            .unwrap_or(v)
+    };
+    let mirrored: Vec<[u32; 3]> = band
+        .iter()
+        .map(|t| [mirror(t[0]), mirror(t[2]), mirror(t[1])])
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect();
+    // Close the gaps at the midlines where the rim has no vertex on them: one triangle joining
+    // the end of each half to its mirror image.
+    let on_midline = |v: u32| anchors[v as usize].rest.z.abs() < 1e-12;
+    let mut joins = Vec::new();
+    if let (Some(u0), Some(l0)) = (upper.first(), lower.first())
+        && !on_midline(l0.1)
+    {
+        joins.push([u0.1, l0.1, mirror(l0.1)]);
+    }
+    if let (Some(un), Some(ln)) = (upper.last(), lower.last())
+        && !on_midline(ln.1)
+    {
+        joins.push([un.1, mirror(ln.1), ln.1]);
+    }
+    tris.extend(band);
+    tris.extend(mirrored);
+    tris.extend(joins);
     // Orientation: the side wall's normals must point away from the axis.
     let probe = tris[tris.len() / 2];
     let [pa, pb, pc] = probe.map(|v| anchors[v as usize].rest);

@@ -15,7 +15,7 @@ mod skeleton;
 pub mod skin;
 mod subject;
 
-pub use abdomen::{Abdomen, VertexRole};
+pub use abdomen::{Abdomen, VertexRole, azimuth};
 pub use layout::{CENTRAL_TENDON, Joint, MuscleElement};
 pub use muscles::MuscleGroup;
 pub use skeleton::{Rib, Scale, Side, Spine, Sternum, rib_index};

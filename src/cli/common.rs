@@ -87,19 +87,19 @@ pub struct DriveArgs {
     #[arg(long)]
     pub ribs_amplitude: Option<f64>,
     /// Rib-cage phase [rad].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub ribs_phase: Option<f64>,
     /// Diaphragm amplitude (0-1).
     #[arg(long)]
     pub diaphragm_amplitude: Option<f64>,
     /// Diaphragm phase [rad].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub diaphragm_phase: Option<f64>,
     /// Abdominal muscles amplitude (0-1).
     #[arg(long)]
     pub abdominals_amplitude: Option<f64>,
     /// Abdominal muscles phase [rad].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub abdominals_phase: Option<f64>,
 }
 

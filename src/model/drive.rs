@@ -70,13 +70,13 @@ impl Drive {
         }
     }
 
-    /// Forced (deep) breathing (thesis Table 4.3, forced: amplitudes 0.35-0.5; rib cage fired
+    /// Forced (deep) breathing (thesis Table 4.3, forced: amplitudes up to 0.5; rib cage fired
     /// slightly first; the abdominal muscles help expiration, as in deep breathing).
     pub fn forced() -> Self {
         Drive {
             frequency: 0.2,
             ribs: Wave {
-                amplitude: 0.45,
+                amplitude: 0.5,
                 phase: 0.0,
             },
             diaphragm: Wave {
