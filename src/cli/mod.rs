@@ -1,10 +1,12 @@
 //! The `torso` command-line tool: one file per subcommand.
 
 pub mod common;
+pub mod fit;
 pub mod simulate;
 
 use clap::{Parser, Subcommand};
 
+pub mod synth;
 pub mod validate;
 
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
@@ -27,6 +29,12 @@ pub enum Command {
     Validate(validate::ValidateArgs),
     /// Write a synthetic spirogram (from a curve or a sinusoidal model).
     SynthSpirometry(validate::SynthSpirometryArgs),
+    /// Write a synthetic SLP recording with known drive parameters and its ground truth.
+    Synth(synth::SynthArgs),
+    /// Fit the model to an SLP recording (registration, frequency, amplitudes and phases).
+    Fit(fit::FitArgs),
+    /// Package the FMU, simulate the default subject and fit the bundled recording.
+    Demo(fit::DemoArgs),
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -40,6 +48,9 @@ pub fn main() -> i32 {
         }
         Command::Validate(a) => validate::run(&a),
         Command::SynthSpirometry(a) => validate::run_synth(&a),
+        Command::Synth(a) => synth::main(&a),
+        Command::Fit(a) => fit::main(&a),
+        Command::Demo(a) => fit::demo(&a),
     };
     match result {
         Ok(()) => 0,
