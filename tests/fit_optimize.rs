@@ -27,7 +27,10 @@ fn nelder_mead_solves_rosenbrock_2d() {
     };
     let m = nelder_mead(&mut f, &[-1.2, 1.0], &b, &o, &mut quiet).unwrap();
     assert!(m.converged, "{m:?}");
-    assert!((m.x[0] - 1.0).abs() < 1e-3 && (m.x[1] - 1.0).abs() < 2e-3, "{m:?}");
+    assert!(
+        (m.x[0] - 1.0).abs() < 1e-3 && (m.x[1] - 1.0).abs() < 2e-3,
+        "{m:?}"
+    );
     assert!(m.evaluations <= 400);
     assert_eq!(calls, m.evaluations);
     assert_eq!(m.f_start, rosenbrock(&[-1.2, 1.0]));
@@ -75,9 +78,20 @@ fn bounded_quadratic_minimum_on_the_bounds() {
     let b = Bounds::new(&[(0.0, 1.0); 4]).unwrap();
     let mut f = |x: &[f64]| {
         assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "outside: {x:?}");
-        Ok(x.iter().zip(c).zip(w).map(|((x, c), w)| w * (x - c).powi(2)).sum::<f64>())
+        Ok(x.iter()
+            .zip(c)
+            .zip(w)
+            .map(|((x, c), w)| w * (x - c).powi(2))
+            .sum::<f64>())
     };
-    let m = nelder_mead(&mut f, &[0.5; 4], &b, &NelderMeadOptions::default(), &mut quiet).unwrap();
+    let m = nelder_mead(
+        &mut f,
+        &[0.5; 4],
+        &b,
+        &NelderMeadOptions::default(),
+        &mut quiet,
+    )
+    .unwrap();
     let want = [0.0, 0.3, 1.0, 0.5];
     for (x, w) in m.x.iter().zip(want) {
         assert!((x - w).abs() < 1e-2, "{m:?}");
@@ -89,9 +103,18 @@ fn bounded_quadratic_minimum_on_the_bounds() {
 fn start_outside_the_box_is_projected() {
     let b = Bounds::new(&[(0.0, 1.0), (0.0, 1.0)]).unwrap();
     let mut f = |x: &[f64]| Ok((x[0] - 0.2).powi(2) + (x[1] - 0.7).powi(2));
-    let m = nelder_mead(&mut f, &[5.0, -3.0], &b, &NelderMeadOptions::default(), &mut quiet)
-        .unwrap();
-    assert!((m.x[0] - 0.2).abs() < 5e-3 && (m.x[1] - 0.7).abs() < 5e-3, "{m:?}");
+    let m = nelder_mead(
+        &mut f,
+        &[5.0, -3.0],
+        &b,
+        &NelderMeadOptions::default(),
+        &mut quiet,
+    )
+    .unwrap();
+    assert!(
+        (m.x[0] - 0.2).abs() < 5e-3 && (m.x[1] - 0.7).abs() < 5e-3,
+        "{m:?}"
+    );
 }
 
 /// Two basins: a shallow local one at (0.2, 0.2) and the global one at (0.8, 0.75).
@@ -107,7 +130,10 @@ fn multistart_escapes_a_local_minimum() {
     let o = NelderMeadOptions::default();
     let mut f = |x: &[f64]| Ok(two_basins(x));
     let local = nelder_mead(&mut f, &[0.15, 0.1], &b, &o, &mut quiet).unwrap();
-    assert!(local.f > 0.4, "plain Nelder-Mead should stay in the local basin: {local:?}");
+    assert!(
+        local.f > 0.4,
+        "plain Nelder-Mead should stay in the local basin: {local:?}"
+    );
     let m = multistart(&mut f, &[0.15, 0.1], &b, &o, 4, 3, &mut quiet).unwrap();
     assert!(m.f < 1e-4, "{m:?}");
     assert!((m.x[0] - 0.8).abs() < 5e-3 && (m.x[1] - 0.75).abs() < 5e-3);
@@ -126,7 +152,10 @@ fn cmaes_solves_a_rotated_ellipsoid_and_rosenbrock() {
     let m = cmaes(&mut f, &[2.0, 2.0, -2.0, 0.0], &b, 2000, 0.3, 5, &mut quiet).unwrap();
     assert!(m.f < 1e-4, "{m:?}");
     let want = [1.0, -1.0, 0.5, 1.0];
-    assert!(m.x.iter().zip(want).all(|(x, w)| (x - w).abs() < 1e-2), "{m:?}");
+    assert!(
+        m.x.iter().zip(want).all(|(x, w)| (x - w).abs() < 1e-2),
+        "{m:?}"
+    );
     assert!(m.evaluations <= 2000);
     let b2 = Bounds::new(&[(-2.0, 2.0); 2]).unwrap();
     let mut g = |x: &[f64]| Ok(rosenbrock(x));
@@ -142,7 +171,10 @@ fn cmaes_stays_in_the_box_and_finds_a_bound_minimum() {
         Ok((x[0] + 0.5).powi(2) + (x[1] - 0.4).powi(2) + (x[2] - 1.5).powi(2))
     };
     let m = cmaes(&mut f, &[0.5; 3], &b, 600, 0.3, 2, &mut quiet).unwrap();
-    assert!(m.x[0] < 1e-2 && (m.x[1] - 0.4).abs() < 1e-2 && m.x[2] > 0.99, "{m:?}");
+    assert!(
+        m.x[0] < 1e-2 && (m.x[1] - 0.4).abs() < 1e-2 && m.x[2] > 0.99,
+        "{m:?}"
+    );
 }
 
 #[test]
@@ -157,8 +189,14 @@ fn objective_errors_stop_the_search() {
             Ok(1.0)
         }
     };
-    let e = nelder_mead(&mut f, &[0.5, 0.5], &b, &NelderMeadOptions::default(), &mut quiet)
-        .unwrap_err();
+    let e = nelder_mead(
+        &mut f,
+        &[0.5, 0.5],
+        &b,
+        &NelderMeadOptions::default(),
+        &mut quiet,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("model failed"));
 }
 
@@ -178,11 +216,18 @@ fn progress_reports_every_evaluation_with_the_best_so_far() {
     let b = Bounds::new(&[(-2.0, 2.0); 2]).unwrap();
     let mut f = |x: &[f64]| Ok(rosenbrock(x));
     let mut seen = Vec::new();
-    let m = nelder_mead(&mut f, &[0.0, 0.0], &b, &NelderMeadOptions::default(), &mut |n, best| {
-        seen.push((n, best))
-    })
+    let m = nelder_mead(
+        &mut f,
+        &[0.0, 0.0],
+        &b,
+        &NelderMeadOptions::default(),
+        &mut |n, best| seen.push((n, best)),
+    )
     .unwrap();
     assert_eq!(seen.len(), m.evaluations);
-    assert!(seen.windows(2).all(|w| w[1].0 == w[0].0 + 1 && w[1].1 <= w[0].1));
+    assert!(
+        seen.windows(2)
+            .all(|w| w[1].0 == w[0].0 + 1 && w[1].1 <= w[0].1)
+    );
     assert_eq!(seen.last().unwrap().1, m.f);
 }

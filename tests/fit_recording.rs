@@ -53,7 +53,10 @@ fn rejects(text: &str, line: usize, column: usize, needle: &str) {
                 "message `{message}` lacks `{needle}`"
             );
             let shown = Recording::parse(text, "rec.csv").unwrap_err().to_string();
-            assert!(shown.starts_with(&format!("rec.csv:{line}:{column}: ")), "{shown}");
+            assert!(
+                shown.starts_with(&format!("rec.csv:{line}:{column}: ")),
+                "{shown}"
+            );
         }
         other => panic!("expected a parse error, got {other:?}"),
     }
@@ -170,7 +173,12 @@ fn ragged_rows() {
     let short = row(0.1, 4);
     let cut = &short[..short.rfind(',').unwrap()];
     let text = small(2).replace(&short, cut);
-    rejects(&text, 6, cut.len() + 1, "ragged row: 12 cells, the header has 13");
+    rejects(
+        &text,
+        6,
+        cut.len() + 1,
+        "ragged row: 12 cells, the header has 13",
+    );
     let text = small(2).replace(&short, &format!("{short},7"));
     rejects(&text, 6, short.len() + 2, "ragged row: 14 cells");
 }
@@ -198,7 +206,12 @@ fn nan_and_infinite_cells() {
 #[test]
 fn time_must_increase() {
     let text = small(3).replace(&row(0.2, 4), &row(0.1, 4));
-    rejects(&text, 7, 1, "time 0.1 s does not increase (previous frame: 0.1 s)");
+    rejects(
+        &text,
+        7,
+        1,
+        "time 0.1 s does not increase (previous frame: 0.1 s)",
+    );
     let text = small(3).replace(&row(0.2, 4), &row(0.05, 4));
     rejects(&text, 7, 1, "does not increase");
 }
@@ -255,7 +268,10 @@ fn comments_only_before_the_header() {
 
 #[test]
 fn blank_line_between_frames() {
-    let text = small(3).replace(&format!("{}\n", row(0.1, 4)), &format!("{}\n\n", row(0.1, 4)));
+    let text = small(3).replace(
+        &format!("{}\n", row(0.1, 4)),
+        &format!("{}\n\n", row(0.1, 4)),
+    );
     rejects(&text, 7, 1, "empty line between frames");
 }
 
@@ -270,8 +286,18 @@ fn crlf_and_trailing_blank_lines_are_accepted() {
 fn writer_validates() {
     let mut r = Recording::parse(&small(3), "r").unwrap();
     r.times[2] = 0.05;
-    assert!(r.to_csv().unwrap_err().to_string().contains("time of frame 3"));
+    assert!(
+        r.to_csv()
+            .unwrap_err()
+            .to_string()
+            .contains("time of frame 3")
+    );
     let mut r = Recording::parse(&small(3), "r").unwrap();
     r.frames[1].pop();
-    assert!(r.to_csv().unwrap_err().to_string().contains("recording frame 2"));
+    assert!(
+        r.to_csv()
+            .unwrap_err()
+            .to_string()
+            .contains("recording frame 2")
+    );
 }

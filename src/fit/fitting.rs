@@ -67,7 +67,10 @@ pub struct FitOptions {
     pub method: Method,
     /// Largest number of cost evaluations.
     pub max_evals: usize,
-    /// Starting rib-cage and diaphragm amplitudes.
+    /// Start from the linearised estimate (two extra model runs, counted as evaluations);
+    /// otherwise from `start_amplitudes` and the recording's breath phase.
+    pub linearised_start: bool,
+    /// Starting rib-cage and diaphragm amplitudes when not `linearised_start`.
     pub start_amplitudes: (f64, f64),
     /// Abdominal muscles' wave, held fixed (not fitted; amplitude 0 by default as in the
     /// thesis's three-parameter fits).
@@ -83,6 +86,7 @@ impl Default for FitOptions {
         FitOptions {
             method: Method::NelderMead,
             max_evals: 120,
+            linearised_start: true,
             start_amplitudes: (0.3, 0.3),
             abdominals: Wave::default(),
             starts: 4,
@@ -100,7 +104,8 @@ pub struct Fit {
     pub cost_m: f64,
     /// Cost at the starting point [m].
     pub initial_cost_m: f64,
-    /// Cost evaluations.
+    /// Model runs spent choosing the parameters: the linearised start's runs plus the
+    /// optimiser's cost evaluations (one more run produces the outputs).
     pub evaluations: usize,
     /// Whether the optimiser met its tolerances (false: stopped on the budget).
     pub converged: bool,
@@ -195,6 +200,194 @@ fn fundamental_phase(times: &[f64], signal: &[f64], f: f64) -> f64 {
     sol[2].atan2(sol[1])
 }
 
+/// Reusable buffers for [`aligned_cost`].
+#[derive(Default)]
+struct Pairs {
+    model: Vec<Point3<f64>>,
+    recorded: Vec<Option<Point3<f64>>>,
+}
+
+/// The cost with the camera pose refined over the whole recording: the rigid transform
+/// (Umeyama, least squares over every frame's tracked points) taking the first-frame
+/// registered points onto the model markers is applied before eq. 3.1. The pose is one
+/// transform for the whole recording, so it absorbs where the recording's first frame sits
+/// in the breath (a first-frame registration assumes the rest pose) but none of the breath.
+/// Returns the cost and the correction.
+fn aligned_cost(
+    model: &[Vec<Point3<f64>>],
+    recorded: &[Vec<Option<Point3<f64>>>],
+    pairs: &mut Pairs,
+) -> Result<(f64, RigidTransform)> {
+    pairs.model.clear();
+    pairs.recorded.clear();
+    for (m, r) in model.iter().zip(recorded) {
+        pairs.model.extend_from_slice(m);
+        pairs.recorded.extend_from_slice(r);
+    }
+    let (t, _) = register_rigid(&pairs.model, &pairs.recorded, false)?;
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (p, q) in pairs.model.iter().zip(&pairs.recorded) {
+        if let Some(q) = q {
+            sum += (t.apply(q) - p).norm();
+            n += 1;
+        }
+    }
+    Ok((
+        if n == 0 {
+            f64::INFINITY
+        } else {
+            sum / n as f64
+        },
+        t,
+    ))
+}
+
+/// Reference amplitude of the two basis runs of [`linearised_start`].
+const BASIS_AMPLITUDE: f64 = 0.3;
+/// Phase shifts tried per family by [`linearised_start`].
+const SHIFTS: usize = 24;
+
+/// A starting point from a linearised model (2 model runs): the displacement from rest is
+/// taken as c_r D_r(t + s_r) + c_d D_d(t + s_d), with D_r and D_d the responses to the
+/// rib-cage and the diaphragm drive alone at amplitude 0.3 and phase `psi`, time-shifted by
+/// s in [0, 1/f) (a phase change of 2 pi f s in the periodic regime). For each pair of
+/// shifts the non-negative least-squares (c_r, c_d) are solved; the best pair gives
+/// A = 0.3 c and phi = psi + 2 pi f s. Returns (x0, model runs used).
+#[allow(clippy::too_many_arguments)]
+fn linearised_start(
+    model: &mut dyn MarkerModel,
+    rest: &[Point3<f64>],
+    recorded: &[Vec<Option<Point3<f64>>>],
+    times: &[f64],
+    f: f64,
+    psi: f64,
+    abdominals: Wave,
+    rate: f64,
+) -> Result<[f64; 4]> {
+    let period = 1.0 / f;
+    let h = 1.0 / rate.max(1.0);
+    let span = times.last().copied().unwrap_or(0.0) + period;
+    let n = (span / h).ceil() as usize + 2;
+    let grid: Vec<f64> = (0..n).map(|j| period + j as f64 * h).collect();
+    let mut basis = Vec::with_capacity(2);
+    for family in 0..2 {
+        let wave = |on: bool| Wave {
+            amplitude: if on { BASIS_AMPLITUDE } else { 0.0 },
+            phase: psi,
+        };
+        let drive = Drive {
+            frequency: f,
+            ribs: wave(family == 0),
+            diaphragm: wave(family == 1),
+            abdominals,
+        };
+        let mut traj = Trajectory::default();
+        model.run(&[(0.0, drive)], &grid, false, &mut traj)?;
+        basis.push(traj.markers);
+    }
+    // Frames used: about 300, evenly spread.
+    let stride = (times.len() / 300).max(1);
+    let frames: Vec<usize> = (0..times.len()).step_by(stride).collect();
+    let disp = |b: &[Vec<Point3<f64>>], t: f64, p: usize| {
+        let x = (t / h).clamp(0.0, (n - 1) as f64);
+        let j = (x.floor() as usize).min(n - 2);
+        let w = x - j as f64;
+        (b[j][p].coords * (1.0 - w) + b[j + 1][p].coords * w) - rest[p].coords
+    };
+    // Pre-sample each basis at every shift.
+    let sample = |b: &[Vec<Point3<f64>>], s: usize| -> Vec<Vec<nalgebra::Vector3<f64>>> {
+        let sigma = s as f64 * period / SHIFTS as f64;
+        frames
+            .iter()
+            .map(|&i| {
+                (0..rest.len())
+                    .map(|p| disp(b, times[i] + sigma, p))
+                    .collect()
+            })
+            .collect()
+    };
+    // Per-point time means are removed from data and bases: the camera pose refinement of
+    // the cost absorbs any constant offset (see `aligned_cost`).
+    let centre = |mut v: Vec<Vec<nalgebra::Vector3<f64>>>| {
+        for p in 0..rest.len() {
+            let mean = v.iter().map(|f| f[p]).sum::<nalgebra::Vector3<f64>>() / v.len() as f64;
+            for f in v.iter_mut() {
+                f[p] -= mean;
+            }
+        }
+        v
+    };
+    let dr: Vec<_> = (0..SHIFTS).map(|s| centre(sample(&basis[0], s))).collect();
+    let dd: Vec<_> = (0..SHIFTS).map(|s| centre(sample(&basis[1], s))).collect();
+    let mut rmean = vec![nalgebra::Vector3::zeros(); rest.len()];
+    let mut rcount = vec![0usize; rest.len()];
+    for &i in &frames {
+        for (p, q) in recorded[i].iter().enumerate() {
+            if let Some(q) = q {
+                rmean[p] += q.coords;
+                rcount[p] += 1;
+            }
+        }
+    }
+    for (m, c) in rmean.iter_mut().zip(&rcount) {
+        *m /= (*c).max(1) as f64;
+    }
+    let mut best = (f64::INFINITY, [0.0; 4]);
+    for (sr, a) in dr.iter().enumerate() {
+        for (sd, b) in dd.iter().enumerate() {
+            let (mut aa, mut ab, mut bb, mut ar, mut br, mut rr) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+            for (k, &i) in frames.iter().enumerate() {
+                for (p, q) in recorded[i].iter().enumerate() {
+                    if let Some(q) = q {
+                        let r = q.coords - rmean[p];
+                        let (u, v) = (&a[k][p], &b[k][p]);
+                        aa += u.dot(u);
+                        ab += u.dot(v);
+                        bb += v.dot(v);
+                        ar += u.dot(&r);
+                        br += v.dot(&r);
+                        rr += r.dot(&r);
+                    }
+                }
+            }
+            let residual = |cr: f64, cd: f64| {
+                rr - 2.0 * (cr * ar + cd * br) + cr * cr * aa + 2.0 * cr * cd * ab + cd * cd * bb
+            };
+            let det = aa * bb - ab * ab;
+            let mut candidates = vec![
+                (if aa > 0.0 { (ar / aa).max(0.0) } else { 0.0 }, 0.0),
+                (0.0, if bb > 0.0 { (br / bb).max(0.0) } else { 0.0 }),
+            ];
+            if det > 1e-12 * aa * bb {
+                let cr = (ar * bb - br * ab) / det;
+                let cd = (br * aa - ar * ab) / det;
+                if cr >= 0.0 && cd >= 0.0 {
+                    candidates.push((cr, cd));
+                }
+            }
+            for (cr, cd) in candidates {
+                let res = residual(cr, cd);
+                if res < best.0 {
+                    let phase = |s: usize| psi + wrap_angle(2.0 * PI * s as f64 / SHIFTS as f64);
+                    best = (
+                        res,
+                        [
+                            (cr * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
+                            (cd * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
+                            phase(sr),
+                            phase(sd),
+                        ],
+                    );
+                }
+            }
+        }
+    }
+    Ok(best.1)
+}
+
+/// Model runs spent by [`linearised_start`].
+pub const START_RUNS: usize = 2;
+
 /// Fits `model` to `recording` (see the module doc). `progress(evaluations, best cost)` is
 /// called after each cost evaluation.
 pub fn fit_recording(
@@ -268,20 +461,41 @@ pub fn fit_recording(
         },
         abdominals: options.abdominals,
     };
+    let x0 = if options.linearised_start {
+        linearised_start(
+            model,
+            &rest,
+            &recorded,
+            &times,
+            f,
+            psi,
+            options.abdominals,
+            recording.rate(),
+        )?
+    } else {
+        [
+            options.start_amplitudes.0.clamp(alo, ahi),
+            options.start_amplitudes.1.clamp(alo, ahi),
+            psi,
+            psi,
+        ]
+    };
+    let start_runs = if options.linearised_start {
+        START_RUNS
+    } else {
+        0
+    };
+    let budget = options.max_evals - start_runs;
+    let nm = NelderMeadOptions {
+        max_evals: budget,
+        initial_step: if options.linearised_start { 0.06 } else { 0.15 },
+        ..NelderMeadOptions::default()
+    };
     let mut traj = Trajectory::default();
+    let mut pairs = Pairs::default();
     let mut cost = |x: &[f64]| -> Result<f64> {
         model.run(&[(0.0, drive_of(x))], &model_times, false, &mut traj)?;
-        Ok(mean_distance(&traj.markers, &recorded))
-    };
-    let x0 = [
-        options.start_amplitudes.0.clamp(alo, ahi),
-        options.start_amplitudes.1.clamp(alo, ahi),
-        psi,
-        psi,
-    ];
-    let nm = NelderMeadOptions {
-        max_evals: options.max_evals,
-        ..NelderMeadOptions::default()
+        Ok(aligned_cost(&traj.markers, &recorded, &mut pairs)?.0)
     };
     let m: Minimum = match options.method {
         Method::NelderMead => nelder_mead(&mut cost, &x0, &bounds, &nm, progress)?,
@@ -298,8 +512,8 @@ pub fn fit_recording(
             &mut cost,
             &x0,
             &bounds,
-            options.max_evals,
-            0.25,
+            budget,
+            if options.linearised_start { 0.1 } else { 0.25 },
             options.seed,
             progress,
         )?,
@@ -309,11 +523,22 @@ pub fn fit_recording(
     drive.diaphragm.phase = wrap_angle(drive.diaphragm.phase);
     let mut fitted = Trajectory::default();
     model.run(&[(0.0, drive_of(&m.x))], &model_times, true, &mut fitted)?;
+    let (_, correction) = aligned_cost(&fitted.markers, &recorded, &mut Pairs::default())?;
+    let to_model = RigidTransform {
+        rotation: correction.rotation * to_model.rotation,
+        translation: correction.rotation * to_model.translation + correction.translation,
+        scale: 1.0,
+    };
+    let recorded: Vec<Vec<Option<Point3<f64>>>> = recording
+        .frames
+        .iter()
+        .map(|f| f.iter().map(|q| q.map(|q| to_model.apply(&q))).collect())
+        .collect();
     Ok(Fit {
         drive,
         cost_m: m.f,
         initial_cost_m: m.f_start,
-        evaluations: m.evaluations,
+        evaluations: m.evaluations + start_runs,
         converged: m.converged,
         wall_s: start.elapsed().as_secs_f64(),
         delta_phase: wrap_angle(m.x[3] - m.x[2]),
