@@ -10,7 +10,7 @@ use breathing_torso::fit::principal::recording_frequency;
 use breathing_torso::fit::report::{truth_json, write_fit};
 use breathing_torso::fit::source::DriveSchedule;
 use breathing_torso::fit::{
-    Camera, FitOptions, MarkerModel, Method, Recording, SynthOptions, Trajectory, fit_recording,
+    Camera, FitOptions, MarkerSource, Method, Recording, SynthOptions, Trajectory, fit_recording,
     synthesize,
 };
 use breathing_torso::model::{Drive, Wave};
@@ -53,7 +53,7 @@ impl LaggedGrid {
     }
 }
 
-impl MarkerModel for LaggedGrid {
+impl MarkerSource for LaggedGrid {
     fn grid(&self) -> (usize, usize) {
         (self.rows, self.cols)
     }

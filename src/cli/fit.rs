@@ -108,6 +108,11 @@ pub struct FitArgs {
     /// Seed of the randomised methods.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Register the grid and fit the skin to the first frame inside the model
+    /// (`slp.reference`, thesis 3.2) rather than a rigid registration alone; for subjects
+    /// whose shape differs from the model's.
+    #[arg(long)]
+    pub skin_fit: bool,
 }
 
 /// A progress bar on a terminal; silent when stdout is not one.
@@ -161,9 +166,13 @@ pub fn fit_file(
     model: &ModelArgs,
     out: &Path,
     options: &FitOptions,
+    skin_fit: bool,
 ) -> Result<crate::fit::Fit> {
     let recording = Recording::read(recording_path)?;
-    let config = model.config(Drive::default())?;
+    let mut config = model.config(Drive::default())?;
+    if skin_fit {
+        config.scene.slp_reference = Some(recording_path.to_path_buf());
+    }
     crate::fit::fitting::check_grid(
         recording.grid,
         (config.scene.grid_rows, config.scene.grid_cols),
@@ -194,7 +203,7 @@ pub fn main(args: &FitArgs) -> Result<()> {
         seed: args.seed,
         ..FitOptions::default()
     };
-    fit_file(&args.slp, &args.model, &args.out, &options).map(|_| ())
+    fit_file(&args.slp, &args.model, &args.out, &options, args.skin_fit).map(|_| ())
 }
 
 /// Options of `torso demo`.
@@ -266,6 +275,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         &model,
         &args.out.join("fit.json"),
         &FitOptions::default(),
+        false,
     )?;
     println!("demo done in {:.1} s", start.elapsed().as_secs_f64());
     Ok(())

@@ -3,6 +3,11 @@
 //! recording's principal displacement, then a bounded search over the rib-cage and
 //! diaphragm amplitudes and phases minimising the mean marker-to-grid distance (eq. 3.1).
 //!
+//! The search: a linearised start (two basis runs, see [`linearised_start`]), then the
+//! chosen optimiser in a box: amplitudes in [0, 1], each phase within pi of its start. The
+//! cost applies one rigid pose correction fitted over all frames before eq. 3.1 (see
+//! [`aligned_cost`]).
+//!
 //! Time convention: the model starts from rest, is driven for one breathing period to reach
 //! its periodic regime, and recording time tau = 0 (the first frame) is model time 1/f.
 //! The drive's phase at model time 1/f equals its phase at 0, so the fitted phases are
@@ -11,7 +16,7 @@
 use super::Recording;
 use super::optimize::{Bounds, Minimum, NelderMeadOptions, cmaes, multistart, nelder_mead};
 use super::principal::principal_displacement;
-use super::source::{MarkerModel, Trajectory};
+use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::{RigidTransform, register_rigid};
 use crate::model::{Drive, Wave};
 use crate::stats::frequency::{FrequencyEstimate, estimate_frequency};
@@ -119,6 +124,9 @@ pub struct Fit {
     pub to_model: RigidTransform,
     /// Mean distance between the registered first frame and the rest markers [m].
     pub registration_mean_m: f64,
+    /// Skin fitting by the model (mean error before, after) [m], when it fitted its skin to
+    /// the first frame (`scene.slp_reference`).
+    pub skin_fit: Option<(f64, f64)>,
     /// RMS residual of the registration [m].
     pub registration_rms_m: f64,
     /// Recording times relative to the first frame [s].
@@ -255,7 +263,7 @@ const SHIFTS: usize = 24;
 /// A = 0.3 c and phi = psi + 2 pi f s. Returns (x0, model runs used).
 #[allow(clippy::too_many_arguments)]
 fn linearised_start(
-    model: &mut dyn MarkerModel,
+    model: &mut dyn MarkerSource,
     rest: &[Point3<f64>],
     recorded: &[Vec<Option<Point3<f64>>>],
     times: &[f64],
@@ -391,7 +399,7 @@ pub const START_RUNS: usize = 2;
 /// Fits `model` to `recording` (see the module doc). `progress(evaluations, best cost)` is
 /// called after each cost evaluation.
 pub fn fit_recording(
-    model: &mut dyn MarkerModel,
+    model: &mut dyn MarkerSource,
     recording: &Recording,
     options: &FitOptions,
     progress: &mut dyn FnMut(usize, f64),
@@ -408,6 +416,7 @@ pub fn fit_recording(
     }
     // Registration of the first frame to the rest markers.
     let rest = model.rest_markers()?;
+    let skin_fit = model.skin_fit()?;
     let (to_model, rms) = register_rigid(&rest, &recording.frames[0], false)?;
     let recorded: Vec<Vec<Option<Point3<f64>>>> = recording
         .frames
@@ -443,12 +452,6 @@ pub fn fit_recording(
     let settle = 1.0 / f;
     let model_times: Vec<f64> = times.iter().map(|t| settle + t).collect();
     let (alo, ahi) = AMPLITUDE_RANGE;
-    let bounds = Bounds::new(&[
-        (alo, ahi),
-        (alo, ahi),
-        (psi - PI, psi + PI),
-        (psi - PI, psi + PI),
-    ])?;
     let drive_of = |x: &[f64]| Drive {
         frequency: f,
         ribs: Wave {
@@ -480,6 +483,14 @@ pub fn fit_recording(
             psi,
         ]
     };
+    let x0 = [x0[0], x0[1], wrap_angle(x0[2]), wrap_angle(x0[3])];
+    // Each phase is searched within pi of its start (inside the drive's [-2 pi, 2 pi]).
+    let bounds = Bounds::new(&[
+        (alo, ahi),
+        (alo, ahi),
+        (x0[2] - PI, x0[2] + PI),
+        (x0[3] - PI, x0[3] + PI),
+    ])?;
     let start_runs = if options.linearised_start {
         START_RUNS
     } else {
@@ -545,6 +556,7 @@ pub fn fit_recording(
         frequency,
         to_model,
         registration_mean_m,
+        skin_fit,
         registration_rms_m: rms,
         times,
         recorded,

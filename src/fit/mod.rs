@@ -7,7 +7,7 @@
 //! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
-//! | [`source`] | the [`MarkerModel`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
+//! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
 //! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
@@ -22,5 +22,5 @@ pub mod synth;
 
 pub use fitting::{Fit, FitOptions, Method, fit_recording};
 pub use recording::{Recording, Units};
-pub use source::{MarkerModel, TorsoMarkers, Trajectory};
+pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

@@ -57,10 +57,14 @@ pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Pat
     let extra = json!({
         "cost_m": fit.cost_m,
         "initial_cost_m": fit.initial_cost_m,
-        "skin_fit_error_m": {
-            "before": fit.registration_mean_m,
-            "after": fit.registration_mean_m,
-            "skin_fitted": false,
+        "skin_fit_error_m": match fit.skin_fit {
+            Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
+            // Rigid registration only: the remaining first-frame distance, before = after.
+            None => json!({
+                "before": fit.registration_mean_m,
+                "after": fit.registration_mean_m,
+                "skin_fitted": false,
+            }),
         },
         "evaluations": fit.evaluations,
         "converged": fit.converged,

@@ -23,12 +23,18 @@ pub struct Trajectory {
 }
 
 /// A model whose markers can be compared with a recording.
-pub trait MarkerModel {
+pub trait MarkerSource {
     /// The marker grid (rows, columns).
     fn grid(&self) -> (usize, usize);
 
     /// Marker positions of the rest state (model frame), used for registration.
     fn rest_markers(&mut self) -> Result<Vec<Point3<f64>>>;
+
+    /// The skin-fitting errors of the model's registration to a recording's first frame
+    /// (mean before, mean after) [m], when the model registered and fitted its skin itself.
+    fn skin_fit(&mut self) -> Result<Option<(f64, f64)>> {
+        Ok(None)
+    }
 
     /// Runs `schedule` from the rest state and records the markers (and the lung volume
     /// when `volumes`) at each of `times` (model time, increasing) into `out`, reusing its
@@ -42,7 +48,7 @@ pub trait MarkerModel {
     ) -> Result<()>;
 }
 
-/// A [`MarkerModel`] backed by one [`Torso`].
+/// A [`MarkerSource`] backed by one [`Torso`].
 pub struct TorsoMarkers {
     torso: Torso,
     rest: Snapshot,
@@ -85,7 +91,7 @@ pub fn read_markers(torso: &mut Torso, count: usize, out: &mut Vec<Point3<f64>>)
     Ok(())
 }
 
-impl MarkerModel for TorsoMarkers {
+impl MarkerSource for TorsoMarkers {
     fn grid(&self) -> (usize, usize) {
         self.grid
     }

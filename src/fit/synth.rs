@@ -13,7 +13,7 @@
 use super::Recording;
 use super::fitting::wrap_angle;
 use super::recording::Units;
-use super::source::{MarkerModel, Trajectory};
+use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::RigidTransform;
 use crate::model::Drive;
 use crate::stats::rng::Pcg64;
@@ -174,7 +174,7 @@ fn schedule(o: &SynthOptions, rng: &mut Pcg64) -> (Vec<(f64, Drive)>, f64) {
 }
 
 /// Generates a synthetic recording from `model` (see the module doc).
-pub fn synthesize(model: &mut dyn MarkerModel, o: &SynthOptions) -> Result<Synthetic> {
+pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synthetic> {
     o.validate()?;
     let mut rng = Pcg64::new(o.seed, 3);
     let (segments, start) = schedule(o, &mut rng);
