@@ -27,8 +27,16 @@ pub enum VertexRole {
 }
 
 /// Height of the dome's apex above the higher of the 9th thoracic vertebra and the 5th rib's
-/// anterior end [m] (end-expiratory position, upright).
-const APEX_RISE: f64 = 0.04;
+/// anterior end [m] at end-expiration, by posture. Lying supine, the weight of the abdominal
+/// contents pushes the relaxed diaphragm cranially (the supine FRC is about 20 % lower than
+/// the upright one), lengthening its fibres.
+fn apex_rise(posture: super::Posture) -> f64 {
+    match posture {
+        super::Posture::Standing => 0.04,
+        super::Posture::Sitting => 0.045,
+        super::Posture::Supine => 0.07,
+    }
+}
 
 /// Inset of the diaphragm's insertions from the costal-margin centrelines toward the cavity
 /// axis [m] (half a rib's thickness).
@@ -269,7 +277,8 @@ pub fn build(
     // Dome apex: at end-expiration the domes rise to the level of the 9th thoracic vertebra
     // dorsally and the 5th rib's anterior end ventrally; take the higher.
     let t9 = spine.joint("thoracic9").map(|p| p.y).unwrap_or(1.22);
-    let apex_y = t9.max(ribs[rib_index(5, Side::Right)].bone_end().y) + APEX_RISE * scale.y;
+    let apex_y =
+        t9.max(ribs[rib_index(5, Side::Right)].bone_end().y) + apex_rise(subject.posture) * scale.y;
     let apex_x = axis_x + 0.1 * (x_front - axis_x);
 
     let dirs: Vec<Vector3<f64>> = sphere

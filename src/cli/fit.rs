@@ -231,7 +231,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
     let start = std::time::Instant::now();
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     println!("== 1. FMU");
-    if let Some(fmu) = package_fmu(&args.out)? {
+    if let Some(fmu) = package_fmu()? {
         println!("wrote {}", fmu.display());
     }
 

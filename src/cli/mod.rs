@@ -6,6 +6,7 @@ pub mod simulate;
 
 use clap::{Parser, Subcommand};
 
+mod fmu;
 pub mod synth;
 pub mod validate;
 
@@ -25,6 +26,8 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Print the library version.
     Version,
+    /// Build the FMI 2.0 co-simulation FMU or write its model description.
+    Fmu(fmu::FmuArgs),
     /// Compare a simulated lung volume with a spirogram (statistics, plots, summary).
     Validate(validate::ValidateArgs),
     /// Write a synthetic spirogram (from a curve or a sinusoidal model).
@@ -46,6 +49,7 @@ pub fn main() -> i32 {
             println!("torso {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
+        Command::Fmu(args) => fmu::run(args),
         Command::Validate(a) => validate::run(&a),
         Command::SynthSpirometry(a) => validate::run_synth(&a),
         Command::Synth(a) => synth::main(&a),

@@ -30,7 +30,6 @@ pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
 /// along -n_{m-1}.
 fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let el = &model.elements;
-    let beta = model.params.beta_max;
     for e in 0..el.len() {
         let path = el.path_of(e);
         let group = el.group[e];
@@ -38,7 +37,7 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             (el.rest_length[e], false)
         } else {
             let a_g = act.level[group as usize][el.side[e] as usize];
-            (el.rest_length[e] * (1.0 - beta * a_g * el.gain[e]), true)
+            (el.rest_length[e] * (1.0 - a_g * el.gain[e]), true)
         };
         if path.len() == 2 {
             let (a, b) = (path[0] as usize, path[1] as usize);

@@ -30,7 +30,7 @@ pub struct Elements {
     pub group: Vec<u8>,
     /// Side code: 0 right, 1 left, 2 midline.
     pub side: Vec<u8>,
-    /// Regional gain g.
+    /// Contraction per unit activation, beta_max g (g: the regional gain).
     pub gain: Vec<f64>,
 }
 
@@ -318,14 +318,23 @@ impl Model {
         let mut elements = Elements::default();
         for m in &anatomy.muscles {
             let l0 = path_length(&m.path).max(1e-4);
-            let k = m.max_force / (params.beta_max * l0);
+            let beta = params.beta_for(m.group);
+            let k = m.max_force / (beta * l0);
             let side = match m.side {
                 Some(Side::Right) => 0,
                 Some(Side::Left) => 1,
                 None => 2,
             };
             let c = 2.0 * zeta * (k * path_mass(&m.path) / share(&m.path)).sqrt();
-            elements.push(&m.path, l0, k, c, m.group.index() as u8, side, m.gain);
+            elements.push(
+                &m.path,
+                l0,
+                k,
+                c,
+                m.group.index() as u8,
+                side,
+                beta * m.gain,
+            );
         }
         let muscle_count = elements.len();
         // Membrane: every edge of the abdominal surface with a free end.

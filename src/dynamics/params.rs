@@ -11,6 +11,9 @@ pub struct Params {
     /// Largest contraction of a muscle element's rest length at full activation and unit
     /// gain: r = 1 - beta_max a g >= 0.7 (thesis 2.4 after Klute et al.: r in [0.7, 1.2]).
     pub beta_max: f64,
+    /// The same for the diaphragm, which can shorten by 30-40 % (seed thesis 2.3, after Hamid
+    /// et al.): r >= 0.6.
+    pub beta_max_diaphragm: f64,
     /// Damping ratio of every spring-damper element against the masses it joins (thesis 2.4:
     /// critically damped).
     pub damping_ratio: f64,
@@ -43,6 +46,14 @@ pub struct Params {
 }
 
 impl Params {
+    /// Largest contraction of an element of `group` (see [`Params::beta_max`]).
+    pub fn beta_for(&self, group: crate::anatomy::MuscleGroup) -> f64 {
+        match group {
+            crate::anatomy::MuscleGroup::Diaphragm => self.beta_max_diaphragm,
+            _ => self.beta_max,
+        }
+    }
+
     /// Defaults for a posture: supine increases the abdominal compliance (thesis 2.3: "a change
     /// from the seated to the supine position increases the abdominal compliance").
     pub fn for_posture(posture: Posture) -> Params {
@@ -53,8 +64,9 @@ impl Params {
         };
         Params {
             beta_max: 0.3,
+            beta_max_diaphragm: 0.4,
             damping_ratio: 1.0,
-            bulk_modulus: 1.0e5,
+            bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
             cartilage_stiffness: 1.0e4,
             rib_joint_stiffness: 2.0,
@@ -62,7 +74,7 @@ impl Params {
             dome_membrane_stiffness: 40.0,
             dome_support: 2.0e5,
             tendon_stiffness: 2000.0,
-            abdominal_wall_compliance: 1.5e-6 * compliance_factor,
+            abdominal_wall_compliance: 2.0e-6 * compliance_factor,
             gravity: 9.81,
         }
     }

@@ -70,7 +70,8 @@ impl Drive {
         }
     }
 
-    /// Forced (deep) breathing (thesis Table 4.3, forced: amplitudes 0.35-0.5; rib cage fired first).
+    /// Forced (deep) breathing (thesis Table 4.3, forced: amplitudes 0.35-0.5; rib cage fired
+    /// slightly first; the abdominal muscles help expiration, as in deep breathing).
     pub fn forced() -> Self {
         Drive {
             frequency: 0.2,
@@ -83,7 +84,7 @@ impl Drive {
                 phase: -0.1,
             },
             abdominals: Wave {
-                amplitude: 0.15,
+                amplitude: 0.5,
                 phase: 0.0,
             },
         }

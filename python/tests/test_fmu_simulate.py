@@ -1,0 +1,156 @@
+"""BreathingTorso.fmu simulated through fmpy: drive parameters and input arrays, bit-identical
+replay from FMU states (in memory and serialised), reset, communication step sizes from
+1e-4 s to 1 s, and eight instances on eight threads.
+"""
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from fmpy.fmi1 import FMICallException
+
+from test_fmu_calls import Host, fmu_path
+
+QUIET = {"drive.ribs.amplitude": 0.2, "drive.diaphragm.amplitude": 0.25, "drive.diaphragm.phase": 0.1}
+VOLUMES = ["volume.lung", "volume.thorax", "volume.abdomen", "volume.trunk", "pressure.abdomen"]
+
+
+def run(host, f, t0, t1, h, names=("volume.lung",)):
+    """Steps from t0 to t1 with step h (t = t0 + k h, as a master computes it); returns the
+    outputs after every step."""
+    vrs = [host.vr[n] for n in names]
+    n = int(round((t1 - t0) / h))
+    out = []
+    for k in range(n):
+        t = t0 + k * h
+        f.doStep(currentCommunicationPoint=t, communicationStepSize=t0 + (k + 1) * h - t)
+        out.append(f.getReal(vrs))
+    return out
+
+
+def test_simulate_with_drive_parameters():
+    r = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, start_values=QUIET,
+                     output=VOLUMES + ["solver.steps", "solver.rhs_evaluations"])
+    assert r["time"][-1] == pytest.approx(8.0)
+    for n in VOLUMES:
+        assert np.all(np.isfinite(r[n])), n
+    lung = r["volume.lung"]
+    tidal = lung.max() - lung.min()
+    assert 0.05 < tidal < 3.0, f"tidal volume {tidal} L"
+    assert r["solver.steps"][-1] > 0 and r["solver.rhs_evaluations"][-1] > r["solver.steps"][-1]
+
+
+def test_simulate_with_input_arrays():
+    t = np.linspace(0.0, 8.0, 401)
+    a = 0.15 * (1.0 - np.cos(2.0 * math.pi * 0.25 * t))
+    signals = np.array(list(zip(t, a, 0.5 * a)),
+                       dtype=[("time", np.float64), ("activation.diaphragm", np.float64),
+                              ("activation.external_intercostals", np.float64)])
+    driven = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, input=signals, output=["volume.lung"])
+    rest = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, output=["volume.lung"])
+    assert np.all(np.isfinite(driven["volume.lung"]))
+    # Inspiratory activation raises the lung volume above the resting run.
+    assert (driven["volume.lung"] - rest["volume.lung"]).max() > 0.02
+
+
+def test_fmu_state_replay_is_bit_identical():
+    h = Host()
+    try:
+        f = h.initialize(QUIET)
+        run(h, f, 0.0, 2.0, 0.02)
+        state = f.getFMUstate()
+        data = f.serializeFMUstate(state)
+        first = run(h, f, 2.0, 4.0, 0.02, VOLUMES)
+        f.setFMUstate(state)
+        assert run(h, f, 2.0, 4.0, 0.02, VOLUMES) == first
+        # A serialised state restores into another instance too.
+        g_host = Host()
+        try:
+            g = g_host.initialize(QUIET)
+            g.setFMUstate(g.deSerializeFMUstate(data))
+            assert run(g_host, g, 2.0, 4.0, 0.02, VOLUMES) == first
+        finally:
+            g_host.close()
+        f.freeFMUstate(state)
+    finally:
+        h.close()
+
+
+def test_reset_then_rerun_is_identical():
+    h = Host()
+    try:
+        f = h.initialize(QUIET)
+        first = run(h, f, 0.0, 3.0, 0.05, VOLUMES)
+        f.reset()
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        for name, value in QUIET.items():
+            f.setReal([h.vr[name]], [value])
+        f.exitInitializationMode()
+        assert run(h, f, 0.0, 3.0, 0.05, VOLUMES) == first
+    finally:
+        h.close()
+
+
+@pytest.mark.parametrize("step", [1e-4, 1e-3, 1e-2, 0.1, 1.0])
+def test_communication_step_sizes_agree_with_one_long_run(step):
+    end = 1.0
+    results = []
+    for h_comm in [end, step]:
+        h = Host()
+        try:
+            f = h.initialize(QUIET)
+            results.append(run(h, f, 0.0, end, h_comm, VOLUMES)[-1])
+        finally:
+            h.close()
+    long_run, stepped = np.array(results[0]), np.array(results[1])
+    # Inputs are constant and the drive is evaluated inside, so only integration error differs.
+    assert np.allclose(stepped, long_run, rtol=1e-4, atol=1e-6), (step, stepped, long_run)
+
+
+def test_eight_threads_give_the_sequential_results():
+    shared = Host()  # one extracted FMU: every instance runs in the same loaded library
+
+    def job(i):
+        from fmpy.fmi2 import FMU2Slave
+        f = FMU2Slave(guid=shared.md.guid, unzipDirectory=shared.dir,
+                      modelIdentifier="BreathingTorso", instanceName=f"torso{i}")
+        f.instantiate(callbacks=shared.callbacks)
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        f.setReal([shared.vr["drive.ribs.amplitude"], shared.vr["drive.diaphragm.amplitude"]],
+                  [0.05 + 0.05 * i, 0.3])
+        f.exitInitializationMode()
+        out = []
+        for k in range(100):
+            f.doStep(currentCommunicationPoint=k * 0.02, communicationStepSize=0.02)
+            out.append(f.getReal([shared.vr["volume.lung"], shared.vr["volume.abdomen"]]))
+        f.terminate()
+        f.fmi2FreeInstance(f.component)
+        return out
+
+    try:
+        sequential = [job(i) for i in range(8)]
+        with ThreadPoolExecutor(max_workers=8) as pool:
+            parallel = list(pool.map(job, range(8)))
+        assert parallel == sequential
+        assert sequential[0] != sequential[7]
+    finally:
+        shutil_dir = shared.dir
+        import shutil
+        shutil.rmtree(shutil_dir, ignore_errors=True)
+
+
+def test_wrong_current_time_after_steps_fails():
+    h = Host()
+    try:
+        f = h.initialize(QUIET)
+        run(h, f, 0.0, 0.1, 0.02)
+        with pytest.raises(FMICallException):
+            f.doStep(currentCommunicationPoint=0.2, communicationStepSize=0.02)
+        assert "currentCommunicationPoint" in h.last_error()
+        run(h, f, 0.1, 0.2, 0.02)
+    finally:
+        h.close()

@@ -1,0 +1,955 @@
+//! One FMU instance: the explicit state machine of FMI 2.0 co-simulation, the per-function
+//! masks of the states each function may be called in, value access through the variable
+//! table, the communication step and the FMU state. Everything here is safe Rust; the
+//! exported C functions in [`super::ffi`] only check pointers, catch panics and forward.
+//!
+//! Status policy: a rejected call (illegal call sequence, unknown value reference, a value
+//! out of range or not finite, a fixed parameter after initialization) returns `fmi2Error`
+//! with a log message naming the function and the variable, and leaves the instance exactly
+//! as it was. A numerical failure inside `fmi2DoStep` returns `fmi2Discard`, keeps the model
+//! at its last successful time and moves to [`Phase::StepFailed`]. Any other internal failure
+//! moves to [`Phase::Error`], from which only `fmi2SetFMUstate`, `fmi2Reset` and
+//! `fmi2FreeInstance` lead out.
+
+// The FMI status-kind constants keep the standard's spelling, also in match patterns.
+#![allow(non_upper_case_globals)]
+
+use super::types::{
+    fmi2DoStepStatus, fmi2LastSuccessfulTime, fmi2PendingStatus, fmi2Status, fmi2Terminated,
+};
+use super::variables::{
+    Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output, table,
+};
+use crate::anatomy::MuscleGroup;
+use crate::model::{Config, Snapshot, Torso};
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::ffi::CString;
+use std::os::raw::c_int;
+use std::path::{Path, PathBuf};
+
+use fmi2Status::{fmi2Discard, fmi2Error, fmi2OK, fmi2Warning};
+
+/// The states of an instance (FMI 2.0 co-simulation state machine). `StepInProgress` and
+/// `StepCanceled` are never entered: steps are synchronous.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Phase {
+    /// After `fmi2Instantiate` or `fmi2Reset`: start values and the experiment may be set.
+    Instantiated,
+    /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
+    InitializationMode,
+    /// Ready for `fmi2DoStep`.
+    StepComplete,
+    /// The last step was discarded (numerical failure); the model is at its last good time.
+    StepFailed,
+    /// After `fmi2Terminate`.
+    Terminated,
+    /// An internal failure: only set state, reset or free may follow.
+    Error,
+}
+
+impl Phase {
+    /// The bit of this phase in a [`mask`].
+    pub fn bit(self) -> u8 {
+        match self {
+            Phase::Instantiated => mask::INSTANTIATED,
+            Phase::InitializationMode => mask::INITIALIZATION_MODE,
+            Phase::StepComplete => mask::STEP_COMPLETE,
+            Phase::StepFailed => mask::STEP_FAILED,
+            Phase::Terminated => mask::TERMINATED,
+            Phase::Error => mask::ERROR,
+        }
+    }
+}
+
+/// Per-function masks of the phases a function may be called in (FMI 2.0 section 4.2.4,
+/// co-simulation state machine).
+pub mod mask {
+    /// [`super::Phase::Instantiated`].
+    pub const INSTANTIATED: u8 = 1;
+    /// [`super::Phase::InitializationMode`].
+    pub const INITIALIZATION_MODE: u8 = 2;
+    /// [`super::Phase::StepComplete`].
+    pub const STEP_COMPLETE: u8 = 4;
+    /// [`super::Phase::StepFailed`].
+    pub const STEP_FAILED: u8 = 8;
+    /// [`super::Phase::Terminated`].
+    pub const TERMINATED: u8 = 16;
+    /// [`super::Phase::Error`].
+    pub const ERROR: u8 = 32;
+    /// Every phase.
+    pub const ANY: u8 =
+        INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR;
+
+    /// `fmi2SetDebugLogging`.
+    pub const SET_DEBUG_LOGGING: u8 = ANY;
+    /// `fmi2FreeInstance`.
+    pub const FREE_INSTANCE: u8 = ANY;
+    /// `fmi2SetupExperiment`.
+    pub const SETUP_EXPERIMENT: u8 = INSTANTIATED;
+    /// `fmi2EnterInitializationMode`.
+    pub const ENTER_INITIALIZATION_MODE: u8 = INSTANTIATED;
+    /// `fmi2ExitInitializationMode`.
+    pub const EXIT_INITIALIZATION_MODE: u8 = INITIALIZATION_MODE;
+    /// `fmi2Terminate`.
+    pub const TERMINATE: u8 = STEP_COMPLETE | STEP_FAILED;
+    /// `fmi2Reset`.
+    pub const RESET: u8 = ANY;
+    /// `fmi2GetReal`, `fmi2GetInteger`, `fmi2GetBoolean`, `fmi2GetString`.
+    pub const GET_VALUES: u8 =
+        INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR;
+    /// `fmi2SetReal`, `fmi2SetInteger`, `fmi2SetBoolean`, `fmi2SetString` (fixed parameters
+    /// are further restricted to the first two phases).
+    pub const SET_VALUES: u8 = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE;
+    /// `fmi2GetFMUstate` (never in [`super::Phase::Error`]: a saved state is consistent).
+    pub const GET_FMU_STATE: u8 = ANY & !ERROR;
+    /// `fmi2SetFMUstate`.
+    pub const SET_FMU_STATE: u8 = ANY;
+    /// `fmi2FreeFMUstate`, `fmi2SerializedFMUstateSize`, `fmi2SerializeFMUstate`,
+    /// `fmi2DeSerializeFMUstate`.
+    pub const FMU_STATE_MEMORY: u8 = ANY;
+    /// `fmi2GetDirectionalDerivative` (not provided).
+    pub const GET_DIRECTIONAL_DERIVATIVE: u8 =
+        INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR;
+    /// `fmi2SetRealInputDerivatives` (not provided).
+    pub const SET_REAL_INPUT_DERIVATIVES: u8 = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE;
+    /// `fmi2GetRealOutputDerivatives` (not provided).
+    pub const GET_REAL_OUTPUT_DERIVATIVES: u8 = STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR;
+    /// `fmi2DoStep`.
+    pub const DO_STEP: u8 = STEP_COMPLETE;
+    /// `fmi2CancelStep`: only while a step is in progress, which never happens.
+    pub const CANCEL_STEP: u8 = 0;
+    /// `fmi2GetStatus` and the typed variants.
+    pub const GET_STATUS: u8 = STEP_COMPLETE | STEP_FAILED | TERMINATED;
+}
+
+/// Log categories, by index in [`LOG_CATEGORIES`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Category {
+    /// `logEvents`.
+    Events = 0,
+    /// `logStatusWarning`.
+    Warning = 1,
+    /// `logStatusDiscard`.
+    Discard = 2,
+    /// `logStatusError`.
+    Error = 3,
+    /// `logStatusFatal`.
+    Fatal = 4,
+    /// `logCalls`.
+    Calls = 5,
+}
+
+impl Category {
+    /// The category's name in `modelDescription.xml`.
+    pub fn name(self) -> &'static str {
+        LOG_CATEGORIES[self as usize].0
+    }
+}
+
+/// The receiver of log messages: (status, category name, message).
+pub type LogSink = Box<dyn FnMut(fmi2Status, &str, &str)>;
+
+/// Categories enabled when the master instantiates with `loggingOn = fmi2False`: errors only.
+const ERRORS_ONLY: u32 = (1 << Category::Error as u32) | (1 << Category::Fatal as u32);
+const ALL_CATEGORIES: u32 = (1 << 6) - 1;
+
+/// Seconds of relative tolerance when comparing the master's communication point with the
+/// instance's time.
+pub const TIME_TOLERANCE: f64 = 1e-9;
+
+/// An FMU instance.
+pub struct Instance {
+    name: String,
+    resources: Option<PathBuf>,
+    sink: Option<LogSink>,
+    categories: u32,
+    phase: Phase,
+    config: Config,
+    rtol_explicit: bool,
+    inputs: [f64; 8],
+    torso: Option<Torso>,
+    start_time: f64,
+    stop_time: Option<f64>,
+    tolerance: Option<f64>,
+    time: f64,
+    last_successful_time: f64,
+    last_step_status: fmi2Status,
+    strings: Vec<CString>,
+    /// Addresses of the FMU states handed out and not yet freed (managed by the C layer).
+    pub(crate) fmu_states: std::collections::HashSet<usize>,
+}
+
+/// A saved instance state (`fmi2FMUstate`): plain data, no pointers into the instance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FmuState {
+    saved: Saved,
+    snapshot: Option<Snapshot>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Saved {
+    guid: String,
+    phase: Phase,
+    config: Config,
+    rtol_explicit: bool,
+    inputs: [f64; 8],
+    start_time: f64,
+    stop_time: Option<f64>,
+    tolerance: Option<f64>,
+    time: f64,
+    last_successful_time: f64,
+    last_step_discarded: bool,
+    /// Whether a model snapshot follows (a truncated state is thus refused).
+    has_snapshot: bool,
+}
+
+const STATE_MAGIC: &[u8; 8] = b"BTFMUST\0";
+/// Format version of serialised FMU states.
+pub const FMU_STATE_VERSION: u32 = 1;
+
+impl FmuState {
+    /// Serialises: magic, version, length of the instance part, the instance part (JSON), then
+    /// the model snapshot ([`Snapshot::to_bytes`]), if any.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let json = serde_json::to_vec(&self.saved).unwrap_or_default();
+        let mut out = STATE_MAGIC.to_vec();
+        out.extend_from_slice(&FMU_STATE_VERSION.to_le_bytes());
+        out.extend_from_slice(&(json.len() as u64).to_le_bytes());
+        out.extend_from_slice(&json);
+        if let Some(s) = &self.snapshot {
+            out.extend_from_slice(&s.to_bytes());
+        }
+        out
+    }
+
+    /// Parses bytes written by [`FmuState::to_bytes`]; anything else is an error, never a panic.
+    pub fn from_bytes(bytes: &[u8]) -> Result<FmuState> {
+        let bad =
+            |m: String| Error::State(format!("not a serialized BreathingTorso FMU state: {m}"));
+        if bytes.len() < 20 || &bytes[..8] != STATE_MAGIC {
+            return Err(bad("missing header".into()));
+        }
+        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if version != FMU_STATE_VERSION {
+            return Err(bad(format!(
+                "format version {version}, this FMU reads {FMU_STATE_VERSION}"
+            )));
+        }
+        let mut len = [0u8; 8];
+        len.copy_from_slice(&bytes[12..20]);
+        let len = usize::try_from(u64::from_le_bytes(len))
+            .map_err(|_| bad("length out of range".into()))?;
+        let body = bytes.get(20..).unwrap_or_default();
+        if len > body.len() {
+            return Err(bad(format!("truncated: {} of {len} bytes", body.len())));
+        }
+        let saved: Saved = serde_json::from_slice(&body[..len]).map_err(|e| bad(e.to_string()))?;
+        if saved.guid != table().guid() {
+            return Err(bad(format!(
+                "saved by an FMU with GUID {}, this one is {}",
+                saved.guid,
+                table().guid()
+            )));
+        }
+        saved.config.validate()?;
+        for (g, v) in MuscleGroup::ALL.iter().zip(saved.inputs) {
+            let var = table().by_vr(super::variables::VR_ACTIVATION + g.index() as u32);
+            if let Some(var) = var {
+                var.check(v)?;
+            }
+        }
+        let rest = &body[len..];
+        let snapshot = match (saved.has_snapshot, rest.is_empty()) {
+            (true, false) => Some(Snapshot::from_bytes(rest)?),
+            (false, true) => None,
+            (true, true) => return Err(bad("truncated: the model snapshot is missing".into())),
+            (false, false) => return Err(bad("trailing bytes after the state".into())),
+        };
+        Ok(FmuState { saved, snapshot })
+    }
+}
+
+fn type_name(t: ScalarType) -> &'static str {
+    match t {
+        ScalarType::Real => "Real",
+        ScalarType::Integer => "Integer",
+        ScalarType::Boolean => "Boolean",
+        ScalarType::String => "String",
+    }
+}
+
+/// A pending change collected by a setter before it is committed.
+enum Change {
+    Input(MuscleGroup, f64),
+    Parameter(Parameter, Value),
+}
+
+impl Instance {
+    /// A fresh instance. `resources` is the decoded `fmuResourceLocation`; `logging_on`
+    /// enables every log category (otherwise only errors are reported).
+    pub fn new(
+        name: &str,
+        resources: Option<PathBuf>,
+        sink: Option<LogSink>,
+        logging_on: bool,
+    ) -> Instance {
+        Instance {
+            name: name.to_string(),
+            resources,
+            sink,
+            categories: if logging_on {
+                ALL_CATEGORIES
+            } else {
+                ERRORS_ONLY
+            },
+            phase: Phase::Instantiated,
+            config: Config::default(),
+            rtol_explicit: false,
+            inputs: [0.0; 8],
+            torso: None,
+            start_time: 0.0,
+            stop_time: None,
+            tolerance: None,
+            time: 0.0,
+            last_successful_time: 0.0,
+            last_step_status: fmi2OK,
+            strings: Vec::new(),
+            fmu_states: Default::default(),
+        }
+    }
+
+    /// The instance name given at instantiation.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Current phase of the state machine.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Current communication time [s].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The configuration the model is (or will be) built from.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Sends a message to the logger if its category is enabled.
+    pub fn log(&mut self, status: fmi2Status, category: Category, message: &str) {
+        if self.categories & (1 << category as u32) != 0
+            && let Some(sink) = self.sink.as_mut()
+        {
+            sink(status, category.name(), message);
+        }
+    }
+
+    /// Records an internal failure: the instance moves to [`Phase::Error`].
+    pub fn fail(&mut self, message: &str) -> fmi2Status {
+        self.phase = Phase::Error;
+        self.error(message)
+    }
+
+    /// Logs an error and returns `fmi2Error`.
+    pub fn error(&mut self, message: &str) -> fmi2Status {
+        self.log(fmi2Error, Category::Error, message);
+        fmi2Error
+    }
+
+    /// Logs a call when `logCalls` is enabled; `args` is only formatted then.
+    pub fn trace(&mut self, args: impl FnOnce() -> String) {
+        if self.categories & (1 << Category::Calls as u32) != 0 {
+            let message = args();
+            self.log(fmi2OK, Category::Calls, &message);
+        }
+    }
+
+    /// Checks that `function` may be called in the current phase; logs "illegal call sequence"
+    /// otherwise.
+    pub fn allowed(&mut self, function: &str, mask: u8) -> bool {
+        if self.phase.bit() & mask != 0 {
+            return true;
+        }
+        let phase = self.phase;
+        self.error(&format!(
+            "{function}: illegal call sequence: not allowed in state {phase:?}"
+        ));
+        false
+    }
+
+    /// `fmi2SetDebugLogging`: no categories sets all of them; unknown names are an error (and
+    /// change nothing).
+    pub fn set_debug_logging(&mut self, on: bool, names: &[&str]) -> fmi2Status {
+        let mut bits = 0u32;
+        for name in names {
+            match LOG_CATEGORIES.iter().position(|(c, _)| c == name) {
+                Some(i) => bits |= 1 << i,
+                None => {
+                    let known: Vec<&str> = LOG_CATEGORIES.iter().map(|c| c.0).collect();
+                    return self.error(&format!(
+                        "fmi2SetDebugLogging: unknown log category \"{name}\" (known: {})",
+                        known.join(", ")
+                    ));
+                }
+            }
+        }
+        if names.is_empty() {
+            bits = ALL_CATEGORIES;
+        }
+        if on {
+            self.categories |= bits;
+        } else {
+            self.categories &= !bits;
+        }
+        fmi2OK
+    }
+
+    /// `fmi2SetupExperiment`. A defined tolerance becomes `solver.rtol` unless `solver.rtol`
+    /// was set explicitly; one outside the solver's range is ignored with a warning.
+    pub fn setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start: f64,
+        stop: Option<f64>,
+    ) -> fmi2Status {
+        if !start.is_finite() {
+            return self.error(&format!(
+                "fmi2SetupExperiment: startTime = {start} is not finite"
+            ));
+        }
+        if let Some(stop) = stop
+            && !(stop.is_finite() && stop >= start)
+        {
+            return self.error(&format!(
+                "fmi2SetupExperiment: stopTime = {stop} must be finite and >= startTime = {start}"
+            ));
+        }
+        let mut status = fmi2OK;
+        if let Some(tol) = tolerance {
+            let rtol = table().by_name("solver.rtol").map(|v| v.check(tol));
+            match rtol {
+                Some(Ok(())) if !self.rtol_explicit => {
+                    self.config.solver.rtol = tol;
+                    self.tolerance = Some(tol);
+                    self.torso = None;
+                }
+                Some(Err(e)) => {
+                    self.log(
+                        fmi2Warning,
+                        Category::Warning,
+                        &format!("fmi2SetupExperiment: tolerance ignored: {e}"),
+                    );
+                    status = fmi2Warning;
+                }
+                _ => {}
+            }
+        }
+        self.start_time = start;
+        self.stop_time = stop;
+        self.time = start;
+        self.last_successful_time = start;
+        status
+    }
+
+    /// `fmi2EnterInitializationMode`.
+    pub fn enter_initialization_mode(&mut self) -> fmi2Status {
+        self.phase = Phase::InitializationMode;
+        self.log(fmi2OK, Category::Events, "entered initialization mode");
+        fmi2OK
+    }
+
+    /// `fmi2ExitInitializationMode`: builds the model (the configuration's final check); a
+    /// bad configuration is an error naming the variable, and the instance stays in
+    /// initialization mode so that the master may correct it.
+    pub fn exit_initialization_mode(&mut self) -> fmi2Status {
+        if let Err(e) = self.ensure_torso() {
+            return self.error(&format!("fmi2ExitInitializationMode: {e}"));
+        }
+        self.phase = Phase::StepComplete;
+        self.last_successful_time = self.time;
+        self.log(fmi2OK, Category::Events, "initialization done");
+        fmi2OK
+    }
+
+    /// `fmi2Terminate`.
+    pub fn terminate(&mut self) -> fmi2Status {
+        self.phase = Phase::Terminated;
+        fmi2OK
+    }
+
+    /// `fmi2Reset`: back to the freshly instantiated state (start values, time, model, solver
+    /// memory and statistics); the name, resources and logging settings stay.
+    pub fn reset(&mut self) -> fmi2Status {
+        let fmu_states = std::mem::take(&mut self.fmu_states);
+        let fresh = Instance::new(&self.name, self.resources.take(), self.sink.take(), false);
+        let categories = self.categories;
+        *self = Instance {
+            categories,
+            fmu_states,
+            ..fresh
+        };
+        self.log(fmi2OK, Category::Events, "reset");
+        fmi2OK
+    }
+
+    fn resolve_slp(&self, value: &str) -> Result<String> {
+        if value.is_empty() {
+            return Ok(String::new());
+        }
+        let path = Path::new(value);
+        let candidate = match (&self.resources, path.is_relative()) {
+            (Some(r), true) if r.join(path).is_file() => r.join(path),
+            _ => path.to_path_buf(),
+        };
+        if !candidate.is_file() {
+            let where_ = self
+                .resources
+                .as_ref()
+                .map(|r| format!(" (also looked in {})", r.display()))
+                .unwrap_or_default();
+            return Err(Error::invalid(
+                "slp.reference",
+                value,
+                format!("an existing SLP recording file{where_}"),
+            ));
+        }
+        Ok(candidate.display().to_string())
+    }
+
+    /// Builds the model from the configuration if it is not built yet.
+    fn ensure_torso(&mut self) -> Result<&mut Torso> {
+        if self.torso.is_none() {
+            let mut torso = Torso::new(self.config.clone())?;
+            for g in MuscleGroup::ALL {
+                torso.set_activation(g, self.inputs[g.index()])?;
+            }
+            self.torso = Some(torso);
+        }
+        self.torso
+            .as_mut()
+            .ok_or_else(|| Error::State("model not built".into()))
+    }
+
+    fn variable(
+        &mut self,
+        function: &str,
+        vr: u32,
+        ty: ScalarType,
+    ) -> std::result::Result<&'static Variable, fmi2Status> {
+        match table().by_vr(vr) {
+            Some(v) if v.ty == ty => Ok(v),
+            Some(v) => Err(self.error(&format!(
+                "{function}: value reference {vr} is `{}`, a {}, not a {}",
+                v.name,
+                type_name(v.ty),
+                type_name(ty)
+            ))),
+            None => Err(self.error(&format!("{function}: unknown value reference {vr}"))),
+        }
+    }
+
+    fn get_value(
+        &mut self,
+        function: &str,
+        vr: u32,
+        ty: ScalarType,
+    ) -> std::result::Result<Value, fmi2Status> {
+        let var = self.variable(function, vr, ty)?;
+        let value = match var.role {
+            Role::Time => Ok(Value::Real(self.time)),
+            Role::Input(g) => Ok(Value::Real(self.inputs[g.index()])),
+            Role::Parameter(p) => Ok(p.get(&self.config)),
+            Role::Output(q) => self
+                .ensure_torso()
+                .and_then(|t| read_output(t, &var.name, q))
+                .map(|x| match var.ty {
+                    ScalarType::Integer => Value::Integer(x.min(i32::MAX as f64) as i32),
+                    _ => Value::Real(x),
+                }),
+        };
+        value.map_err(|e| self.error(&format!("{function}: {e}")))
+    }
+
+    /// `fmi2GetReal`.
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> fmi2Status {
+        for (vr, o) in vrs.iter().zip(out.iter_mut()) {
+            match self.get_value("fmi2GetReal", *vr, ScalarType::Real) {
+                Ok(Value::Real(x)) => *o = x,
+                Ok(_) => return self.error("fmi2GetReal: internal type mismatch"),
+                Err(s) => return s,
+            }
+        }
+        fmi2OK
+    }
+
+    /// `fmi2GetInteger`.
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> fmi2Status {
+        for (vr, o) in vrs.iter().zip(out.iter_mut()) {
+            match self.get_value("fmi2GetInteger", *vr, ScalarType::Integer) {
+                Ok(Value::Integer(x)) => *o = x,
+                Ok(_) => return self.error("fmi2GetInteger: internal type mismatch"),
+                Err(s) => return s,
+            }
+        }
+        fmi2OK
+    }
+
+    /// `fmi2GetBoolean`: the model has no Boolean variables.
+    pub fn get_boolean(&mut self, vrs: &[u32]) -> fmi2Status {
+        match vrs.first() {
+            None => fmi2OK,
+            Some(&vr) => self
+                .variable("fmi2GetBoolean", vr, ScalarType::Boolean)
+                .map(|_| fmi2OK)
+                .unwrap_or_else(|s| s),
+        }
+    }
+
+    /// `fmi2GetString`: the returned pointers stay valid until the next call on this instance
+    /// that returns strings.
+    pub fn get_string(
+        &mut self,
+        vrs: &[u32],
+        out: &mut [*const std::os::raw::c_char],
+    ) -> fmi2Status {
+        let mut strings = Vec::with_capacity(vrs.len());
+        for vr in vrs {
+            match self.get_value("fmi2GetString", *vr, ScalarType::String) {
+                Ok(Value::String(s)) => {
+                    strings.push(CString::new(s.replace('\0', "")).unwrap_or_default())
+                }
+                Ok(_) => return self.error("fmi2GetString: internal type mismatch"),
+                Err(s) => return s,
+            }
+        }
+        self.strings = strings;
+        for (o, s) in out.iter_mut().zip(&self.strings) {
+            *o = s.as_ptr();
+        }
+        fmi2OK
+    }
+
+    /// Checks one assignment and turns it into a [`Change`]; nothing is modified yet.
+    fn check_set(
+        &mut self,
+        function: &str,
+        vr: u32,
+        ty: ScalarType,
+        value: Value,
+    ) -> std::result::Result<Change, fmi2Status> {
+        let var = self.variable(function, vr, ty)?;
+        let numeric = match &value {
+            Value::Real(x) => Some(*x),
+            Value::Integer(i) => Some(f64::from(*i)),
+            Value::String(_) => None,
+        };
+        if let Some(x) = numeric
+            && let Err(e) = var.check(x)
+        {
+            return Err(self.error(&format!("{function}: {e}; the value was not applied")));
+        }
+        match var.role {
+            Role::Input(g) => Ok(Change::Input(g, numeric.unwrap_or_default())),
+            Role::Parameter(p) => {
+                let before_run =
+                    matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
+                if !p.is_tunable() && !before_run {
+                    return Err(self.error(&format!(
+                        "{function}: `{}` is a fixed parameter: it cannot change after fmi2ExitInitializationMode",
+                        var.name
+                    )));
+                }
+                let value = match (p, value) {
+                    (Parameter::SlpReference, Value::String(s)) => match self.resolve_slp(&s) {
+                        Ok(path) => Value::String(path),
+                        Err(e) => return Err(self.error(&format!("{function}: {e}"))),
+                    },
+                    (_, v) => v,
+                };
+                Ok(Change::Parameter(p, value))
+            }
+            Role::Time | Role::Output(_) => {
+                let what = if var.causality == Causality::Output {
+                    "an output"
+                } else {
+                    "the independent variable"
+                };
+                Err(self.error(&format!(
+                    "{function}: `{}` is {what} and cannot be set",
+                    var.name
+                )))
+            }
+        }
+    }
+
+    /// Applies checked changes all together: the configuration and the inputs are updated on
+    /// copies, validated, then committed, so that a failure changes nothing.
+    fn commit(&mut self, function: &str, changes: Vec<Change>) -> fmi2Status {
+        let mut config = self.config.clone();
+        let mut inputs = self.inputs;
+        let mut rtol_explicit = self.rtol_explicit;
+        let mut fixed_changed = false;
+        let mut drive_changed = false;
+        for change in changes {
+            match change {
+                Change::Input(g, v) => inputs[g.index()] = v,
+                Change::Parameter(p, v) => {
+                    if let Err(e) = p.set(&mut config, v) {
+                        return self.error(&format!("{function}: {e}"));
+                    }
+                    rtol_explicit |= p == Parameter::SolverRtol;
+                    if p.is_tunable() {
+                        drive_changed = true;
+                    } else {
+                        fixed_changed = true;
+                    }
+                }
+            }
+        }
+        if drive_changed && let Err(e) = config.drive.validate() {
+            return self.error(&format!("{function}: {e}"));
+        }
+        if fixed_changed {
+            self.torso = None;
+        } else if let Some(torso) = self.torso.as_mut() {
+            let mut result = Ok(());
+            if drive_changed {
+                result = torso.set_drive(config.drive);
+            }
+            for g in MuscleGroup::ALL {
+                if result.is_ok() && inputs[g.index()] != self.inputs[g.index()] {
+                    result = torso.set_activation(g, inputs[g.index()]);
+                }
+            }
+            if let Err(e) = result {
+                self.phase = Phase::Error;
+                return self.error(&format!("{function}: {e}"));
+            }
+        }
+        self.config = config;
+        self.inputs = inputs;
+        self.rtol_explicit = rtol_explicit;
+        fmi2OK
+    }
+
+    fn set_values<T: Copy>(
+        &mut self,
+        function: &str,
+        ty: ScalarType,
+        vrs: &[u32],
+        values: &[T],
+        wrap: impl Fn(T) -> Value,
+    ) -> fmi2Status {
+        let mut changes = Vec::with_capacity(vrs.len());
+        for (vr, v) in vrs.iter().zip(values) {
+            match self.check_set(function, *vr, ty, wrap(*v)) {
+                Ok(c) => changes.push(c),
+                Err(s) => return s,
+            }
+        }
+        self.commit(function, changes)
+    }
+
+    /// `fmi2SetReal`.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> fmi2Status {
+        self.set_values("fmi2SetReal", ScalarType::Real, vrs, values, Value::Real)
+    }
+
+    /// `fmi2SetInteger`.
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> fmi2Status {
+        self.set_values(
+            "fmi2SetInteger",
+            ScalarType::Integer,
+            vrs,
+            values,
+            Value::Integer,
+        )
+    }
+
+    /// `fmi2SetBoolean`: the model has no Boolean variables.
+    pub fn set_boolean(&mut self, vrs: &[u32]) -> fmi2Status {
+        self.get_boolean(vrs)
+    }
+
+    /// `fmi2SetString` (the strings are copied).
+    pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> fmi2Status {
+        let mut changes = Vec::with_capacity(vrs.len());
+        for (vr, v) in vrs.iter().zip(values) {
+            match self.check_set(
+                "fmi2SetString",
+                *vr,
+                ScalarType::String,
+                Value::String(v.clone()),
+            ) {
+                Ok(c) => changes.push(c),
+                Err(s) => return s,
+            }
+        }
+        self.commit("fmi2SetString", changes)
+    }
+
+    /// `fmi2DoStep`: integrates from `t` to exactly `t + h` with the inputs held.
+    pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
+        if !(h.is_finite() && h > 0.0) {
+            return self.error(&format!(
+                "fmi2DoStep: communicationStepSize = {h} must be finite and > 0"
+            ));
+        }
+        let tolerance = TIME_TOLERANCE * self.time.abs().max(t.abs()).max(h);
+        if !t.is_finite() || (t - self.time).abs() > tolerance {
+            let now = self.time;
+            return self.error(&format!(
+                "fmi2DoStep: currentCommunicationPoint = {t} is not the instance's current time {now} (tolerance {tolerance:e})"
+            ));
+        }
+        let target = t + h;
+        if let Some(stop) = self.stop_time
+            && target > stop + TIME_TOLERANCE * stop.abs().max(h)
+        {
+            return self.error(&format!(
+                "fmi2DoStep: t + h = {target} is beyond stopTime = {stop}"
+            ));
+        }
+        let start = self.start_time;
+        let torso = match self.ensure_torso() {
+            Ok(t) => t,
+            Err(e) => {
+                self.phase = Phase::Error;
+                return self.error(&format!("fmi2DoStep: {e}"));
+            }
+        };
+        match torso.advance_to(target - start) {
+            Ok(_) => {
+                self.time = target;
+                self.last_successful_time = target;
+                self.last_step_status = fmi2OK;
+                fmi2OK
+            }
+            Err(Error::Numerical { time, reason }) => {
+                let at = start + time;
+                self.time = at;
+                self.last_successful_time = at;
+                self.last_step_status = fmi2Discard;
+                self.phase = Phase::StepFailed;
+                let message = format!(
+                    "fmi2DoStep: step from {t} to {target} discarded: {reason}; the model stays at its last successful time {at}"
+                );
+                self.log(fmi2Discard, Category::Discard, &message);
+                fmi2Discard
+            }
+            Err(e) => {
+                self.phase = Phase::Error;
+                self.error(&format!("fmi2DoStep: {e}"))
+            }
+        }
+    }
+
+    /// `fmi2GetStatus`: `fmi2DoStepStatus` answers the last step's status.
+    pub fn get_status(&mut self, kind: c_int) -> std::result::Result<fmi2Status, fmi2Status> {
+        match kind {
+            fmi2DoStepStatus => Ok(self.last_step_status),
+            fmi2PendingStatus => {
+                Err(self.error("fmi2GetStatus: no asynchronous step is ever pending"))
+            }
+            k => Err(self.error(&format!(
+                "fmi2GetStatus: status kind {k} has no fmi2Status value"
+            ))),
+        }
+    }
+
+    /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime`.
+    pub fn get_real_status(&mut self, kind: c_int) -> std::result::Result<f64, fmi2Status> {
+        match kind {
+            fmi2LastSuccessfulTime => Ok(self.last_successful_time),
+            k => Err(self.error(&format!(
+                "fmi2GetRealStatus: status kind {k} has no Real value"
+            ))),
+        }
+    }
+
+    /// `fmi2GetBooleanStatus`: `fmi2Terminated` is true after a discarded step (the model
+    /// cannot go on from there without `fmi2SetFMUstate` or `fmi2Reset`).
+    pub fn get_boolean_status(&mut self, kind: c_int) -> std::result::Result<bool, fmi2Status> {
+        match kind {
+            fmi2Terminated => Ok(self.phase == Phase::StepFailed),
+            k => Err(self.error(&format!(
+                "fmi2GetBooleanStatus: status kind {k} has no Boolean value"
+            ))),
+        }
+    }
+
+    /// A saved state of the whole instance.
+    pub fn get_fmu_state(&mut self) -> FmuState {
+        FmuState {
+            saved: Saved {
+                guid: table().guid().to_string(),
+                phase: self.phase,
+                config: self.config.clone(),
+                rtol_explicit: self.rtol_explicit,
+                inputs: self.inputs,
+                start_time: self.start_time,
+                stop_time: self.stop_time,
+                tolerance: self.tolerance,
+                time: self.time,
+                last_successful_time: self.last_successful_time,
+                last_step_discarded: self.last_step_status == fmi2Discard,
+                has_snapshot: self.torso.is_some(),
+            },
+            snapshot: self.torso.as_ref().map(Torso::snapshot),
+        }
+    }
+
+    /// Restores a saved state. The model is rebuilt only when the fixed configuration differs.
+    pub fn set_fmu_state(&mut self, state: &FmuState) -> fmi2Status {
+        let s = &state.saved;
+        let torso = match &state.snapshot {
+            None => None,
+            Some(snapshot) => {
+                let same_model = |c: &Config| {
+                    let mut c = c.clone();
+                    c.drive = s.config.drive;
+                    c == s.config
+                };
+                let reuse = matches!(&self.torso, Some(t) if same_model(t.config()));
+                let mut torso = match (reuse, self.torso.take()) {
+                    (true, Some(t)) => t,
+                    (_, current) => {
+                        self.torso = current;
+                        match Torso::new(s.config.clone()) {
+                            Ok(t) => t,
+                            Err(e) => return self.error(&format!("fmi2SetFMUstate: {e}")),
+                        }
+                    }
+                };
+                if let Err(e) = torso.restore(snapshot) {
+                    // The facade leaves a model whose restore failed as it was.
+                    if reuse {
+                        self.torso = Some(torso);
+                    }
+                    return self.error(&format!("fmi2SetFMUstate: {e}"));
+                }
+                Some(torso)
+            }
+        };
+        self.torso = torso;
+        self.phase = s.phase;
+        self.config = s.config.clone();
+        self.rtol_explicit = s.rtol_explicit;
+        self.inputs = s.inputs;
+        self.start_time = s.start_time;
+        self.stop_time = s.stop_time;
+        self.tolerance = s.tolerance;
+        self.time = s.time;
+        self.last_successful_time = s.last_successful_time;
+        self.last_step_status = if s.last_step_discarded {
+            fmi2Discard
+        } else {
+            fmi2OK
+        };
+        fmi2OK
+    }
+}

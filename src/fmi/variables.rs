@@ -1,0 +1,954 @@
+//! The one table of every FMI variable of the BreathingTorso FMU: name, value reference, type,
+//! causality, variability, initial, unit, range, start value, description and the model
+//! quantity or configuration field it maps to.
+//!
+//! Everything else is generated from this table: `modelDescription.xml` (and the FMU's copy),
+//! `documentation/index.html`, the value-reference constants of `include/breathing_torso.h`,
+//! the range checks of `fmi2SetReal`/`fmi2SetInteger`, and the GUID (a hash of the interface
+//! part of the table, so that it changes exactly when the interface changes).
+//!
+//! Value references are unique across types and grouped: 0 time, 1-8 activation inputs,
+//! 100-199 Real parameters, 200-299 Integer parameters, 300 the String parameter, 1000-1099
+//! Real outputs, 2000-2767 markers (`2000 + 3 (i - 1) + axis`), 3000-3002 Integer outputs.
+//!
+//! Ranges: the table's min/max are what the FMI layer checks first (and what masters see);
+//! [`crate::Config::validate`] stays the final check. A test checks that both agree at every
+//! bound.
+
+use crate::anatomy::{MuscleGroup, SUBJECT_RANGES};
+use crate::model::{Config, Quantity, Torso, Wave};
+use crate::solver::Method;
+use crate::{Error, Result};
+use std::collections::HashMap;
+use std::f64::consts::PI;
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+/// The FMU's model identifier (name of the shared library and of the `.fmu`).
+pub const MODEL_IDENTIFIER: &str = "BreathingTorso";
+/// Number of marker slots exposed as outputs (`marker[1]` .. `marker[256]`: a 16 x 16 grid).
+pub const MARKER_SLOTS: u16 = 256;
+/// Value reference of `time`.
+pub const VR_TIME: u32 = 0;
+/// First value reference of the activation inputs (in [`MuscleGroup::ALL`] order).
+pub const VR_ACTIVATION: u32 = 1;
+/// Value reference of `marker[1].x`; `marker[i].<axis>` is `VR_MARKER + 3 (i - 1) + axis`.
+pub const VR_MARKER: u32 = 2000;
+
+/// FMI base type of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ScalarType {
+    /// `fmi2Real`.
+    Real,
+    /// `fmi2Integer`.
+    Integer,
+    /// `fmi2Boolean` (none in this model yet).
+    Boolean,
+    /// `fmi2String`.
+    String,
+}
+
+/// FMI causality.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Causality {
+    /// The independent variable (time).
+    Independent,
+    /// A parameter.
+    Parameter,
+    /// An input.
+    Input,
+    /// An output.
+    Output,
+}
+
+/// FMI variability.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variability {
+    /// Set before initialization only.
+    Fixed,
+    /// May change between communication steps.
+    Tunable,
+    /// Discrete in time (changes only at communication points).
+    Discrete,
+    /// Continuous in time.
+    Continuous,
+}
+
+/// FMI `initial` attribute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Initial {
+    /// The start value is used as is.
+    Exact,
+    /// Computed by the model during initialization (no start value).
+    Calculated,
+}
+
+/// A start value.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Start {
+    /// No start value (independent and calculated variables).
+    None,
+    /// A Real start value.
+    Real(f64),
+    /// An Integer start value.
+    Integer(i32),
+    /// A String start value.
+    String(String),
+}
+
+/// A family of the built-in drive (thesis eq. 2.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// Rib-cage muscles.
+    Ribs,
+    /// Diaphragm.
+    Diaphragm,
+    /// Abdominal wall muscles.
+    Abdominals,
+}
+
+impl Family {
+    /// All families, in table order.
+    pub const ALL: [Family; 3] = [Family::Ribs, Family::Diaphragm, Family::Abdominals];
+
+    /// Name used in `drive.<family>.*`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Ribs => "ribs",
+            Family::Diaphragm => "diaphragm",
+            Family::Abdominals => "abdominals",
+        }
+    }
+
+    fn wave(self, config: &Config) -> Wave {
+        match self {
+            Family::Ribs => config.drive.ribs,
+            Family::Diaphragm => config.drive.diaphragm,
+            Family::Abdominals => config.drive.abdominals,
+        }
+    }
+
+    fn wave_mut(self, config: &mut Config) -> &mut Wave {
+        match self {
+            Family::Ribs => &mut config.drive.ribs,
+            Family::Diaphragm => &mut config.drive.diaphragm,
+            Family::Abdominals => &mut config.drive.abdominals,
+        }
+    }
+}
+
+/// A configuration field exposed as an FMI parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parameter {
+    /// `subject.sex` (Integer: 0 male, 1 female).
+    Sex,
+    /// `subject.age` [y].
+    Age,
+    /// `subject.stature` [m].
+    Stature,
+    /// `subject.mass` [kg].
+    Mass,
+    /// `subject.breast_size` [0-1].
+    BreastSize,
+    /// `posture` (Integer: 0 standing, 1 sitting, 2 supine).
+    Posture,
+    /// `drive.frequency` [Hz].
+    DriveFrequency,
+    /// `drive.<family>.amplitude`.
+    DriveAmplitude(Family),
+    /// `drive.<family>.phase` [rad].
+    DrivePhase(Family),
+    /// `lung.ratio`.
+    LungRatio,
+    /// `gain.left`.
+    GainLeft,
+    /// `gain.right`.
+    GainRight,
+    /// `scene.level_of_detail` (Integer).
+    LevelOfDetail,
+    /// `grid.rows` (Integer).
+    GridRows,
+    /// `grid.cols` (Integer).
+    GridCols,
+    /// `slp.reference` (String).
+    SlpReference,
+    /// `solver.method` (Integer).
+    SolverMethod,
+    /// `solver.rtol`.
+    SolverRtol,
+    /// `solver.atol`.
+    SolverAtol,
+    /// `solver.max_step` [s].
+    SolverMaxStep,
+}
+
+/// A value of any FMI type, as read from or written to a [`Config`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    /// Real.
+    Real(f64),
+    /// Integer.
+    Integer(i32),
+    /// String.
+    String(String),
+}
+
+impl Parameter {
+    /// Whether the parameter may change between communication steps (the drive).
+    pub fn is_tunable(self) -> bool {
+        matches!(
+            self,
+            Parameter::DriveFrequency | Parameter::DriveAmplitude(_) | Parameter::DrivePhase(_)
+        )
+    }
+
+    /// Reads the parameter's value from `config`.
+    pub fn get(self, config: &Config) -> Value {
+        use Parameter::*;
+        let s = &config.subject;
+        match self {
+            Sex => Value::Integer(s.sex.code()),
+            Age => Value::Real(s.age),
+            Stature => Value::Real(s.stature),
+            Mass => Value::Real(s.mass),
+            BreastSize => Value::Real(s.breast_size),
+            Posture => Value::Integer(s.posture.code()),
+            DriveFrequency => Value::Real(config.drive.frequency),
+            DriveAmplitude(f) => Value::Real(f.wave(config).amplitude),
+            DrivePhase(f) => Value::Real(f.wave(config).phase),
+            LungRatio => Value::Real(config.lung_ratio),
+            GainLeft => Value::Real(config.gain_left),
+            GainRight => Value::Real(config.gain_right),
+            LevelOfDetail => Value::Integer(config.scene.level_of_detail as i32),
+            GridRows => Value::Integer(config.scene.grid_rows as i32),
+            GridCols => Value::Integer(config.scene.grid_cols as i32),
+            SlpReference => Value::String(
+                config
+                    .scene
+                    .slp_reference
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default(),
+            ),
+            SolverMethod => Value::Integer(config.solver.method.code()),
+            SolverRtol => Value::Real(config.solver.rtol),
+            SolverAtol => Value::Real(config.solver.atol),
+            SolverMaxStep => Value::Real(config.solver.max_step),
+        }
+    }
+
+    /// Writes `value` into `config`. The caller has range-checked it against the table
+    /// ([`Variable::check`]); codes are converted through the facade's parsers, whose errors
+    /// name the variable.
+    pub fn set(self, config: &mut Config, value: Value) -> Result<()> {
+        use Parameter::*;
+        let s = &mut config.subject;
+        match (self, value) {
+            (Sex, Value::Integer(v)) => s.sex = crate::anatomy::Sex::from_code(v.into())?,
+            (Age, Value::Real(v)) => s.age = v,
+            (Stature, Value::Real(v)) => s.stature = v,
+            (Mass, Value::Real(v)) => s.mass = v,
+            (BreastSize, Value::Real(v)) => s.breast_size = v,
+            (Posture, Value::Integer(v)) => {
+                s.posture = crate::anatomy::Posture::from_code(v.into())?
+            }
+            (DriveFrequency, Value::Real(v)) => config.drive.frequency = v,
+            (DriveAmplitude(f), Value::Real(v)) => f.wave_mut(config).amplitude = v,
+            (DrivePhase(f), Value::Real(v)) => f.wave_mut(config).phase = v,
+            (LungRatio, Value::Real(v)) => config.lung_ratio = v,
+            (GainLeft, Value::Real(v)) => config.gain_left = v,
+            (GainRight, Value::Real(v)) => config.gain_right = v,
+            (LevelOfDetail, Value::Integer(v)) => {
+                config.scene.level_of_detail = non_negative(v)? as u32
+            }
+            (GridRows, Value::Integer(v)) => config.scene.grid_rows = non_negative(v)?,
+            (GridCols, Value::Integer(v)) => config.scene.grid_cols = non_negative(v)?,
+            (SlpReference, Value::String(v)) => {
+                config.scene.slp_reference = if v.is_empty() {
+                    None
+                } else {
+                    Some(PathBuf::from(v))
+                }
+            }
+            (SolverMethod, Value::Integer(v)) => {
+                config.solver.method = Method::from_code(v.into()).ok_or_else(|| {
+                    Error::invalid("solver.method", v, format!("0..{}", Method::ALL.len() - 1))
+                })?
+            }
+            (SolverRtol, Value::Real(v)) => config.solver.rtol = v,
+            (SolverAtol, Value::Real(v)) => config.solver.atol = v,
+            (SolverMaxStep, Value::Real(v)) => config.solver.max_step = v,
+            (p, v) => return Err(Error::State(format!("parameter {p:?} cannot take {v:?}"))),
+        }
+        Ok(())
+    }
+}
+
+fn non_negative(v: i32) -> Result<usize> {
+    usize::try_from(v).map_err(|_| Error::State(format!("negative value {v}")))
+}
+
+/// What a variable stands for in the model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Role {
+    /// Simulated time.
+    Time,
+    /// The activation input of a muscle group.
+    Input(MuscleGroup),
+    /// A configuration field.
+    Parameter(Parameter),
+    /// A quantity read off the model.
+    Output(Quantity),
+}
+
+/// One FMI scalar variable.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variable {
+    /// Structured name, e.g. `volume.lung`, `marker[12].x`.
+    pub name: String,
+    /// Value reference (unique across types in this model).
+    pub vr: u32,
+    /// Base type.
+    pub ty: ScalarType,
+    /// Causality.
+    pub causality: Causality,
+    /// Variability.
+    pub variability: Variability,
+    /// `initial` attribute, where one is written.
+    pub initial: Option<Initial>,
+    /// Unit (declared in [`UNITS`]).
+    pub unit: Option<&'static str>,
+    /// Preferred display unit (declared in [`UNITS`]).
+    pub display_unit: Option<&'static str>,
+    /// Smallest allowed value (Real and Integer).
+    pub min: Option<f64>,
+    /// Largest allowed value (Real and Integer).
+    pub max: Option<f64>,
+    /// Start value.
+    pub start: Start,
+    /// Description.
+    pub description: String,
+    /// What the variable maps to.
+    pub role: Role,
+}
+
+impl Variable {
+    /// Checks a value against the variable's range: finite and within [min, max]. The error
+    /// names the variable and the range.
+    pub fn check(&self, v: f64) -> Result<()> {
+        let lo = self.min.unwrap_or(f64::NEG_INFINITY);
+        let hi = self.max.unwrap_or(f64::INFINITY);
+        if v.is_finite() && v >= lo && v <= hi {
+            return Ok(());
+        }
+        let range = match (self.min, self.max) {
+            (Some(a), Some(b)) => format!("[{a}, {b}]"),
+            (Some(a), None) => format!(">= {a}"),
+            (None, Some(b)) => format!("<= {b}"),
+            (None, None) => "finite".to_string(),
+        };
+        Err(Error::invalid(&self.name, v, range))
+    }
+}
+
+/// A unit declared in `<UnitDefinitions>`: SI base-unit exponents, factor to the base unit,
+/// and display units (name, factor: display = factor x value).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unit {
+    /// Unit name as used in `unit=`.
+    pub name: &'static str,
+    /// SI exponents as (attribute, exponent), e.g. `("m", 3)`.
+    pub base: &'static [(&'static str, i32)],
+    /// value in base units = factor x value in this unit.
+    pub factor: f64,
+    /// Display units: (name, factor).
+    pub display: &'static [(&'static str, f64)],
+}
+
+/// Pascal per cmH2O (conventional: 1 cmH2O = 98.0665 Pa).
+pub const PA_PER_CMH2O: f64 = 98.0665;
+/// Seconds per (Julian) year.
+pub const SECONDS_PER_YEAR: f64 = 31_557_600.0;
+
+/// Every unit used by the table.
+pub const UNITS: &[Unit] = &[
+    Unit {
+        name: "s",
+        base: &[("s", 1)],
+        factor: 1.0,
+        display: &[],
+    },
+    Unit {
+        name: "L",
+        base: &[("m", 3)],
+        factor: 0.001,
+        display: &[],
+    },
+    Unit {
+        name: "m",
+        base: &[("m", 1)],
+        factor: 1.0,
+        display: &[("mm", 1000.0)],
+    },
+    Unit {
+        name: "Pa",
+        base: &[("kg", 1), ("m", -1), ("s", -2)],
+        factor: 1.0,
+        display: &[("cmH2O", 1.0 / PA_PER_CMH2O)],
+    },
+    Unit {
+        name: "Hz",
+        base: &[("s", -1)],
+        factor: 1.0,
+        display: &[],
+    },
+    Unit {
+        name: "rad",
+        base: &[("rad", 1)],
+        factor: 1.0,
+        display: &[],
+    },
+    Unit {
+        name: "kg",
+        base: &[("kg", 1)],
+        factor: 1.0,
+        display: &[],
+    },
+    Unit {
+        name: "y",
+        base: &[("s", 1)],
+        factor: SECONDS_PER_YEAR,
+        display: &[],
+    },
+];
+
+/// Log categories declared in `<LogCategories>` and honoured by `fmi2SetDebugLogging`.
+pub const LOG_CATEGORIES: &[(&str, &str)] = &[
+    ("logEvents", "State changes and informational messages"),
+    ("logStatusWarning", "Messages with status fmi2Warning"),
+    (
+        "logStatusDiscard",
+        "Messages with status fmi2Discard (numerical failures)",
+    ),
+    (
+        "logStatusError",
+        "Messages with status fmi2Error (on unless switched off)",
+    ),
+    (
+        "logStatusFatal",
+        "Messages with status fmi2Fatal (on unless switched off)",
+    ),
+    (
+        "logCalls",
+        "Every call of an FMI function, with its arguments",
+    ),
+];
+
+/// The table and its indexes.
+#[derive(Debug)]
+pub struct Table {
+    variables: Vec<Variable>,
+    by_vr: HashMap<u32, usize>,
+    by_name: HashMap<String, usize>,
+    guid: String,
+}
+
+impl Table {
+    /// All variables, in `<ModelVariables>` order.
+    pub fn variables(&self) -> &[Variable] {
+        &self.variables
+    }
+
+    /// The variable with value reference `vr`.
+    pub fn by_vr(&self, vr: u32) -> Option<&Variable> {
+        self.by_vr.get(&vr).map(|&i| &self.variables[i])
+    }
+
+    /// The variable called `name`.
+    pub fn by_name(&self, name: &str) -> Option<&Variable> {
+        self.by_name.get(name).map(|&i| &self.variables[i])
+    }
+
+    /// 1-based index of a variable in `<ModelVariables>`.
+    pub fn index_of(&self, vr: u32) -> Option<usize> {
+        self.by_vr.get(&vr).map(|&i| i + 1)
+    }
+
+    /// The GUID: `{...}` formatted 128-bit FNV-1a hash of the interface.
+    pub fn guid(&self) -> &str {
+        &self.guid
+    }
+}
+
+/// The table (built once; immutable and shared by every instance and thread).
+pub fn table() -> &'static Table {
+    static TABLE: OnceLock<Table> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let variables = build();
+        let by_vr = variables
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v.vr, i))
+            .collect();
+        let by_name = variables
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v.name.clone(), i))
+            .collect();
+        let guid = format_guid(fnv1a_128(interface_text(&variables).as_bytes()));
+        Table {
+            variables,
+            by_vr,
+            by_name,
+            guid,
+        }
+    })
+}
+
+/// Value reference of `marker[index + 1].<axis>` (index 0-based, axis 0 = x, 1 = y, 2 = z).
+pub fn marker_vr(index: u16, axis: u8) -> u32 {
+    VR_MARKER + 3 * u32::from(index) + u32::from(axis)
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// A compact builder for table rows.
+struct Row(Variable);
+
+impl Row {
+    fn new(
+        name: impl Into<String>,
+        vr: u32,
+        ty: ScalarType,
+        role: Role,
+        description: impl Into<String>,
+    ) -> Row {
+        Row(Variable {
+            name: name.into(),
+            vr,
+            ty,
+            causality: Causality::Output,
+            variability: Variability::Continuous,
+            initial: None,
+            unit: None,
+            display_unit: None,
+            min: None,
+            max: None,
+            start: Start::None,
+            description: description.into(),
+            role,
+        })
+    }
+    fn unit(mut self, unit: &'static str) -> Row {
+        self.0.unit = Some(unit);
+        self
+    }
+    fn display(mut self, unit: &'static str) -> Row {
+        self.0.display_unit = Some(unit);
+        self
+    }
+    fn range(mut self, lo: f64, hi: f64) -> Row {
+        self.0.min = Some(lo);
+        self.0.max = Some(hi);
+        self
+    }
+    /// The range the anatomy declares for this subject field ([`SUBJECT_RANGES`]).
+    fn subject_range(self) -> Row {
+        match SUBJECT_RANGES.iter().find(|r| r.0 == self.0.name) {
+            Some(&(_, lo, hi)) => self.range(lo, hi),
+            None => self,
+        }
+    }
+    fn output(mut self, variability: Variability) -> Row {
+        self.0.causality = Causality::Output;
+        self.0.variability = variability;
+        self.0.initial = Some(Initial::Calculated);
+        self
+    }
+    /// A parameter whose start value is read from the default configuration.
+    fn parameter(mut self, defaults: &Config) -> Row {
+        let Role::Parameter(p) = self.0.role else {
+            unreachable!("parameter rows carry a parameter role")
+        };
+        self.0.causality = Causality::Parameter;
+        self.0.variability = if p.is_tunable() {
+            Variability::Tunable
+        } else {
+            Variability::Fixed
+        };
+        self.0.initial = Some(Initial::Exact);
+        self.0.start = match p.get(defaults) {
+            Value::Real(v) => Start::Real(v),
+            Value::Integer(v) => Start::Integer(v),
+            Value::String(v) => Start::String(v),
+        };
+        self
+    }
+}
+
+fn build() -> Vec<Variable> {
+    use Parameter as P;
+    use ScalarType::{Integer, Real, String as Str};
+    let d = Config::default();
+    let mut rows: Vec<Variable> = Vec::with_capacity(900);
+
+    rows.push(Variable {
+        causality: Causality::Independent,
+        initial: None,
+        ..Row::new("time", VR_TIME, Real, Role::Time, "Simulated time")
+            .unit("s")
+            .0
+    });
+
+    for (k, g) in MuscleGroup::ALL.into_iter().enumerate() {
+        let mut r = Row::new(
+            format!("activation.{}", g.name()),
+            VR_ACTIVATION + k as u32,
+            Real,
+            Role::Input(g),
+            format!(
+                "Activation input of the {} (added to the drive, applied clamped to [0, 1])",
+                g.name().replace('_', " ")
+            ),
+        )
+        .range(0.0, 1.0)
+        .0;
+        r.causality = Causality::Input;
+        r.start = Start::Real(0.0);
+        rows.push(r);
+    }
+
+    let methods = (Method::ALL.len() - 1) as f64;
+    let par = |name: &str, vr: u32, ty: ScalarType, p: Parameter, desc: &str| {
+        Row::new(name, vr, ty, Role::Parameter(p), desc)
+    };
+    let mut params: Vec<Row> = vec![
+        par(
+            "subject.sex",
+            200,
+            Integer,
+            P::Sex,
+            "Sex of the subject: 0 male, 1 female",
+        )
+        .range(0.0, 1.0),
+        par("subject.age", 100, Real, P::Age, "Age of the subject")
+            .unit("y")
+            .subject_range(),
+        par(
+            "subject.stature",
+            101,
+            Real,
+            P::Stature,
+            "Stature of the subject",
+        )
+        .unit("m")
+        .subject_range(),
+        par(
+            "subject.mass",
+            102,
+            Real,
+            P::Mass,
+            "Body mass of the subject (body mass index 13-60 kg/m2)",
+        )
+        .unit("kg")
+        .subject_range(),
+        par(
+            "subject.breast_size",
+            103,
+            Real,
+            P::BreastSize,
+            "Breast size, 0 (none) to 1 (large)",
+        )
+        .subject_range(),
+        par(
+            "posture",
+            201,
+            Integer,
+            P::Posture,
+            "Posture: 0 standing, 1 sitting, 2 supine",
+        )
+        .range(0.0, 2.0),
+        par(
+            "drive.frequency",
+            110,
+            Real,
+            P::DriveFrequency,
+            "Breathing frequency of the built-in drive",
+        )
+        .unit("Hz")
+        .range(0.05, 2.0),
+    ];
+    for (k, f) in Family::ALL.into_iter().enumerate() {
+        let vr = 111 + 2 * k as u32;
+        params.push(
+            par(
+                &format!("drive.{}.amplitude", f.name()),
+                vr,
+                Real,
+                P::DriveAmplitude(f),
+                &format!("Drive amplitude of the {} family (fraction of the maximal activation; thesis eq. 2.4)", f.name()),
+            )
+            .range(0.0, 1.0),
+        );
+        params.push(
+            par(
+                &format!("drive.{}.phase", f.name()),
+                vr + 1,
+                Real,
+                P::DrivePhase(f),
+                &format!("Drive phase of the {} family", f.name()),
+            )
+            .unit("rad")
+            .range(-2.0 * PI, 2.0 * PI),
+        );
+    }
+    params.extend([
+        par("lung.ratio", 120, Real, P::LungRatio, "Lung volume as a fraction of the thoracic cavity volume (thesis 4.2)")
+            .range(0.3, 1.0),
+        par("gain.left", 121, Real, P::GainLeft, "Activation gain of the subject's left side (1: healthy)").range(0.0, 2.0),
+        par("gain.right", 122, Real, P::GainRight, "Activation gain of the subject's right side (1: healthy)").range(0.0, 2.0),
+        par("scene.level_of_detail", 202, Integer, P::LevelOfDetail, "Level of detail: 0 coarse, 1 default, 2 the thesis's element counts")
+            .range(0.0, 2.0),
+        par("grid.rows", 203, Integer, P::GridRows, "Marker grid rows").range(1.0, 16.0),
+        par("grid.cols", 204, Integer, P::GridCols, "Marker grid columns").range(1.0, 16.0),
+        par(
+            "slp.reference",
+            300,
+            Str,
+            P::SlpReference,
+            "SLP recording whose first frame registers the marker grid (absolute, or relative to the FMU's resources/); empty: default grid",
+        ),
+        par(
+            "solver.method",
+            205,
+            Integer,
+            P::SolverMethod,
+            "Integration method: 0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high-order pair",
+        )
+        .range(0.0, methods),
+        par("solver.rtol", 130, Real, P::SolverRtol, "Relative tolerance of the integrator").range(1e-12, 1e-2),
+        par("solver.atol", 131, Real, P::SolverAtol, "Absolute tolerance of the integrator on the state").range(1e-14, 1e-2),
+        par("solver.max_step", 132, Real, P::SolverMaxStep, "Largest internal integration step").unit("s").range(1e-5, 1.0),
+    ]);
+    rows.extend(params.into_iter().map(|r| r.parameter(&d).0));
+
+    use Quantity as Q;
+    let out = |name: &str, vr: u32, q: Quantity, unit: &'static str, desc: &str| {
+        Row::new(name, vr, Real, Role::Output(q), desc)
+            .unit(unit)
+            .output(Variability::Continuous)
+    };
+    rows.extend([
+        out(
+            "volume.lung",
+            1000,
+            Q::LungVolume,
+            "L",
+            "Lung volume = lung.ratio x thoracic volume (thesis 4.2)",
+        )
+        .0,
+        out(
+            "volume.thorax",
+            1001,
+            Q::ThoraxVolume,
+            "L",
+            "Thoracic cavity volume = trunk - abdomen",
+        )
+        .0,
+        out(
+            "volume.abdomen",
+            1002,
+            Q::AbdomenVolume,
+            "L",
+            "Abdominal cavity volume",
+        )
+        .0,
+        out(
+            "volume.trunk",
+            1003,
+            Q::TrunkVolume,
+            "L",
+            "Trunk cavity volume (rib-cage lining plus abdominal wall)",
+        )
+        .0,
+        out(
+            "volume.rib_cage_displaced",
+            1004,
+            Q::RibCageDisplaced,
+            "L",
+            "Volume displaced by the rib-cage wall since the start",
+        )
+        .0,
+        out(
+            "volume.abdomen_displaced",
+            1005,
+            Q::AbdomenDisplaced,
+            "L",
+            "Volume displaced by the abdominal wall since the start",
+        )
+        .0,
+        out(
+            "pressure.abdomen",
+            1006,
+            Q::AbdominalPressure,
+            "Pa",
+            "Abdominal pressure above rest (thesis eq. 2.5)",
+        )
+        .display("cmH2O")
+        .0,
+        out(
+            "diaphragm.displacement",
+            1007,
+            Q::DiaphragmDisplacement,
+            "m",
+            "Displacement of the diaphragm dome since the start, positive cranial",
+        )
+        .display("mm")
+        .0,
+    ]);
+    for (axis, a) in AXES.iter().enumerate() {
+        rows.push(
+            out(
+                &format!("sternum.displacement.{a}"),
+                1008 + axis as u32,
+                Q::SternumDisplacement(axis as u8),
+                "m",
+                &format!("Displacement of the sternum since the start along {a} (x anterior, y cranial, z right)"),
+            )
+            .display("mm")
+            .0,
+        );
+    }
+    for index in 0..MARKER_SLOTS {
+        for (axis, a) in AXES.iter().enumerate() {
+            let axis = axis as u8;
+            rows.push(
+                out(
+                    &format!("marker[{}].{a}", index + 1),
+                    marker_vr(index, axis),
+                    Q::Marker { index, axis },
+                    "m",
+                    &format!(
+                        "Marker {} (row-major from the top row, column 1 on the subject's right), {a} coordinate; reads 0 when {} > grid.rows x grid.cols",
+                        index + 1,
+                        index + 1
+                    ),
+                )
+                .display("mm")
+                .0,
+            );
+        }
+    }
+    let int_out = |name: &str, vr: u32, q: Quantity, desc: &str| {
+        Row::new(name, vr, Integer, Role::Output(q), desc)
+            .output(Variability::Discrete)
+            .0
+    };
+    rows.extend([
+        int_out(
+            "solver.steps",
+            3000,
+            Q::SolverSteps,
+            "Accepted integration steps since the start",
+        ),
+        int_out(
+            "solver.rejected_steps",
+            3001,
+            Q::SolverRejectedSteps,
+            "Rejected integration steps since the start",
+        ),
+        int_out(
+            "solver.rhs_evaluations",
+            3002,
+            Q::SolverRhsEvaluations,
+            "Right-hand-side evaluations since the start",
+        ),
+    ]);
+    rows
+}
+
+/// The part of the model description that makes up the interface: identifier, capability
+/// flags, units, and every variable's name, reference, type, causality, variability, initial,
+/// unit, range and start (descriptions excluded).
+fn interface_text(variables: &[Variable]) -> String {
+    use std::fmt::Write;
+    let mut s = format!(
+        "fmi2|{MODEL_IDENTIFIER}|cs|{}\n",
+        crate::fmi::xml::CAPABILITY_FLAGS.join(",")
+    );
+    for u in UNITS {
+        let _ = writeln!(
+            s,
+            "unit|{}|{:?}|{:?}|{:?}",
+            u.name, u.base, u.factor, u.display
+        );
+    }
+    for v in variables {
+        let _ = writeln!(
+            s,
+            "{}|{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+            v.name,
+            v.vr,
+            v.ty,
+            v.causality,
+            v.variability,
+            v.initial,
+            v.unit,
+            v.display_unit,
+            v.min,
+            v.max,
+            v.start
+        );
+    }
+    s
+}
+
+/// 128-bit FNV-1a (Fowler-Noll-Vo) hash.
+pub fn fnv1a_128(bytes: &[u8]) -> u128 {
+    const OFFSET: u128 = 0x6c62272e07bb014262b821756295c58d;
+    const PRIME: u128 = 0x0000000001000000000000000000013B;
+    bytes
+        .iter()
+        .fold(OFFSET, |h, &b| (h ^ u128::from(b)).wrapping_mul(PRIME))
+}
+
+fn format_guid(h: u128) -> String {
+    let x = format!("{h:032x}");
+    format!(
+        "{{{}-{}-{}-{}-{}}}",
+        &x[0..8],
+        &x[8..12],
+        &x[12..16],
+        &x[16..20],
+        &x[20..32]
+    )
+}
+
+/// Reads an output quantity off `torso`, the way the FMU and the C ABI both report it:
+/// markers beyond `grid.rows x grid.cols` read 0, solver statistics come from the integrator's
+/// counters, everything else from [`Torso::read`]. What the model cannot provide, and any
+/// non-finite value, is an error naming `name`.
+pub fn read_output(torso: &mut Torso, name: &str, q: Quantity) -> Result<f64> {
+    if let Quantity::Marker { index, .. } = q {
+        let scene = &torso.config().scene;
+        if usize::from(index) >= scene.grid_rows * scene.grid_cols {
+            return Ok(0.0);
+        }
+    }
+    let stats = torso.solver_stats();
+    let value = match q {
+        Quantity::SolverSteps => stats.steps as f64,
+        Quantity::SolverRejectedSteps => stats.rejected as f64,
+        Quantity::SolverRhsEvaluations => stats.rhs_evaluations as f64,
+        q => torso
+            .read(q)
+            .map_err(|e| Error::State(format!("cannot read `{name}`: {e}")))?,
+    };
+    if !value.is_finite() {
+        return Err(Error::Numerical {
+            time: torso.time(),
+            reason: format!("`{name}` is not finite ({value})"),
+        });
+    }
+    Ok(value)
+}

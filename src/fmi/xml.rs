@@ -1,0 +1,300 @@
+//! `modelDescription.xml` and `documentation/index.html`, both generated from the variable
+//! table ([`super::variables`]). The committed top-level `modelDescription.xml` must equal
+//! [`model_description`]'s output (checked by `tests/fmi_generated.rs`).
+
+use super::variables::{
+    Causality, Initial, LOG_CATEGORIES, MODEL_IDENTIFIER, ScalarType, Start, Table, UNITS,
+    Variability, Variable, table,
+};
+use quick_xml::Writer;
+use quick_xml::events::{BytesDecl, Event};
+use std::io;
+
+/// Capability flags declared in `<CoSimulation>` (all `true`); each is honoured by the code:
+/// variable step sizes, FMU state get/set and (de)serialisation, and no use of the master's
+/// memory functions.
+pub const CAPABILITY_FLAGS: [&str; 4] = [
+    "canHandleVariableCommunicationStepSize",
+    "canGetAndSetFMUstate",
+    "canSerializeFMUstate",
+    "canNotUseMemoryManagementFunctions",
+];
+
+/// Formats a number for XML: shortest round-trip form, in exponent notation when that is shorter.
+pub fn num(v: f64) -> String {
+    let plain = format!("{v}");
+    let sci = format!("{v:e}");
+    if sci.len() < plain.len() { sci } else { plain }
+}
+
+fn causality(c: Causality) -> &'static str {
+    match c {
+        Causality::Independent => "independent",
+        Causality::Parameter => "parameter",
+        Causality::Input => "input",
+        Causality::Output => "output",
+    }
+}
+
+fn variability(v: Variability) -> &'static str {
+    match v {
+        Variability::Fixed => "fixed",
+        Variability::Tunable => "tunable",
+        Variability::Discrete => "discrete",
+        Variability::Continuous => "continuous",
+    }
+}
+
+fn initial(i: Initial) -> &'static str {
+    match i {
+        Initial::Exact => "exact",
+        Initial::Calculated => "calculated",
+    }
+}
+
+fn type_name(t: ScalarType) -> &'static str {
+    match t {
+        ScalarType::Real => "Real",
+        ScalarType::Integer => "Integer",
+        ScalarType::Boolean => "Boolean",
+        ScalarType::String => "String",
+    }
+}
+
+fn bound(t: ScalarType, v: f64) -> String {
+    match t {
+        ScalarType::Integer => format!("{}", v as i64),
+        _ => num(v),
+    }
+}
+
+fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
+    let vr = v.vr.to_string();
+    let mut e = w
+        .create_element("ScalarVariable")
+        .with_attribute(("name", v.name.as_str()))
+        .with_attribute(("valueReference", vr.as_str()))
+        .with_attribute(("description", v.description.as_str()))
+        .with_attribute(("causality", causality(v.causality)))
+        .with_attribute(("variability", variability(v.variability)));
+    if let Some(i) = v.initial {
+        e = e.with_attribute(("initial", initial(i)));
+    }
+    e.write_inner_content(|w| {
+        let mut t = w.create_element(type_name(v.ty));
+        if let Some(u) = v.unit {
+            t = t.with_attribute(("unit", u));
+        }
+        if let Some(u) = v.display_unit {
+            t = t.with_attribute(("displayUnit", u));
+        }
+        let (lo, hi) = (v.min.map(|x| bound(v.ty, x)), v.max.map(|x| bound(v.ty, x)));
+        if let Some(lo) = &lo {
+            t = t.with_attribute(("min", lo.as_str()));
+        }
+        if let Some(hi) = &hi {
+            t = t.with_attribute(("max", hi.as_str()));
+        }
+        let start = match &v.start {
+            Start::None => None,
+            Start::Real(x) => Some(num(*x)),
+            Start::Integer(x) => Some(x.to_string()),
+            Start::String(x) => Some(x.clone()),
+        };
+        if let Some(s) = &start {
+            t = t.with_attribute(("start", s.as_str()));
+        }
+        t.write_empty()?;
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("UnitDefinitions")
+        .write_inner_content(|w| {
+            for u in UNITS {
+                w.create_element("Unit")
+                    .with_attribute(("name", u.name))
+                    .write_inner_content(|w| {
+                        let exps: Vec<(String, String)> = u
+                            .base
+                            .iter()
+                            .map(|(k, e)| (k.to_string(), e.to_string()))
+                            .collect();
+                        let factor = num(u.factor);
+                        let mut b = w.create_element("BaseUnit");
+                        for (k, e) in &exps {
+                            b = b.with_attribute((k.as_str(), e.as_str()));
+                        }
+                        if u.factor != 1.0 {
+                            b = b.with_attribute(("factor", factor.as_str()));
+                        }
+                        b.write_empty()?;
+                        for (name, f) in u.display {
+                            let f = num(*f);
+                            w.create_element("DisplayUnit")
+                                .with_attribute(("name", *name))
+                                .with_attribute(("factor", f.as_str()))
+                                .write_empty()?;
+                        }
+                        Ok(())
+                    })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+fn write_structure(w: &mut Writer<Vec<u8>>, t: &Table) -> io::Result<()> {
+    let outputs: Vec<String> = t
+        .variables()
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.causality == Causality::Output)
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    let initial_unknowns: Vec<String> = t
+        .variables()
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.causality == Causality::Output && v.initial == Some(Initial::Calculated))
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    w.create_element("ModelStructure")
+        .write_inner_content(|w| {
+            for (tag, list) in [
+                ("Outputs", &outputs),
+                ("InitialUnknowns", &initial_unknowns),
+            ] {
+                w.create_element(tag).write_inner_content(|w| {
+                    for i in list.iter() {
+                        w.create_element("Unknown")
+                            .with_attribute(("index", i.as_str()))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+/// The complete `modelDescription.xml` text.
+pub fn model_description() -> String {
+    let t = table();
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    let version = env!("CARGO_PKG_VERSION");
+    let tool = format!("breathing-torso {version}");
+    let result: io::Result<()> = (|| {
+        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+        w.create_element("fmiModelDescription")
+            .with_attribute(("fmiVersion", "2.0"))
+            .with_attribute(("modelName", MODEL_IDENTIFIER))
+            .with_attribute(("guid", t.guid()))
+            .with_attribute((
+                "description",
+                "Physically based breathing human torso (Maldonado 2011): muscle activations in, volumes, pressures and marker positions out",
+            ))
+            .with_attribute(("version", version))
+            .with_attribute(("generationTool", tool.as_str()))
+            .with_attribute(("variableNamingConvention", "structured"))
+            .with_attribute(("numberOfEventIndicators", "0"))
+            .write_inner_content(|w| {
+                let mut cs = w
+                    .create_element("CoSimulation")
+                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
+                    .with_attribute(("needsExecutionTool", "false"));
+                for flag in CAPABILITY_FLAGS {
+                    cs = cs.with_attribute((flag, "true"));
+                }
+                cs.write_empty()?;
+                write_units(w)?;
+                w.create_element("LogCategories").write_inner_content(|w| {
+                    for (name, description) in LOG_CATEGORIES {
+                        w.create_element("Category")
+                            .with_attribute(("name", *name))
+                            .with_attribute(("description", *description))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+                w.create_element("DefaultExperiment")
+                    .with_attribute(("startTime", "0"))
+                    .with_attribute(("stopTime", "10"))
+                    .with_attribute(("tolerance", "1e-6"))
+                    .with_attribute(("stepSize", "0.02"))
+                    .write_empty()?;
+                w.create_element("ModelVariables").write_inner_content(|w| {
+                    for v in t.variables() {
+                        write_variable(w, v)?;
+                    }
+                    Ok(())
+                })?;
+                write_structure(w, t)?;
+                Ok(())
+            })?;
+        Ok(())
+    })();
+    // Writing into a Vec cannot fail.
+    debug_assert!(result.is_ok());
+    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
+fn escape_html(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// `documentation/index.html`: the variable table, for people.
+pub fn documentation_html() -> String {
+    use std::fmt::Write;
+    let t = table();
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{MODEL_IDENTIFIER} FMU</title>\n\
+         <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}\
+         td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}</style>\n</head>\n<body>\n\
+         <h1>{MODEL_IDENTIFIER}</h1>\n<p>FMI 2.0 co-simulation FMU of a physically based breathing human torso \
+         (breathing-torso {}). GUID <code>{}</code>.</p>\n\
+         <p>Muscle activations are inputs; the built-in sinusoidal drive (thesis eq. 2.4) is set by the \
+         <code>drive.*</code> parameters, which may change between steps. Each communication step is \
+         integrated inside the FMU by an adaptive embedded Runge-Kutta method. Markers are numbered \
+         row-major from the top row, column 1 on the subject's right; markers beyond \
+         <code>grid.rows</code> x <code>grid.cols</code> read 0.</p>\n<table>\n\
+         <tr><th>name</th><th>vr</th><th>type</th><th>causality</th><th>variability</th><th>unit</th>\
+         <th>min</th><th>max</th><th>start</th><th>description</th></tr>\n",
+        env!("CARGO_PKG_VERSION"),
+        t.guid()
+    );
+    for v in t.variables() {
+        let start = match &v.start {
+            Start::None => String::new(),
+            Start::Real(x) => num(*x),
+            Start::Integer(x) => x.to_string(),
+            Start::String(x) => format!("\"{x}\""),
+        };
+        let _ = writeln!(
+            s,
+            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape_html(&v.name),
+            v.vr,
+            type_name(v.ty),
+            causality(v.causality),
+            variability(v.variability),
+            v.unit.unwrap_or(""),
+            v.min.map(|x| bound(v.ty, x)).unwrap_or_default(),
+            v.max.map(|x| bound(v.ty, x)).unwrap_or_default(),
+            escape_html(&start),
+            escape_html(&v.description)
+        );
+    }
+    s.push_str("</table>\n</body>\n</html>\n");
+    s
+}
