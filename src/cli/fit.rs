@@ -217,13 +217,20 @@ pub struct DemoArgs {
     pub recording: PathBuf,
 }
 
-/// Packages the FMU for the demo. Returns `None` (with the reason printed) while this build
-/// has no FMU packaging; the FMI layer's packaging function is called here once it exists.
-fn package_fmu(_dir: &Path) -> Result<Option<PathBuf>> {
-    println!(
-        "FMU: skipped (this build has no FMU packaging; `torso fmu build` comes with the FMI layer)"
-    );
-    Ok(None)
+/// Packages `fmu/BreathingTorso.fmu` from the shared library beside this executable (as
+/// `torso fmu build` does). A missing library is reported and skipped, not fatal: the rest
+/// of the demo does not need the FMU.
+fn package_fmu() -> Result<Option<PathBuf>> {
+    let lib = crate::fmi::package::default_library()?;
+    if !lib.exists() {
+        println!(
+            "FMU: skipped ({} not found; build it with `cargo build --release --lib`)",
+            lib.display()
+        );
+        return Ok(None);
+    }
+    let p = crate::fmi::package::build_fmu(&lib, None, Path::new("fmu/BreathingTorso.fmu"))?;
+    Ok(Some(p.path))
 }
 
 /// Runs `torso demo`.
