@@ -1,8 +1,8 @@
 //! Skin generation: size, closedness, no self-intersection, determinism, enclosure of the
-//! reference rib cage, agreement with the ANSUR II dimensions.
+//! anatomy's rib cage and abdominal wall, agreement with the ANSUR II dimensions.
 
-use breathing_torso::anatomy::skin::{ReferenceSkeleton, Skin, geometry};
-use breathing_torso::anatomy::{Sex, Subject};
+use breathing_torso::anatomy::skin::{Skin, dense_bone_points, geometry, wall_points};
+use breathing_torso::anatomy::{Anatomy, Sex, Subject};
 
 fn female() -> Subject {
     Subject {
@@ -61,11 +61,24 @@ fn generation_is_deterministic() {
 }
 
 #[test]
-fn skin_encloses_reference_rib_cage_with_soft_tissue_gap() {
+fn skin_encloses_the_anatomy_with_soft_tissue_gap() {
     let subject = Subject::default();
     let skin = Skin::generate(&subject).unwrap();
-    let bones = ReferenceSkeleton::for_subject(&subject).unwrap();
-    let gap = skin.gap_report(&bones.dense_bone_points(0.005));
+    let anatomy = Anatomy::build(&subject, 0).unwrap();
+    // The skin is cut at the hips; the cavity's pelvic part below the cut is not enclosed.
+    let (lo, hi) = (skin.landmarks.bottom_height, skin.landmarks.top_height);
+    let all = wall_points(&anatomy);
+    let within: Vec<_> = all.into_iter().filter(|p| p.y > lo && p.y < hi).collect();
+    assert!(
+        within.len() > 30,
+        "{} wall vertices within the skin",
+        within.len()
+    );
+    let wall = skin.gap_report(&within);
+    println!("gap to the free abdominal wall above the hip cut: {wall:?}");
+    assert_eq!(wall.outside, 0);
+    assert!(wall.min > 0.008, "min wall gap {}", wall.min);
+    let gap = skin.gap_report(&dense_bone_points(&anatomy, 0.005));
     println!("gap to bone centrelines: {gap:?}");
     assert_eq!(gap.outside, 0);
     // Centreline to skin: at least the rib half-thickness (~6 mm) plus a few mm of tissue.

@@ -2,7 +2,9 @@
 
 pub mod common;
 pub mod fit;
+pub mod mesh;
 pub mod simulate;
+pub mod skin;
 
 use clap::{Parser, Subcommand};
 
@@ -38,6 +40,16 @@ pub enum Command {
     Fit(fit::FitArgs),
     /// Package the FMU, simulate the default subject and fit the bundled recording.
     Demo(fit::DemoArgs),
+    /// Write the rest geometry (skin, ribs, sternum, abdomen, marker grid) as OBJ files.
+    ExportObj(skin::ExportObjArgs),
+    /// Render the skin and markers at rest and at end-inspiration as a PNG.
+    RenderSkin(skin::RenderSkinArgs),
+    /// Prepare, inspect and volume-mesh subject surfaces.
+    Mesh {
+        /// The mesh subcommand.
+        #[command(subcommand)]
+        command: mesh::MeshCommand,
+    },
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -55,6 +67,9 @@ pub fn main() -> i32 {
         Command::Synth(a) => synth::main(&a),
         Command::Fit(a) => fit::main(&a),
         Command::Demo(a) => fit::demo(&a),
+        Command::ExportObj(a) => skin::export_obj(&a),
+        Command::RenderSkin(a) => skin::render_skin(&a),
+        Command::Mesh { command } => mesh::run(command),
     };
     match result {
         Ok(()) => 0,

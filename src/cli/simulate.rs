@@ -28,6 +28,12 @@ pub struct SimulateArgs {
     /// CSV output file (default: out/simulation.csv).
     #[arg(long, default_value = "out/simulation.csv")]
     pub out: PathBuf,
+    /// Also write the skin, markers, abdominal surface and bones as VTK series (.vtp + .pvd).
+    #[arg(long)]
+    pub export_vtk: Option<PathBuf>,
+    /// Write every N-th output frame to the VTK series.
+    #[arg(long, default_value_t = 4)]
+    pub vtk_stride: usize,
 }
 
 /// Runs `torso simulate`.
@@ -45,7 +51,12 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
     let mut torso = Torso::new(config)?;
     let build = start.elapsed().as_secs_f64();
     let start = std::time::Instant::now();
-    let frames = run(&mut torso, args.duration, args.rate)?;
+    let frames = match &args.export_vtk {
+        Some(dir) => {
+            super::skin::run_with_vtk(&mut torso, args.duration, args.rate, dir, args.vtk_stride)?
+        }
+        None => run(&mut torso, args.duration, args.rate)?,
+    };
     let wall = start.elapsed().as_secs_f64();
     write_csv(&args.out, &frames)?;
     let period = 1.0 / drive.frequency;

@@ -76,8 +76,11 @@ pub struct NelderMeadOptions {
     /// Stop when the simplex's largest vertex distance from the best, in range fractions
     /// (infinity norm), is below this...
     pub x_tol: f64,
-    /// ...and its objective values differ from the best by at most this (absolute).
+    /// ...and its objective values differ from the best by at most
+    /// `f_tol + f_rel_tol * |best|`.
     pub f_tol: f64,
+    /// Relative part of the objective tolerance.
+    pub f_rel_tol: f64,
 }
 
 impl Default for NelderMeadOptions {
@@ -87,6 +90,7 @@ impl Default for NelderMeadOptions {
             initial_step: 0.15,
             x_tol: 2e-3,
             f_tol: 1e-9,
+            f_rel_tol: 0.0,
         }
     }
 }
@@ -232,7 +236,8 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
             .flat_map(|(v, _)| v.iter().zip(&best.0).map(|(a, b)| (a - b).abs()))
             .fold(0.0, f64::max);
         let f_spread = simplex[n].1 - best.1;
-        if x_spread <= o.x_tol && f_spread <= o.f_tol.max(0.0) {
+        if x_spread <= o.x_tol && f_spread <= o.f_tol.max(0.0) + o.f_rel_tol.max(0.0) * best.1.abs()
+        {
             return Ok((true, f0));
         }
         if c.evaluations >= budget {

@@ -78,16 +78,9 @@ impl TorsoMarkers {
 }
 
 /// Reads the markers of `torso` into `out` (one point per grid point) through the facade.
-pub fn read_markers(torso: &mut Torso, count: usize, out: &mut Vec<Point3<f64>>) -> Result<()> {
+pub fn read_markers(torso: &mut Torso, out: &mut Vec<Point3<f64>>) -> Result<()> {
     out.clear();
-    for i in 0..count {
-        let index = u16::try_from(i).map_err(|_| Error::invalid("marker index", i, "0..65535"))?;
-        let mut p = Point3::origin();
-        for axis in 0..3u8 {
-            p[axis as usize] = torso.read(Quantity::Marker { index, axis })?;
-        }
-        out.push(p);
-    }
+    out.extend_from_slice(torso.markers()?);
     Ok(())
 }
 
@@ -96,10 +89,17 @@ impl MarkerSource for TorsoMarkers {
         self.grid
     }
 
+    fn skin_fit(&mut self) -> Result<Option<(f64, f64)>> {
+        let model = self.torso.marker_model()?;
+        Ok(model
+            .registration()
+            .map(|r| (r.fit.mean_before, r.fit.mean_after)))
+    }
+
     fn rest_markers(&mut self) -> Result<Vec<Point3<f64>>> {
         self.torso.restore(&self.rest)?;
         let mut out = Vec::new();
-        read_markers(&mut self.torso, self.grid.0 * self.grid.1, &mut out)?;
+        read_markers(&mut self.torso, &mut out)?;
         Ok(out)
     }
 
@@ -117,7 +117,6 @@ impl MarkerSource for TorsoMarkers {
                 "at least one drive",
             ));
         };
-        let count = self.grid.0 * self.grid.1;
         self.torso.restore(&self.rest)?;
         self.torso.set_drive(first.1)?;
         out.markers.resize_with(times.len(), Vec::new);
@@ -130,7 +129,7 @@ impl MarkerSource for TorsoMarkers {
                 next += 1;
             }
             self.torso.advance_to(t)?;
-            read_markers(&mut self.torso, count, &mut out.markers[k])?;
+            read_markers(&mut self.torso, &mut out.markers[k])?;
             if volumes {
                 out.lung_volume.push(self.torso.read(Quantity::LungVolume)?);
             }

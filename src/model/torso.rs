@@ -3,10 +3,13 @@
 use super::{Config, Drive, Quantity, Snapshot};
 use crate::anatomy::{Anatomy, MuscleGroup};
 use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
+use crate::observe::markers::{MarkerCache, MarkerOutputs};
 use crate::observe::{self, Compartments, Observation};
 use crate::solver::{Integrator, Ode, Options, Stats};
 use crate::{Error, Result};
 use std::sync::Arc;
+
+mod markers;
 
 /// Statistics of one [`Torso::advance_to`] call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -30,6 +33,8 @@ pub struct Compiled {
     pub compartments: Compartments,
     /// Fingerprint of `model`.
     pub fingerprint: u64,
+    /// Skin and marker grids, built when markers are first read.
+    pub markers: MarkerCache,
 }
 
 impl Compiled {
@@ -46,6 +51,7 @@ impl Compiled {
             model,
             compartments,
             fingerprint,
+            markers: MarkerCache::default(),
         })
     }
 }
@@ -91,6 +97,7 @@ pub struct Torso {
     inputs: [f64; 8],
     integrator: Integrator,
     observation: Option<Observation>,
+    markers: MarkerOutputs,
 }
 
 fn solver_options(config: &Config) -> Options {
@@ -124,6 +131,7 @@ impl Torso {
             inputs: [0.0; 8],
             integrator,
             observation: None,
+            markers: MarkerOutputs::default(),
             config,
             compiled,
         })
@@ -207,6 +215,7 @@ impl Torso {
             };
             let result = integrator.integrate(&mut system, time, y, t);
             self.observation = None;
+            self.markers.invalidate();
             result.map_err(|e| Error::Numerical {
                 time: self.time,
                 reason: e.to_string(),
@@ -259,13 +268,7 @@ impl Torso {
             Quantity::SolverSteps => self.integrator.stats().steps as f64,
             Quantity::SolverRejectedSteps => self.integrator.stats().rejected as f64,
             Quantity::SolverRhsEvaluations => self.integrator.stats().rhs_evaluations as f64,
-            Quantity::Marker { index, axis } => {
-                return Err(Error::State(format!(
-                    "marker[{}].{} is not available: this build has no skin model",
-                    index as usize + 1,
-                    ["x", "y", "z"].get(axis as usize).unwrap_or(&"?")
-                )));
-            }
+            Quantity::Marker { index, axis } => return self.read_marker(index, axis),
             q => {
                 return Err(Error::invalid(
                     "quantity",
@@ -376,6 +379,7 @@ impl Torso {
         self.inputs = snapshot.inputs;
         self.config.drive = snapshot.drive;
         self.observation = None;
+        self.markers.invalidate();
         Ok(())
     }
 
@@ -386,5 +390,6 @@ impl Torso {
         self.y = dynamics::rest_state(&self.compiled.model);
         self.integrator.reset();
         self.observation = None;
+        self.markers.invalidate();
     }
 }

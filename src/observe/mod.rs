@@ -10,6 +10,7 @@
 //! centroid) gives the displaced compartments, which add up to the trunk's volume change.
 //! V_thorax = V_trunk - V_abdomen and V_lung = ratio x V_thorax (thesis 4.2).
 
+pub mod markers;
 pub mod skinning;
 
 use crate::dynamics::{Model, volume};

@@ -23,11 +23,10 @@
 //! `R_j = I` and `t_j` their patch displacement. Points bound to the skin (markers) are
 //! pre-combined so that only they are evaluated.
 
-use crate::anatomy::Subject;
+use crate::anatomy::skin::SurfaceBinding;
 use crate::anatomy::skin::geometry::{
     TriangleGrid, closest_point_on_segment, mean_edge_length, segment_crosses_triangle,
 };
-use crate::anatomy::skin::{ReferenceSkeleton, SurfaceBinding};
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
@@ -862,47 +861,4 @@ impl BoundPoints {
             *o = self.rest[m] + off;
         }
     }
-}
-
-/// Stand-in handles until the anatomy supplies the subject's own: the 24 reference ribs, the
-/// sternum and the spine (rigid; see [`ReferenceSkeleton`]) and 240 abdominal-wall vertices
-/// (translation) on a half-elliptic wall below the rib cage, 12 levels x 20 angles.
-pub fn reference_handles(subject: &Subject) -> Result<Vec<Handle>> {
-    let bones = ReferenceSkeleton::for_subject(subject)?;
-    let mut handles: Vec<Handle> = bones
-        .ribs
-        .iter()
-        .map(|(name, pts)| Handle {
-            kind: HandleKind::Rigid,
-            name: name.clone(),
-            points: pts.clone(),
-        })
-        .collect();
-    handles.push(Handle {
-        kind: HandleKind::Rigid,
-        name: "sternum".into(),
-        points: bones.sternum.clone(),
-    });
-    handles.push(Handle {
-        kind: HandleKind::Rigid,
-        name: "spine".into(),
-        points: bones.spine.clone(),
-    });
-    let s = subject.stature / crate::anatomy::skin::REFERENCE_STATURE;
-    for r in 0..12 {
-        let y = (0.95 + (1.16 - 0.95) * r as f64 / 11.0) * s;
-        for c in 0..20 {
-            let t = (-100.0 + 200.0 * c as f64 / 19.0f64).to_radians();
-            handles.push(Handle {
-                kind: HandleKind::Translation,
-                name: format!("abdominal_wall_{r}_{c}"),
-                points: vec![Point3::new(
-                    (-0.01 + 0.09 * t.cos()) * s,
-                    y,
-                    0.125 * t.sin() * s,
-                )],
-            });
-        }
-    }
-    Ok(handles)
 }

@@ -61,23 +61,27 @@ pub struct MarkerGrid {
 }
 
 impl MarkerGrid {
-    /// Places a `rows` x `cols` grid (each 2..=16) on the skin. Rows run from the clavicle
-    /// line (15 mm below the suprasternale, scaled by stature) to 40 mm below the omphalion;
-    /// columns are centred on the midline with the row spacing, narrowed when needed so the
-    /// grid stays within 62 % of the narrowest half-breadth over the rows (the anterior
-    /// surface an SLP projector lights).
+    /// Places a `rows` x `cols` grid (each 1..=16) on the skin. Rows run from the clavicle
+    /// line (15 mm below the suprasternale, scaled by stature) to 40 mm below the omphalion
+    /// (a single row lies halfway); columns are centred on the midline with the row spacing,
+    /// narrowed when needed so the grid stays within 62 % of the narrowest half-breadth over
+    /// the rows (the anterior surface an SLP projector lights).
     pub fn place(skin: &Skin, rows: usize, cols: usize) -> Result<MarkerGrid> {
-        for (name, v) in [("markers.rows", rows), ("markers.cols", cols)] {
-            if !(2..=MAX_GRID_SIZE).contains(&v) {
-                return Err(Error::invalid(name, v, format!("2..={MAX_GRID_SIZE}")));
+        for (name, v) in [("grid.rows", rows), ("grid.cols", cols)] {
+            if !(1..=MAX_GRID_SIZE).contains(&v) {
+                return Err(Error::invalid(name, v, format!("1..={MAX_GRID_SIZE}")));
             }
         }
         let lm = &skin.landmarks;
         let s = lm.stature / super::REFERENCE_STATURE;
         let top = lm.suprasternale_height - 0.015 * s;
         let bottom = lm.omphalion_height - 0.04 * s;
-        let row_spacing = (top - bottom) / (rows - 1) as f64;
-        let heights: Vec<f64> = (0..rows).map(|r| top - r as f64 * row_spacing).collect();
+        let row_spacing = (top - bottom) / (rows.max(2) - 1) as f64;
+        let heights: Vec<f64> = if rows == 1 {
+            vec![0.5 * (top + bottom)]
+        } else {
+            (0..rows).map(|r| top - r as f64 * row_spacing).collect()
+        };
         let half_breadth = heights
             .iter()
             .map(|&y| {
@@ -87,7 +91,7 @@ impl MarkerGrid {
                     .fold(0.0, f64::max)
             })
             .fold(f64::MAX, f64::min);
-        let col_spacing = row_spacing.min(2.0 * 0.62 * half_breadth / (cols - 1) as f64);
+        let col_spacing = row_spacing.min(2.0 * 0.62 * half_breadth / (cols.max(2) - 1) as f64);
         let mut markers = Vec::with_capacity(rows * cols);
         for (row, &y) in heights.iter().enumerate() {
             for col in 0..cols {

@@ -19,14 +19,22 @@ mod smooth;
 pub use anthropometry::TorsoDimensions;
 pub use markers::{MAX_GRID_SIZE, Marker, MarkerGrid, SurfaceBinding};
 pub use profile::{Pchip, Section};
-pub use reference::{REFERENCE_STATURE, ReferenceSkeleton, SPINE_CENTRES_MM};
+pub use reference::{
+    BONE_CLEARANCE, REFERENCE_STATURE, SPINE_CENTRES_MM, WALL_CLEARANCE, anatomy_clearance,
+    bone_polylines, dense_bone_points, densify, is_trunk_vertebra, spinous_tips, trunk_spine,
+    wall_points,
+};
 pub use register::{FitOptions, Registration, RigidTransform, SkinFitReport, register_rigid};
 pub use smooth::{taubin_smooth, vertex_neighbours};
 
-use crate::anatomy::{Sex, Subject};
+use crate::anatomy::{Anatomy, Sex, Subject};
 use crate::{Error, Result};
 use nalgebra::{Point2, Point3};
 use std::f64::consts::TAU;
+
+/// Reach [m] of the smooth widening around a bone the trunk shape leaves too little room
+/// for (1.75 m subject): about half a chest depth, so the widening spreads like soft tissue.
+const ENCLOSE_REACH: f64 = 0.08;
 
 /// Resolution and enclosure settings of the skin generator.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,8 +45,8 @@ pub struct SkinOptions {
     pub side_rings: usize,
     /// Concentric rings of each flat end cap (>= 1).
     pub cap_rings: usize,
-    /// Radial clearance [m] kept between the skin and each bone sample of the stand-in
-    /// skeleton used by [`Skin::generate`]: bone half-thickness plus the thinnest soft tissue.
+    /// Radial clearance [m] kept between the skin and each bone sample of the anatomy
+    /// ([`Skin::for_anatomy`]): bone half-thickness plus the thinnest soft tissue.
     pub bone_clearance: f64,
 }
 
@@ -50,7 +58,7 @@ impl Default for SkinOptions {
             around: 88,
             side_rings: 66,
             cap_rings: 4,
-            bone_clearance: 0.018,
+            bone_clearance: BONE_CLEARANCE,
         }
     }
 }
@@ -374,49 +382,32 @@ impl TrunkShape {
     }
 }
 
-/// Raises the radius grid so every clearance point is enclosed with its radial room:
-/// deficit splatted into the (ring, angle) grid, dilated by 2w cells and box-blurred twice by
-/// w cells. Dilation by the blur's full support guarantees the blurred field is not below
-/// the deficit anywhere, so the constraint holds and the bump stays smooth.
-#[allow(clippy::needless_range_loop)] // (ring, angle) grid indexing reads clearer
-fn enclose(r: &mut [Vec<f64>], heights: &[f64], axis_x: f64, points: &[Clearance], w: usize) {
+/// Radius of the (ring, angle) grid at height `y` and angle `theta`, bilinear between the
+/// four surrounding grid values (the surface between rings is planar, so this is exact
+/// along the rings' chords to within their sag).
+fn radius_at(r: &[Vec<f64>], heights: &[f64], y: f64, theta: f64) -> f64 {
     let (nk, nj) = (r.len(), r[0].len());
-    let mut deficit = vec![vec![0.0f64; nj]; nk];
-    for c in points {
-        let (dx, dz) = (c.point.x - axis_x, c.point.z);
-        let rho = dx.hypot(dz);
-        let theta = dz.atan2(dx).rem_euclid(TAU);
-        let y = c.point.y;
-        if y < heights[0] || y > heights[nk - 1] {
-            continue;
-        }
-        let k = heights.partition_point(|&h| h < y).min(nk - 1);
-        let k = if k > 0 && (y - heights[k - 1]) < (heights[k] - y) {
-            k - 1
-        } else {
-            k
-        };
-        let j = ((theta / TAU * nj as f64).round() as usize) % nj;
-        let need = rho + c.clearance - r[k][j];
-        if need > deficit[k][j] {
-            deficit[k][j] = need;
-        }
-    }
-    let dilate = |f: &Vec<Vec<f64>>, w: usize| -> Vec<Vec<f64>> {
-        let mut g = vec![vec![0.0; nj]; nk];
-        for k in 0..nk {
-            for j in 0..nj {
-                let mut m = 0.0f64;
-                for kk in k.saturating_sub(w)..=(k + w).min(nk - 1) {
-                    for dj in 0..=2 * w {
-                        m = m.max(f[kk][(j + nj + dj - w) % nj]);
-                    }
-                }
-                g[k][j] = m;
-            }
-        }
-        g
-    };
+    let k = heights.partition_point(|&h| h <= y).clamp(1, nk - 1) - 1;
+    let fy = ((y - heights[k]) / (heights[k + 1] - heights[k]).max(1e-12)).clamp(0.0, 1.0);
+    let u = theta.rem_euclid(TAU) / TAU * nj as f64;
+    let j0 = (u.floor() as usize) % nj;
+    let j1 = (j0 + 1) % nj;
+    let fj = u - u.floor();
+    let row = |k: usize| r[k][j0] * (1.0 - fj) + r[k][j1] * fj;
+    row(k) * (1.0 - fy) + row(k + 1) * fy
+}
+
+/// Raises the radius grid so every clearance point is enclosed with its radial room. Each
+/// point short of room lifts the surface by a smooth compact bump centred on it,
+/// `need (1 - (d / R)^2)^3` for surface distance d < R (a Wendland-type C2 profile), and the
+/// lift of a grid vertex is the largest bump reaching it, so a ridge of bone (the sternum)
+/// widens the trunk by a gently rounded mound instead of a step. The lift field is then
+/// blurred (two passes of a 5 x 5 box on the grid) so that neighbouring bumps of unequal
+/// height merge without scallops; the blur lowers peaks, so passes repeat on the residual
+/// deficits, the last ones unblurred so that every point ends with its room.
+#[allow(clippy::needless_range_loop)] // (ring, angle) grid indexing reads clearer
+fn enclose(r: &mut [Vec<f64>], heights: &[f64], axis_x: f64, points: &[Clearance], reach: f64) {
+    let (nk, nj) = (r.len(), r[0].len());
     let blur = |f: &Vec<Vec<f64>>, w: usize| -> Vec<Vec<f64>> {
         let mut g = vec![vec![0.0; nj]; nk];
         for k in 0..nk {
@@ -433,29 +424,75 @@ fn enclose(r: &mut [Vec<f64>], heights: &[f64], axis_x: f64, points: &[Clearance
         }
         g
     };
-    let smooth = blur(&blur(&dilate(&deficit, 2 * w), w), w);
-    for k in 0..nk {
-        for j in 0..nj {
-            r[k][j] += smooth[k][j];
+    const PASSES: usize = 8;
+    for pass in 0..PASSES {
+        let mut lift = vec![vec![0.0f64; nj]; nk];
+        let mut any = false;
+        for c in points {
+            let (dx, dz) = (c.point.x - axis_x, c.point.z);
+            let rho = dx.hypot(dz);
+            let theta = dz.atan2(dx).rem_euclid(TAU);
+            let y = c.point.y;
+            if y < heights[0] || y > heights[nk - 1] {
+                continue;
+            }
+            // Aim a little beyond the room needed so that the passes converge from above.
+            let need = rho + c.clearance - radius_at(r, heights, y, theta);
+            if need <= 0.0 {
+                continue;
+            }
+            let need = need + 1e-4;
+            any = true;
+            let r0 = rho.max(1e-3);
+            let k_lo = heights.partition_point(|&h| h < y - reach);
+            let k_hi = heights.partition_point(|&h| h <= y + reach);
+            let dj = ((reach / r0) / TAU * nj as f64).ceil() as isize + 1;
+            let jc = (theta / TAU * nj as f64).round() as isize;
+            for k in k_lo..k_hi.min(nk) {
+                let ddy = heights[k] - y;
+                for o in -dj..=dj {
+                    let j = (jc + o).rem_euclid(nj as isize) as usize;
+                    let mut dt = TAU * j as f64 / nj as f64 - theta;
+                    dt = (dt + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
+                    let d2 = (ddy * ddy + (r0 * dt).powi(2)) / (reach * reach);
+                    if d2 < 1.0 {
+                        let b = need * (1.0 - d2).powi(3);
+                        if b > lift[k][j] {
+                            lift[k][j] = b;
+                        }
+                    }
+                }
+            }
+        }
+        if !any {
+            break;
+        }
+        if pass + 2 < PASSES {
+            lift = blur(&blur(&lift, 2), 2);
+        }
+        for k in 0..nk {
+            for j in 0..nj {
+                r[k][j] += lift[k][j];
+            }
         }
     }
 }
 
 impl Skin {
-    /// Generates the default-resolution skin of `subject`, enclosing the stand-in reference
-    /// skeleton ([`ReferenceSkeleton`]) with [`SkinOptions::bone_clearance`] of room.
+    /// Generates the default-resolution skin of `subject` around its anatomy's bones and
+    /// abdominal wall (the anatomy is built at level of detail 0; the bones do not depend on
+    /// the level of detail).
     pub fn generate(subject: &Subject) -> Result<Skin> {
-        let options = SkinOptions::default();
-        let bones = ReferenceSkeleton::for_subject(subject)?;
-        let clear: Vec<Clearance> = bones
-            .dense_bone_points(0.005)
-            .into_iter()
-            .map(|point| Clearance {
-                point,
-                clearance: options.bone_clearance,
-            })
-            .collect();
-        Skin::generate_with(subject, &options, &clear)
+        let anatomy = Anatomy::build(subject, 0)?;
+        Skin::for_anatomy(&anatomy, &SkinOptions::default())
+    }
+
+    /// Generates the skin of `anatomy`'s subject enclosing its bones with
+    /// [`SkinOptions::bone_clearance`] and its free abdominal wall with [`WALL_CLEARANCE`] of
+    /// radial room ([`anatomy_clearance`]).
+    pub fn for_anatomy(anatomy: &Anatomy, options: &SkinOptions) -> Result<Skin> {
+        let clear = anatomy_clearance(anatomy, options.bone_clearance);
+        Skin::generate_with(&anatomy.subject, options, &clear)
     }
 
     /// Generates a skin from the subject's ANSUR II dimensions at the given resolution, then
@@ -550,7 +587,13 @@ impl Skin {
             .iter()
             .map(|&y| thetas.iter().map(|&t| shape.radius(axis_x, t, y)).collect())
             .collect();
-        enclose(&mut radii, &heights, axis_x, enclosed, 1);
+        enclose(
+            &mut radii,
+            &heights,
+            axis_x,
+            enclosed,
+            ENCLOSE_REACH * subject.stature / REFERENCE_STATURE,
+        );
 
         let ring = |y: f64, r: &[f64], scale: f64| -> Vec<Point3<f64>> {
             thetas

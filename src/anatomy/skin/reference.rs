@@ -1,17 +1,14 @@
-//! A stand-in skeleton for the skin: the reference rib centrelines (right side from
-//! `data/rib_centerlines_right_mm.csv`, mirrored for the left), a sternum and a spine
-//! centreline, scaled to the subject's stature. The skin generator uses it as the
-//! interior the surface must enclose, and the skinning tests and benchmarks use it as
-//! handles until the anatomy module supplies the subject's own bones.
+//! The bones the skin must enclose, taken from the subject's [`Anatomy`]: rib centrelines
+//! (bone and costal cartilage), the sternum (jugular notch, sternal angle, xiphisternal
+//! joint), the spinous processes of the thoracic and lumbar vertebrae, and the free
+//! abdominal wall. Also the reference spine profile the trunk sections are hung from.
 
-use crate::anatomy::Subject;
-use crate::{Error, Result};
-use nalgebra::Point3;
+use super::Clearance;
+use crate::anatomy::{Anatomy, VertexRole};
+use nalgebra::{Point3, Vector3};
 
-/// Stature [m] of the subject the reference centrelines were placed for.
+/// Stature [m] of the subject the reference spine profile was placed for.
 pub const REFERENCE_STATURE: f64 = 1.75;
-
-const RIB_CSV: &str = include_str!("../../../data/rib_centerlines_right_mm.csv");
 
 /// Vertebral body centres (x, y) [mm] of the reference spine, caudal to cranial.
 /// T1-T12: `vert_origin` of the costovertebral joints of the Bruno et al. thoracolumbar
@@ -45,129 +42,112 @@ pub const SPINE_CENTRES_MM: [(f64, f64); 24] = [
     (6.0, 1486.0),     // C3
 ];
 
-/// The stand-in skeleton, in metres, ISB frame (x anterior, y superior, z right).
-#[derive(Clone, Debug)]
-pub struct ReferenceSkeleton {
-    /// 24 ribs, right 1-12 then left 1-12, each as (name, centreline from head to
-    /// costochondral junction, 11 samples).
-    pub ribs: Vec<(String, Vec<Point3<f64>>)>,
-    /// Sternum centreline, jugular notch to xiphoid tip.
-    pub sternum: Vec<Point3<f64>>,
-    /// Spine centreline through the vertebral bodies, caudal to cranial.
-    pub spine: Vec<Point3<f64>>,
-    /// Spinous process tips (posterior limit of the vertebrae) of T1-L5.
-    pub spinous_tips: Vec<Point3<f64>>,
+/// Radial room [m] kept between the skin and a bone centreline: rib half-thickness (about
+/// 6 mm) plus the thinnest soft tissue over the ribs and sternum (about 12 mm).
+pub const BONE_CLEARANCE: f64 = 0.018;
+
+/// Radial room [m] kept between the skin and the abdominal cavity's wall: the thinnest
+/// abdominal wall (muscle, fascia, fat and skin, about 10 mm in lean adults).
+pub const WALL_CLEARANCE: f64 = 0.010;
+
+/// Spinous tip offset from a vertebral joint centre (x, y) [m] for a 1.75 m subject: body,
+/// canal, lamina and process about 70 mm dorsal, the process sloping 12 mm caudally.
+const SPINOUS_OFFSET: (f64, f64) = (-0.070, -0.012);
+
+/// Names of the thoracic and lumbar levels of [`crate::anatomy::Spine::joints`].
+pub fn is_trunk_vertebra(name: &str) -> bool {
+    name.starts_with("thoracic") || name.starts_with("lumbar")
 }
 
-/// Parses the reference rib centrelines (right side), in millimetres.
-fn parse_ribs() -> Result<Vec<Vec<[f64; 3]>>> {
-    let mut ribs: Vec<Vec<[f64; 3]>> = vec![Vec::new(); 12];
-    for (i, line) in RIB_CSV.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || line.starts_with("rib,") {
-            continue;
-        }
-        let parse_err = |column: usize, message: String| Error::Parse {
-            path: "data/rib_centerlines_right_mm.csv".into(),
-            line: i + 1,
-            column,
-            message,
-        };
-        let f: Vec<&str> = line.split(',').collect();
-        if f.len() != 5 {
-            return Err(parse_err(
-                1,
-                format!("expected 5 fields, found {}", f.len()),
-            ));
-        }
-        let rib: usize = f[0]
-            .parse()
-            .map_err(|_| parse_err(1, format!("bad rib number `{}`", f[0])))?;
-        if !(1..=12).contains(&rib) {
-            return Err(parse_err(1, format!("rib number {rib} outside 1-12")));
-        }
-        let mut p = [0.0; 3];
-        for k in 0..3 {
-            p[k] = f[2 + k]
-                .parse()
-                .map_err(|_| parse_err(3 + k, format!("bad number `{}`", f[2 + k])))?;
-        }
-        ribs[rib - 1].push(p);
-    }
-    Ok(ribs)
-}
-
-impl ReferenceSkeleton {
-    /// The reference skeleton scaled by `stature / 1.75 m` about the floor origin.
-    pub fn for_subject(subject: &Subject) -> Result<Self> {
-        subject.validate()?;
-        let s = subject.stature / REFERENCE_STATURE * 1e-3;
-        let p = |x: f64, y: f64, z: f64| Point3::new(x * s, y * s, z * s);
-        let right = parse_ribs()?;
-        let mut ribs = Vec::with_capacity(24);
-        for (side, sign) in [("right", 1.0), ("left", -1.0)] {
-            for (k, rib) in right.iter().enumerate() {
-                let pts = rib.iter().map(|q| p(q[0], q[1], sign * q[2])).collect();
-                ribs.push((format!("rib{}_{side}", k + 1), pts));
-            }
-        }
-        // Sternum: manubrium from the jugular notch, body down to the seventh costal cartilage,
-        // xiphoid; lengths 51 / 102 mm (CT norms, physiology reference), sternal angle ~162 deg.
-        let sternum = vec![
-            p(45.0, 1405.0, 0.0),
-            p(62.0, 1357.0, 0.0),
-            p(98.0, 1262.0, 0.0),
-            p(106.0, 1215.0, 0.0),
-        ];
-        let spine = SPINE_CENTRES_MM
-            .iter()
-            .map(|&(x, y)| p(x, y, 0.0))
-            .collect();
-        // Spinous tips about 70 mm behind the body centre (body, canal, lamina and process).
-        let spinous_tips = SPINE_CENTRES_MM[1..19]
-            .iter()
-            .map(|&(x, y)| p(x - 70.0, y - 12.0, 0.0))
-            .collect();
-        Ok(ReferenceSkeleton {
-            ribs,
-            sternum,
-            spine,
-            spinous_tips,
+/// The anatomy's bones as named polylines: 24 ribs (body index order, bone then
+/// cartilage), the sternum (jugular notch, sternal angle, xiphisternal joint) and the
+/// thoracic and lumbar spine (joint centres, caudal to cranial).
+pub fn bone_polylines(anatomy: &Anatomy) -> Vec<(String, Vec<Point3<f64>>)> {
+    let mut out: Vec<(String, Vec<Point3<f64>>)> = anatomy
+        .ribs
+        .iter()
+        .map(|r| {
+            let side = match r.side {
+                crate::anatomy::Side::Right => "right",
+                crate::anatomy::Side::Left => "left",
+            };
+            (format!("rib{}_{side}", r.level), r.polyline())
         })
-    }
+        .collect();
+    let s = &anatomy.sternum;
+    out.push(("sternum".into(), vec![s.jugular, s.angle, s.xiphisternal]));
+    out.push(("spine".into(), trunk_spine(anatomy)));
+    out
+}
 
-    /// Every bone sample of the skeleton: rib centrelines, sternum, spinous tips.
-    pub fn bone_points(&self) -> Vec<Point3<f64>> {
-        let mut out: Vec<Point3<f64>> = self
-            .ribs
-            .iter()
-            .flat_map(|(_, r)| r.iter().copied())
-            .collect();
-        out.extend(self.sternum.iter().copied());
-        out.extend(self.spinous_tips.iter().copied());
-        out
-    }
+/// Joint centres of the thoracic and lumbar vertebrae, caudal to cranial.
+pub fn trunk_spine(anatomy: &Anatomy) -> Vec<Point3<f64>> {
+    anatomy
+        .spine
+        .joints
+        .iter()
+        .filter(|(n, _)| is_trunk_vertebra(n))
+        .map(|(_, p)| *p)
+        .collect()
+}
 
-    /// Bone samples densified to at most `step` metres apart along each polyline, for
-    /// enclosure constraints and gap reports.
-    pub fn dense_bone_points(&self, step: f64) -> Vec<Point3<f64>> {
-        let mut out = Vec::new();
-        let mut add_polyline = |pts: &[Point3<f64>]| {
-            for w in pts.windows(2) {
-                let n = ((w[1] - w[0]).norm() / step).ceil().max(1.0) as usize;
-                for i in 0..n {
-                    out.push(w[0] + (w[1] - w[0]) * (i as f64 / n as f64));
-                }
-            }
-            if let Some(last) = pts.last() {
-                out.push(*last);
-            }
-        };
-        for (_, r) in &self.ribs {
-            add_polyline(r);
+/// Spinous process tips of the thoracic and lumbar vertebrae (the posterior limit of the
+/// spine), caudal to cranial.
+pub fn spinous_tips(anatomy: &Anatomy) -> Vec<Point3<f64>> {
+    let s = anatomy.subject.stature / REFERENCE_STATURE;
+    trunk_spine(anatomy)
+        .into_iter()
+        .map(|p| p + Vector3::new(SPINOUS_OFFSET.0 * s, SPINOUS_OFFSET.1 * s, 0.0))
+        .collect()
+}
+
+/// Samples of a polyline at most `step` metres apart (ends included).
+pub fn densify(points: &[Point3<f64>], step: f64, out: &mut Vec<Point3<f64>>) {
+    for w in points.windows(2) {
+        let n = ((w[1] - w[0]).norm() / step).ceil().max(1.0) as usize;
+        for i in 0..n {
+            out.push(w[0] + (w[1] - w[0]) * (i as f64 / n as f64));
         }
-        add_polyline(&self.sternum);
-        add_polyline(&self.spinous_tips);
-        out
     }
+    if let Some(last) = points.last() {
+        out.push(*last);
+    }
+}
+
+/// Bone samples at most `step` metres apart: rib centrelines, sternum, spinous tips (for
+/// enclosure constraints and gap reports).
+pub fn dense_bone_points(anatomy: &Anatomy, step: f64) -> Vec<Point3<f64>> {
+    let mut out = Vec::new();
+    for (name, pts) in bone_polylines(anatomy) {
+        if name != "spine" {
+            densify(&pts, step, &mut out);
+        }
+    }
+    densify(&spinous_tips(anatomy), step, &mut out);
+    out
+}
+
+/// Rest positions of the abdominal cavity's free lateral and ventral wall.
+pub fn wall_points(anatomy: &Anatomy) -> Vec<Point3<f64>> {
+    let ab = &anatomy.abdomen;
+    ab.with_role(VertexRole::Wall)
+        .map(|v| anatomy.rest(ab.anchor[v as usize]))
+        .collect()
+}
+
+/// What the skin must enclose: every bone sample (5 mm apart) with `bone_clearance` (see
+/// [`BONE_CLEARANCE`]) and every free abdominal-wall vertex with [`WALL_CLEARANCE`].
+pub fn anatomy_clearance(anatomy: &Anatomy, bone_clearance: f64) -> Vec<Clearance> {
+    let mut out: Vec<Clearance> = dense_bone_points(anatomy, 0.005)
+        .into_iter()
+        .map(|point| Clearance {
+            point,
+            clearance: bone_clearance,
+        })
+        .collect();
+    out.extend(wall_points(anatomy).into_iter().map(|point| Clearance {
+        point,
+        clearance: WALL_CLEARANCE,
+    }));
+    out
 }

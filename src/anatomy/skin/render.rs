@@ -30,6 +30,63 @@ impl Default for RenderOptions {
     }
 }
 
+/// An RGB picture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    /// Width [px].
+    pub width: usize,
+    /// Height [px].
+    pub height: usize,
+    /// Row-major pixels from the top-left corner.
+    pub pixels: Vec<[u8; 3]>,
+}
+
+impl RgbImage {
+    /// Places pictures of equal height side by side.
+    pub fn hstack(images: &[RgbImage]) -> Result<RgbImage> {
+        let height = images.first().map(|i| i.height).unwrap_or(0);
+        if images.is_empty() || images.iter().any(|i| i.height != height) {
+            return Err(Error::invalid(
+                "picture panels",
+                images.len(),
+                "one or more panels of equal height",
+            ));
+        }
+        let width = images.iter().map(|i| i.width).sum();
+        let mut pixels = Vec::with_capacity(width * height);
+        for y in 0..height {
+            for i in images {
+                pixels.extend_from_slice(&i.pixels[y * i.width..(y + 1) * i.width]);
+            }
+        }
+        Ok(RgbImage {
+            width,
+            height,
+            pixels,
+        })
+    }
+
+    /// Writes the picture as an 8-bit RGB PNG.
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let data: Vec<u8> = self.pixels.iter().flatten().copied().collect();
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+        let mut enc = png::Encoder::new(
+            std::io::BufWriter::new(file),
+            self.width as u32,
+            self.height as u32,
+        );
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let png_err = |e: png::EncodingError| Error::io(path, std::io::Error::other(e.to_string()));
+        let mut writer = enc.write_header().map_err(png_err)?;
+        writer.write_image_data(&data).map_err(png_err)?;
+        writer.finish().map_err(png_err)
+    }
+}
+
 /// A shaded picture of a triangle surface with markers (drawn where visible) and lines
 /// between pairs of markers (index pairs), written to `path` as an RGB PNG.
 pub fn render_png(
@@ -40,6 +97,20 @@ pub fn render_png(
     marker_links: &[(usize, usize)],
     options: &RenderOptions,
 ) -> Result<()> {
+    render_rgb(vertices, triangles, markers, marker_links, &[], options)?.write_png(path)
+}
+
+/// A shaded picture of a triangle surface with markers, lines between pairs of markers and
+/// arrows (segments from a point to another, drawn in green with the end point marked; used
+/// for magnified marker displacements). The framing fits the surface.
+pub fn render_rgb(
+    vertices: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    markers: &[Point3<f64>],
+    marker_links: &[(usize, usize)],
+    arrows: &[(Point3<f64>, Point3<f64>)],
+    options: &RenderOptions,
+) -> Result<RgbImage> {
     let (w, h) = (options.width as usize, options.height as usize);
     if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
         return Err(Error::invalid(
@@ -155,6 +226,37 @@ pub fn render_png(
         }
     }
     let rad = options.marker_radius;
+    for (a, b) in arrows {
+        let (pa, pb) = (to_px(proj(a)), to_px(proj(b)));
+        if !visible(&pa) {
+            continue;
+        }
+        let steps = ((pb.0 - pa.0).hypot(pb.1 - pa.1).ceil() as usize).max(1);
+        for s in 0..=steps {
+            let f = s as f64 / steps as f64;
+            let (x, y) = (pa.0 + (pb.0 - pa.0) * f, pa.1 + (pb.1 - pa.1) * f);
+            for (ox, oy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let (x, y) = (x + ox - 0.5, y + oy - 0.5);
+                if x >= 0.0 && y >= 0.0 && (x as usize) < w && (y as usize) < h {
+                    image[y as usize * w + x as usize] = [20, 150, 60];
+                }
+            }
+        }
+        let r = 2isize;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let (x, y) = (pb.0 as isize + dx, pb.1 as isize + dy);
+                if dx * dx + dy * dy <= r * r
+                    && x >= 0
+                    && y >= 0
+                    && (x as usize) < w
+                    && (y as usize) < h
+                {
+                    image[y as usize * w + x as usize] = [20, 150, 60];
+                }
+            }
+        }
+    }
     for p in mpx.iter().filter(|p| visible(p)) {
         let r = rad.ceil() as isize;
         for dy in -r..=r {
@@ -171,16 +273,9 @@ pub fn render_png(
             }
         }
     }
-    let data: Vec<u8> = image.iter().flatten().copied().collect();
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let png_err = |e: png::EncodingError| Error::io(path, std::io::Error::other(e.to_string()));
-    let mut writer = enc.write_header().map_err(png_err)?;
-    writer.write_image_data(&data).map_err(png_err)?;
-    writer.finish().map_err(png_err)
+    Ok(RgbImage {
+        width: w,
+        height: h,
+        pixels: image,
+    })
 }

@@ -1,0 +1,690 @@
+//! The SLP marker grid of a compiled model (thesis chapter 3): the subject's skin generated
+//! around its own bones, bone-heat skinning driven by the model's bodies, the R x C grid
+//! bound to the skin, and, when a recording is given, the grid registered to its first
+//! frame so that marker outputs are expressed in the recording's frame (thesis 3.2).
+//!
+//! Handles (thesis 3.3): one rigid handle per rib (its bone and cartilage polyline), the
+//! sternum (jugular notch, sternal angle, xiphisternal joint), the fixed thoracic and lumbar
+//! spine, and one translation handle per free vertex of the abdomen's lateral and ventral
+//! wall. Their poses come straight from the state vector ([`crate::dynamics::Layout`]):
+//!
+//! - rib r turns by theta_r about its unit hinge axis u_r through its head h_r:
+//!   `p -> h_r + R(u_r, theta_r) (p - h_r)` (Rodrigues, as in the dynamics' kinematics);
+//! - the sternum is a free body with centre of mass x and orientation q:
+//!   `p -> x + R(q) (p - x0)`;
+//! - a wall vertex moves by its displacement from rest.
+//!
+//! Only the points bound to the skin (the markers) are blended per state; the whole skin is
+//! deformed only on request (export, C ABI). Building a [`MarkerModel`] (skin, weights) takes
+//! a few tenths of a second, so the facade builds it when markers are first read, once per
+//! compiled model and grid ([`MarkerCache`]).
+
+use super::skinning::{
+    BoundPoints, Handle, HandleKind, HandlePose, Skinning, SkinningFrame, SkinningOptions,
+};
+use crate::anatomy::skin::{FitOptions, MarkerGrid, Registration, Skin, SkinOptions};
+use crate::anatomy::{Anatomy, Body, VertexRole};
+use crate::dynamics::{Layout, Model, RIBS};
+use crate::{Error, Result};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// Largest number of markers a grid can have (16 x 16); the FMI layer exposes this many.
+pub const MAX_MARKERS: usize = 256;
+
+/// What moves a skinning handle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HandleSource {
+    /// Rib by body index (0-11 right levels 1-12, 12-23 left).
+    Rib(usize),
+    /// The sternum.
+    Sternum,
+    /// The thoracic and lumbar spine (fixed).
+    Spine,
+    /// A free vertex of the abdominal wall, by index among the free vertices.
+    WallVertex(u32),
+}
+
+/// The skinning handles of an anatomy and what moves each: 24 ribs, the sternum, the spine
+/// (rigid), then the free lateral and ventral abdominal-wall vertices (translation).
+pub fn anatomy_handles(anatomy: &Anatomy) -> (Vec<Handle>, Vec<HandleSource>) {
+    let mut handles = Vec::new();
+    let mut sources = Vec::new();
+    for (name, points) in crate::anatomy::skin::bone_polylines(anatomy) {
+        let source = match name.as_str() {
+            "sternum" => HandleSource::Sternum,
+            "spine" => HandleSource::Spine,
+            _ => HandleSource::Rib(handles.len()),
+        };
+        handles.push(Handle {
+            kind: HandleKind::Rigid,
+            name,
+            points,
+        });
+        sources.push(source);
+    }
+    let ab = &anatomy.abdomen;
+    for v in ab.with_role(VertexRole::Wall) {
+        let anchor = anatomy.anchors[ab.anchor[v as usize] as usize];
+        if let Body::Vertex(j) = anchor.body {
+            handles.push(Handle {
+                kind: HandleKind::Translation,
+                name: format!("abdominal_wall_{v}"),
+                points: vec![anchor.rest],
+            });
+            sources.push(HandleSource::WallVertex(j));
+        }
+    }
+    (handles, sources)
+}
+
+/// Rest-pose data needed to turn a state vector into handle poses.
+#[derive(Clone, Debug)]
+struct PoseRig {
+    layout: Layout,
+    rib_head: Vec<Point3<f64>>,
+    rib_axis: Vec<Unit<Vector3<f64>>>,
+    sternum_com: Point3<f64>,
+    vertex_rest: Vec<Point3<f64>>,
+}
+
+impl PoseRig {
+    fn new(model: &Model) -> Self {
+        PoseRig {
+            layout: Layout::new(model),
+            rib_head: model.rib_head.clone(),
+            rib_axis: model
+                .rib_axis
+                .iter()
+                .map(|a| Unit::new_normalize(*a))
+                .collect(),
+            sternum_com: model.sternum_com,
+            vertex_rest: model
+                .vertex_anchor
+                .iter()
+                .map(|&a| model.rest[a as usize])
+                .collect(),
+        }
+    }
+
+    fn check(&self, y: &[f64]) -> Result<()> {
+        if y.len() != self.layout.len {
+            return Err(Error::invalid(
+                "state length",
+                y.len(),
+                format!("{} (the model's state)", self.layout.len),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The pose of every handle at state `y` (length checked by the caller).
+    fn poses_into(&self, sources: &[HandleSource], y: &[f64], out: &mut Vec<HandlePose>) {
+        let l = &self.layout;
+        let q = &y[l.sternum_q..l.sternum_q + 4];
+        let rot = UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]));
+        let x = Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]);
+        let sternum = Isometry3::from_parts(
+            Translation3::from(x.coords - rot * self.sternum_com.coords),
+            rot,
+        );
+        out.clear();
+        out.extend(sources.iter().map(|s| match *s {
+            HandleSource::Rib(r) if r < RIBS => {
+                let rot = UnitQuaternion::from_axis_angle(&self.rib_axis[r], y[l.theta + r]);
+                let h = self.rib_head[r].coords;
+                HandlePose::Rigid(Isometry3::from_parts(Translation3::from(h - rot * h), rot))
+            }
+            HandleSource::Rib(_) | HandleSource::Spine => HandlePose::Rigid(Isometry3::identity()),
+            HandleSource::Sternum => HandlePose::Rigid(sternum),
+            HandleSource::WallVertex(j) => {
+                let k = l.vertex_x + 3 * j as usize;
+                HandlePose::Translation(
+                    Vector3::new(y[k], y[k + 1], y[k + 2]) - self.vertex_rest[j as usize].coords,
+                )
+            }
+        }));
+    }
+}
+
+/// Which grid a marker model carries: its size and the recording it is registered to.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct MarkerScene {
+    /// Grid rows (1..=16).
+    pub rows: usize,
+    /// Grid columns (1..=16).
+    pub cols: usize,
+    /// SLP recording whose first frame registers the grid (`None`: the model's own frame).
+    pub slp_reference: Option<PathBuf>,
+}
+
+impl Default for MarkerScene {
+    /// The thesis's 10 x 6 grid, unregistered.
+    fn default() -> Self {
+        MarkerScene {
+            rows: 10,
+            cols: 6,
+            slp_reference: None,
+        }
+    }
+}
+
+/// Scratch memory of one marker evaluation (handle poses and influence motions).
+#[derive(Clone, Debug, Default)]
+pub struct MarkerScratch {
+    poses: Vec<HandlePose>,
+    frame: SkinningFrame,
+}
+
+/// The skin, its weights and the bound marker grid of one compiled model (immutable,
+/// shareable).
+#[derive(Clone, Debug)]
+pub struct MarkerModel {
+    skin: Skin,
+    grid: MarkerGrid,
+    handles: Vec<Handle>,
+    sources: Vec<HandleSource>,
+    skinning: Skinning,
+    bound: BoundPoints,
+    registration: Option<Registration>,
+    rig: PoseRig,
+}
+
+impl MarkerModel {
+    /// Builds the marker model of `scene`: reads the recording's first frame when one is
+    /// given ([`read_slp_first_frame`]), then [`MarkerModel::with_first_frame`].
+    pub fn build(anatomy: &Anatomy, model: &Model, scene: &MarkerScene) -> Result<Self> {
+        let frame = match &scene.slp_reference {
+            None => None,
+            Some(path) => {
+                let rec = read_slp_first_frame(path)?;
+                if (rec.rows, rec.cols) != (scene.rows, scene.cols) {
+                    return Err(Error::invalid(
+                        "slp.reference",
+                        format!("{} (a {} x {} grid)", path.display(), rec.rows, rec.cols),
+                        format!(
+                            "a recording of the model's {} x {} grid (grid.rows x grid.cols)",
+                            scene.rows, scene.cols
+                        ),
+                    ));
+                }
+                Some(rec.points)
+            }
+        };
+        MarkerModel::with_first_frame(anatomy, model, scene.rows, scene.cols, frame.as_deref())
+    }
+
+    /// Builds the skin around `anatomy`'s bones, places a `rows` x `cols` grid on it, and,
+    /// given a recording's first frame (end-expiration; `None` = untracked point), registers
+    /// the grid to it and fits the skin (thesis 3.2) before computing the bone-heat weights
+    /// of the fitted skin (thesis 3.3).
+    pub fn with_first_frame(
+        anatomy: &Anatomy,
+        model: &Model,
+        rows: usize,
+        cols: usize,
+        first_frame: Option<&[Option<Point3<f64>>]>,
+    ) -> Result<Self> {
+        let mut skin = Skin::for_anatomy(anatomy, &SkinOptions::default())?;
+        let grid = MarkerGrid::place(&skin, rows, cols)?;
+        let registration = match first_frame {
+            Some(frame) => Some(skin.register(&grid, frame, &FitOptions::default())?),
+            None => None,
+        };
+        let (handles, sources) = anatomy_handles(anatomy);
+        let skinning = Skinning::new(
+            &skin.vertices,
+            &skin.triangles,
+            &handles,
+            &SkinningOptions::default(),
+        )?;
+        let bound = skinning.bind(&skin.triangles, &grid.bindings())?;
+        let rig = PoseRig::new(model);
+        if sources.iter().any(|s| match s {
+            HandleSource::WallVertex(j) => *j as usize >= rig.vertex_rest.len(),
+            _ => false,
+        }) {
+            return Err(Error::State(
+                "marker model: the anatomy's free vertices do not match the compiled model".into(),
+            ));
+        }
+        Ok(MarkerModel {
+            skin,
+            grid,
+            handles,
+            sources,
+            skinning,
+            bound,
+            registration,
+            rig,
+        })
+    }
+
+    /// The rest skin (fitted to the recording when registered), model frame.
+    pub fn skin(&self) -> &Skin {
+        &self.skin
+    }
+
+    /// The marker grid.
+    pub fn grid(&self) -> &MarkerGrid {
+        &self.grid
+    }
+
+    /// Number of markers (rows x columns).
+    pub fn len(&self) -> usize {
+        self.bound.len()
+    }
+
+    /// Whether the grid is empty (never, once built).
+    pub fn is_empty(&self) -> bool {
+        self.bound.is_empty()
+    }
+
+    /// The skinning handles, in the order of [`MarkerModel::sources`].
+    pub fn handles(&self) -> &[Handle] {
+        &self.handles
+    }
+
+    /// What moves each handle.
+    pub fn sources(&self) -> &[HandleSource] {
+        &self.sources
+    }
+
+    /// The weights.
+    pub fn skinning(&self) -> &Skinning {
+        &self.skinning
+    }
+
+    /// The markers' pre-combined weights.
+    pub fn bound(&self) -> &BoundPoints {
+        &self.bound
+    }
+
+    /// The registration to the recording, when one was given.
+    pub fn registration(&self) -> Option<&Registration> {
+        self.registration.as_ref()
+    }
+
+    /// Expresses a model-frame point in the output frame (the recording's when registered).
+    pub fn to_output(&self, p: &Point3<f64>) -> Point3<f64> {
+        match &self.registration {
+            Some(r) => r.to_recording(p),
+            None => *p,
+        }
+    }
+
+    /// The pose of every handle at state `y`.
+    pub fn handle_poses(&self, y: &[f64], out: &mut Vec<HandlePose>) -> Result<()> {
+        self.rig.check(y)?;
+        self.rig.poses_into(&self.sources, y, out);
+        Ok(())
+    }
+
+    fn frame(&self, y: &[f64], scratch: &mut MarkerScratch) -> Result<()> {
+        self.handle_poses(y, &mut scratch.poses)?;
+        self.skinning.frame_into(&scratch.poses, &mut scratch.frame)
+    }
+
+    /// Marker positions at state `y` in the model frame (`out` resized to the grid).
+    pub fn markers_model_frame(
+        &self,
+        y: &[f64],
+        scratch: &mut MarkerScratch,
+        out: &mut Vec<Point3<f64>>,
+    ) -> Result<()> {
+        self.frame(y, scratch)?;
+        out.resize(self.bound.len(), Point3::origin());
+        self.bound.evaluate(&scratch.frame, out);
+        Ok(())
+    }
+
+    /// Marker positions at state `y` in the output frame (the recording's when registered).
+    pub fn markers(
+        &self,
+        y: &[f64],
+        scratch: &mut MarkerScratch,
+        out: &mut Vec<Point3<f64>>,
+    ) -> Result<()> {
+        self.markers_model_frame(y, scratch, out)?;
+        if let Some(r) = &self.registration {
+            for p in out.iter_mut() {
+                *p = r.to_recording(p);
+            }
+        }
+        Ok(())
+    }
+
+    /// The whole deformed skin at state `y`, model frame.
+    pub fn skin_model_frame(
+        &self,
+        y: &[f64],
+        scratch: &mut MarkerScratch,
+        out: &mut Vec<Point3<f64>>,
+    ) -> Result<()> {
+        self.frame(y, scratch)?;
+        self.skinning.deform_all(&scratch.frame, out);
+        Ok(())
+    }
+
+    /// The whole deformed skin at state `y` in the output frame (the markers' frame).
+    pub fn skin_vertices(
+        &self,
+        y: &[f64],
+        scratch: &mut MarkerScratch,
+        out: &mut Vec<Point3<f64>>,
+    ) -> Result<()> {
+        self.skin_model_frame(y, scratch, out)?;
+        if let Some(r) = &self.registration {
+            for p in out.iter_mut() {
+                *p = r.to_recording(p);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Marker models built for one compiled model, one per grid (size and registration), built
+/// on first use and shared by every instance of that compiled model.
+#[derive(Default)]
+pub struct MarkerCache {
+    built: Mutex<Vec<(MarkerScene, Arc<MarkerModel>)>>,
+}
+
+impl std::fmt::Debug for MarkerCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let n = self.built.lock().map(|b| b.len()).unwrap_or(0);
+        write!(f, "MarkerCache({n} built)")
+    }
+}
+
+impl MarkerCache {
+    /// The marker model of `scene`, built now if not yet built (a failed build is not
+    /// cached: its error is returned and the next call tries again).
+    pub fn get_or_build(
+        &self,
+        scene: &MarkerScene,
+        anatomy: &Anatomy,
+        model: &Model,
+    ) -> Result<Arc<MarkerModel>> {
+        let mut built = self.built.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, m)) = built.iter().find(|(s, _)| s == scene) {
+            return Ok(m.clone());
+        }
+        let m = Arc::new(MarkerModel::build(anatomy, model, scene)?);
+        built.push((scene.clone(), m.clone()));
+        Ok(m)
+    }
+}
+
+/// Per-instance marker outputs: the shared model, and the markers of the current state,
+/// computed once per state (call [`MarkerOutputs::invalidate`] when the state changes).
+#[derive(Clone, Debug, Default)]
+pub struct MarkerOutputs {
+    model: Option<Arc<MarkerModel>>,
+    valid: bool,
+    positions: Vec<Point3<f64>>,
+    scratch: MarkerScratch,
+}
+
+impl MarkerOutputs {
+    /// Marks the cached markers stale (after a step, restore or reset).
+    pub fn invalidate(&mut self) {
+        self.valid = false;
+    }
+
+    /// The marker model, fetched with `get` on first use.
+    pub fn model(
+        &mut self,
+        get: impl FnOnce() -> Result<Arc<MarkerModel>>,
+    ) -> Result<&Arc<MarkerModel>> {
+        if self.model.is_none() {
+            self.model = Some(get()?);
+        }
+        Ok(self.model.as_ref().expect("set above"))
+    }
+
+    /// The markers at state `y` (output frame), computed once per state.
+    pub fn positions(
+        &mut self,
+        get: impl FnOnce() -> Result<Arc<MarkerModel>>,
+        y: &[f64],
+    ) -> Result<&[Point3<f64>]> {
+        if !self.valid {
+            let m = self.model(get)?.clone();
+            m.markers(y, &mut self.scratch, &mut self.positions)?;
+            self.valid = true;
+        }
+        Ok(&self.positions)
+    }
+
+    /// The whole skin at state `y` (output frame) into `out`.
+    pub fn skin(
+        &mut self,
+        get: impl FnOnce() -> Result<Arc<MarkerModel>>,
+        y: &[f64],
+        out: &mut Vec<Point3<f64>>,
+    ) -> Result<()> {
+        let m = self.model(get)?.clone();
+        m.skin_vertices(y, &mut self.scratch, out)
+    }
+}
+
+/// The grid size and first frame of an SLP recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SlpFirstFrame {
+    /// Grid rows.
+    pub rows: usize,
+    /// Grid columns.
+    pub cols: usize,
+    /// Time of the first frame [s].
+    pub time: f64,
+    /// Grid points of the first frame in metres (`None`: not tracked), row-major from the top
+    /// row, column 1 on the subject's right.
+    pub points: Vec<Option<Point3<f64>>>,
+}
+
+fn parse_err(path: &Path, line: usize, column: usize, message: impl Into<String>) -> Error {
+    Error::Parse {
+        path: path.display().to_string(),
+        line,
+        column,
+        message: message.into(),
+    }
+}
+
+/// Reads the header and first frame of an SLP recording (CSV, UTF-8): optional `#` comment
+/// lines among which `# grid: RxC` and `# units: m|mm`; a header `time,marker[1].x,
+/// marker[1].y,marker[1].z,...` in row-major grid order; one row per frame (time strictly
+/// increasing, at least two frames; an empty cell = point not tracked). Without `# grid:`
+/// 60 points are a 10 x 6 grid, other counts need the line. Only the first frame (and the
+/// second's time) is read; errors name the line and column.
+pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut grid: Option<(usize, usize, usize)> = None;
+    let mut scale = 1.0;
+    let mut header: Option<(usize, usize)> = None; // (line, points)
+    let mut first: Option<(f64, Vec<Option<Point3<f64>>>)> = None;
+    for (i, raw) in text.lines().enumerate() {
+        let ln = i + 1;
+        let line = raw.trim_end_matches('\r');
+        if line.trim().is_empty() {
+            continue;
+        }
+        if let Some(comment) = line.trim_start().strip_prefix('#') {
+            if header.is_some() {
+                continue;
+            }
+            let Some((key, value)) = comment.split_once(':') else {
+                continue;
+            };
+            let value = value.trim();
+            match key.trim().to_ascii_lowercase().as_str() {
+                "grid" => {
+                    let bad = || {
+                        parse_err(
+                            path,
+                            ln,
+                            1,
+                            format!("grid `{value}`: expected ROWSxCOLS with each in 1..=16"),
+                        )
+                    };
+                    let (r, c) = value
+                        .to_ascii_lowercase()
+                        .split_once('x')
+                        .map(|(r, c)| (r.trim().parse::<usize>(), c.trim().parse::<usize>()))
+                        .ok_or_else(bad)?;
+                    let (r, c) = (r.map_err(|_| bad())?, c.map_err(|_| bad())?);
+                    if !(1..=16).contains(&r) || !(1..=16).contains(&c) {
+                        return Err(bad());
+                    }
+                    grid = Some((r, c, ln));
+                }
+                "units" => {
+                    scale = match value {
+                        "m" => 1.0,
+                        "mm" => 1e-3,
+                        other => {
+                            return Err(parse_err(
+                                path,
+                                ln,
+                                1,
+                                format!("unknown units `{other}`: expected `m` or `mm`"),
+                            ));
+                        }
+                    };
+                }
+                _ => {}
+            }
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let Some((_, n)) = header else {
+            if cells[0] != "time" {
+                return Err(parse_err(
+                    path,
+                    ln,
+                    1,
+                    format!("header starts with `{}`, expected `time`", cells[0]),
+                ));
+            }
+            if cells.len() < 4 || !(cells.len() - 1).is_multiple_of(3) {
+                return Err(parse_err(
+                    path,
+                    ln,
+                    cells.len(),
+                    format!(
+                        "header has {} columns: expected time then x, y, z per grid point",
+                        cells.len()
+                    ),
+                ));
+            }
+            for (k, cell) in cells.iter().enumerate().skip(1) {
+                let want = format!(
+                    "marker[{}].{}",
+                    (k - 1) / 3 + 1,
+                    ["x", "y", "z"][(k - 1) % 3]
+                );
+                if *cell != want {
+                    return Err(parse_err(
+                        path,
+                        ln,
+                        k + 1,
+                        format!("header column `{cell}`, expected `{want}`"),
+                    ));
+                }
+            }
+            header = Some((ln, (cells.len() - 1) / 3));
+            continue;
+        };
+        if cells.len() != 1 + 3 * n {
+            return Err(parse_err(
+                path,
+                ln,
+                cells.len().min(1 + 3 * n) + 1,
+                format!("row has {} cells, the header {}", cells.len(), 1 + 3 * n),
+            ));
+        }
+        let number = |k: usize| -> Result<Option<f64>> {
+            let c = cells[k];
+            if c.is_empty() {
+                return Ok(None);
+            }
+            match c.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(Some(v)),
+                _ => Err(parse_err(
+                    path,
+                    ln,
+                    k + 1,
+                    format!("`{c}` is not a finite number"),
+                )),
+            }
+        };
+        let time = number(0)?.ok_or_else(|| parse_err(path, ln, 1, "empty time cell"))?;
+        match &first {
+            None => {
+                let mut points = Vec::with_capacity(n);
+                for p in 0..n {
+                    let c = [number(1 + 3 * p)?, number(2 + 3 * p)?, number(3 + 3 * p)?];
+                    points.push(match c {
+                        [Some(x), Some(y), Some(z)] => {
+                            Some(Point3::new(x * scale, y * scale, z * scale))
+                        }
+                        _ => None,
+                    });
+                }
+                first = Some((time, points));
+            }
+            Some((t0, points)) => {
+                if time <= *t0 {
+                    return Err(parse_err(
+                        path,
+                        ln,
+                        1,
+                        format!("time {time} does not increase (previous {t0})"),
+                    ));
+                }
+                let n = points.len();
+                let (rows, cols) = match grid {
+                    Some((r, c, gl)) => {
+                        if r * c != n {
+                            return Err(parse_err(
+                                path,
+                                gl,
+                                1,
+                                format!("grid {r}x{c} has {} points, the header {n}", r * c),
+                            ));
+                        }
+                        (r, c)
+                    }
+                    None if n == 60 => (10, 6),
+                    None => {
+                        return Err(parse_err(
+                            path,
+                            header.map(|h| h.0).unwrap_or(0),
+                            1,
+                            format!("{n} grid points: add a `# grid: RxC` line (rows x columns)"),
+                        ));
+                    }
+                };
+                let (time, points) = first.take().expect("matched Some");
+                return Ok(SlpFirstFrame {
+                    rows,
+                    cols,
+                    time,
+                    points,
+                });
+            }
+        }
+    }
+    let line = text.lines().count();
+    Err(parse_err(
+        path,
+        line,
+        0,
+        match (header, first) {
+            (None, _) => "no header row (`time,marker[1].x,...`)",
+            _ => "fewer than two frames",
+        },
+    ))
+}
