@@ -4,8 +4,9 @@
 The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface:
 
 1. the recording (CSV: `# grid: RxC`, `# units: m|mm`, `time,marker[i].x,...`) is read;
-2. the FMU registers its marker grid to the recording's first frame (`slp.reference`), so its
-   `marker[i].x|y|z` outputs are in the recording's frame;
+2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`), or, with
+   `--slp-reference`, the FMU registers its grid and fits its skin to it (`slp.reference`,
+   as `torso fit --skin-fit`) so that its `marker[i].x|y|z` outputs are in the recording's frame;
 3. the breathing frequency comes from the recording's principal displacement (PCA of the
    detrended marker trajectories, Hann-windowed DFT with two-bin interpolation);
 4. a linearised start (two basis runs, rib cage alone and diaphragm alone, time-shifted,
@@ -297,8 +298,10 @@ def fit(args) -> dict:
         "scene.level_of_detail": args.lod,
         "grid.rows": rows,
         "grid.cols": cols,
+        "solver.rtol": args.rtol,
     }
-    model = FmuModel(Path(args.fmu), params, {"slp.reference": str(Path(args.slp).resolve())})
+    strings = {"slp.reference": str(Path(args.slp).resolve())} if args.slp_reference else {}
+    model = FmuModel(Path(args.fmu), params, strings)
     try:
         n_model = model.rows * model.cols
         if n_model != rows * cols:
@@ -306,6 +309,11 @@ def fit(args) -> dict:
         rest, _ = model.run(drive_dict(0.25, [0, 0, 0, 0]), np.array([0.0]))
         rest = rest[0]
         first = tracked[0]
+        if not args.slp_reference:
+            # Rigid registration of the first frame to the rest markers (as `torso fit`);
+            # the cost's pose correction over all frames refines it.
+            rot, t = kabsch(rest[first], rec[0][first])
+            rec = rec @ rot.T + t
         skin_err = float(np.linalg.norm(rec[0][first] - rest[first], axis=1).mean())
         rate = (len(times) - 1) / times[-1]
         f, signal, loadings = breathing_frequency(times, rec)
@@ -365,9 +373,11 @@ def fit(args) -> dict:
             "cost_m": final_cost,
             "initial_cost_m": history[0],
             "best_history_index": best,
-            # The FMU registers and fits its skin to the first frame (slp.reference); this is
-            # the remaining mean distance between its rest markers and that frame.
-            "skin_fit_error_m": {"before": None, "after": skin_err, "skin_fitted": True},
+            # With slp.reference the FMU registers and fits its skin to the first frame: the
+            # remaining mean distance between its rest markers and that frame. Otherwise the
+            # distance after the rigid registration.
+            "skin_fit_error_m": {"before": None if args.slp_reference else skin_err, "after": skin_err,
+                                 "skin_fitted": bool(args.slp_reference)},
             "evaluations": evaluations,
             "wall_s": time.perf_counter() - start,
             "delta_phase": wrap(x[3] - x[2]),
@@ -393,6 +403,9 @@ def main(argv=None) -> int:
     p.add_argument("--posture", default="standing", choices=sorted(POSTURES))
     p.add_argument("--lod", type=int, default=1)
     p.add_argument("--max-evals", type=int, default=120)
+    p.add_argument("--rtol", type=float, default=1e-6, help="solver.rtol of the FMU")
+    p.add_argument("--slp-reference", action="store_true",
+                   help="register and fit the skin inside the FMU (slp.reference), as `torso fit --skin-fit`")
     args = p.parse_args(argv)
     try:
         r = fit(args)

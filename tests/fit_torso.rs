@@ -18,6 +18,8 @@ fn config(subject: Subject) -> Config {
         ..Config::default()
     };
     c.scene.level_of_detail = 0;
+    // 1.5x faster than 1e-6 with the same tidal volume to 1 mL.
+    c.solver.rtol = 1e-4;
     c
 }
 

@@ -110,7 +110,10 @@ pub struct FitArgs {
     pub seed: u64,
     /// Register the grid and fit the skin to the first frame inside the model
     /// (`slp.reference`, thesis 3.2) rather than a rigid registration alone; for subjects
-    /// whose shape differs from the model's.
+    /// whose shape differs from the model's. The model fits its rest pose to the frame, so
+    /// any difference between its rest pose and its end-expiratory pose stays in the skin
+    /// as an offset the drive cannot remove (about 2.5 mm with the current drive, whose
+    /// expiratory muscles are active at end-expiration).
     #[arg(long)]
     pub skin_fit: bool,
 }

@@ -3,11 +3,11 @@
 //! variability and dropped points.
 //!
 //! Timing follows the fit's convention (see [`super::fitting`]): the model is driven from
-//! rest for one period, then the recording starts at the next end-expiration (rib-cage
-//! activation at its minimum, as the thesis's recordings start, figure 3.4), so the true
-//! phases, taken at the first frame, are -pi/2 for the rib cage and -pi/2 + (phi_d - phi_r)
-//! for the diaphragm. Variability: each breath's period and amplitudes are scaled by
-//! 1 + v N(0, 1) (clamped to [0.5, 1.5]); the drive changes at the breath boundaries
+//! rest, and the recording starts at end-expiration (the smallest lung volume in the period
+//! after the first rib-cage activation minimum past one period), as the thesis's recordings
+//! start (figure 3.4); the true phases are the drive's phases at that first frame.
+//! Variability: from the second breath on, each breath's period and amplitudes are scaled
+//! by 1 + v N(0, 1) (clamped to [0.5, 1.5]); the drive changes at the breath boundaries
 //! (rib-cage activation minima) with phases chosen so the waves are continuous.
 
 use super::Recording;
@@ -139,20 +139,23 @@ fn random_camera(rng: &mut Pcg64, target: &Point3<f64>) -> RigidTransform {
     }
 }
 
-/// The drive schedule: one settling period at the nominal drive, then breaths starting at
-/// rib-cage activation minima, each with its own period and amplitude scale.
-fn schedule(o: &SynthOptions, rng: &mut Pcg64) -> (Vec<(f64, Drive)>, f64) {
-    let d = o.drive;
+/// The first rib-cage activation minimum (phase -pi/2 mod 2 pi) at or after one period.
+fn first_activation_minimum(d: &Drive) -> f64 {
     let f = d.frequency;
-    // First rib-cage minimum (phase -pi/2 mod 2 pi) at or after one period.
     let settle = 1.0 / f;
     let phase_at = 2.0 * PI * f * settle + d.ribs.phase;
-    let to_min = (-PI / 2.0 - phase_at).rem_euclid(2.0 * PI) / (2.0 * PI * f);
-    let start = settle + to_min;
+    settle + (-PI / 2.0 - phase_at).rem_euclid(2.0 * PI) / (2.0 * PI * f)
+}
+
+/// The drive schedule: the nominal drive, then (with variability) one drive per breath
+/// from `first_boundary` on, each breath starting at a rib-cage activation minimum with its
+/// own period and amplitude scale.
+fn schedule(o: &SynthOptions, rng: &mut Pcg64, first_boundary: f64, end: f64) -> Vec<(f64, Drive)> {
+    let d = o.drive;
+    let f = d.frequency;
     let mut segments = vec![(0.0, d)];
     if o.variability > 0.0 {
-        let mut t = start;
-        let end = start + o.duration + 1.0 / f;
+        let mut t = first_boundary;
         while t < end {
             let scale = |rng: &mut Pcg64| (1.0 + o.variability * rng.normal()).clamp(0.5, 1.5);
             let fk = (f / scale(rng)).clamp(0.05, 2.0);
@@ -170,14 +173,42 @@ fn schedule(o: &SynthOptions, rng: &mut Pcg64) -> (Vec<(f64, Drive)>, f64) {
             t += 1.0 / fk;
         }
     }
-    (segments, start)
+    segments
+}
+
+/// End-expiration: the time of the smallest lung volume within one period from the first
+/// rib-cage activation minimum, under the nominal drive (one model run).
+fn end_expiration(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<f64> {
+    let d = o.drive;
+    let a = first_activation_minimum(&d);
+    let n = (o.rate / d.frequency).ceil() as usize;
+    let times: Vec<f64> = (0..=n).map(|k| a + k as f64 / o.rate).collect();
+    let mut traj = Trajectory::default();
+    model.run(&[(0.0, d)], &times, true, &mut traj)?;
+    let k = traj
+        .lung_volume
+        .iter()
+        .enumerate()
+        .fold(
+            (0, f64::INFINITY),
+            |b, (i, &v)| if v < b.1 { (i, v) } else { b },
+        )
+        .0;
+    Ok(times[k])
 }
 
 /// Generates a synthetic recording from `model` (see the module doc).
 pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synthetic> {
     o.validate()?;
     let mut rng = Pcg64::new(o.seed, 3);
-    let (segments, start) = schedule(o, &mut rng);
+    let start = end_expiration(model, o)?;
+    let f = o.drive.frequency;
+    let segments = schedule(
+        o,
+        &mut rng,
+        first_activation_minimum(&o.drive) + 1.0 / f,
+        start + o.duration + 1.0 / f,
+    );
     let n = (o.duration * o.rate).round() as usize + 1;
     let times: Vec<f64> = (0..n).map(|i| i as f64 / o.rate).collect();
     let model_times: Vec<f64> = times.iter().map(|t| start + t).collect();
@@ -211,10 +242,12 @@ pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synt
         })
         .collect();
     let d = o.drive;
+    // Phases of the nominal drive at the first frame.
+    let at_start = |phase: f64| wrap_angle(2.0 * PI * d.frequency * start + phase);
     let mut truth = d;
-    truth.ribs.phase = -PI / 2.0;
-    truth.diaphragm.phase = wrap_angle(-PI / 2.0 + d.diaphragm.phase - d.ribs.phase);
-    truth.abdominals.phase = wrap_angle(-PI / 2.0 + d.abdominals.phase - d.ribs.phase);
+    truth.ribs.phase = at_start(d.ribs.phase);
+    truth.diaphragm.phase = at_start(d.diaphragm.phase);
+    truth.abdominals.phase = at_start(d.abdominals.phase);
     Ok(Synthetic {
         recording: Recording {
             grid: model.grid(),
