@@ -1,6 +1,7 @@
 //! The `torso` command-line tool: one file per subcommand.
 
 pub mod common;
+pub mod fit;
 pub mod mesh;
 pub mod simulate;
 pub mod skin;
@@ -8,6 +9,7 @@ pub mod skin;
 use clap::{Parser, Subcommand};
 
 mod fmu;
+pub mod synth;
 pub mod validate;
 
 /// Breathing torso simulator: simulate, fit SLP recordings, validate against spirometry.
@@ -32,6 +34,12 @@ pub enum Command {
     Validate(validate::ValidateArgs),
     /// Write a synthetic spirogram (from a curve or a sinusoidal model).
     SynthSpirometry(validate::SynthSpirometryArgs),
+    /// Write a synthetic SLP recording with known drive parameters and its ground truth.
+    Synth(synth::SynthArgs),
+    /// Fit the model to an SLP recording (registration, frequency, amplitudes and phases).
+    Fit(fit::FitArgs),
+    /// Package the FMU, simulate the default subject and fit the bundled recording.
+    Demo(fit::DemoArgs),
     /// Write the rest geometry (skin, ribs, sternum, abdomen, marker grid) as OBJ files.
     ExportObj(skin::ExportObjArgs),
     /// Render the skin and markers at rest and at end-inspiration as a PNG.
@@ -56,6 +64,9 @@ pub fn main() -> i32 {
         Command::Fmu(args) => fmu::run(args),
         Command::Validate(a) => validate::run(&a),
         Command::SynthSpirometry(a) => validate::run_synth(&a),
+        Command::Synth(a) => synth::main(&a),
+        Command::Fit(a) => fit::main(&a),
+        Command::Demo(a) => fit::demo(&a),
         Command::ExportObj(a) => skin::export_obj(&a),
         Command::RenderSkin(a) => skin::render_skin(&a),
         Command::Mesh { command } => mesh::run(command),

@@ -1,1 +1,26 @@
-//! (module under construction)
+//! Fitting the model to structured-light plethysmography (SLP) recordings (thesis 3.4 and
+//! 4.3): the recording format, synthetic recordings with known parameters, the breathing
+//! frequency of a recording, derivative-free optimisers, the fit loop and its report.
+//!
+//! | file | owns |
+//! |---|---|
+//! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
+//! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
+//! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
+//! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
+//! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
+//! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
+//! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
+
+pub mod fitting;
+pub mod optimize;
+pub mod principal;
+pub mod recording;
+pub mod report;
+pub mod source;
+pub mod synth;
+
+pub use fitting::{Fit, FitOptions, Method, fit_recording};
+pub use recording::{Recording, Units};
+pub use source::{MarkerSource, TorsoMarkers, Trajectory};
+pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

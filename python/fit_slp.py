@@ -1,0 +1,423 @@
+#!/usr/bin/env python3
+"""Fit BreathingTorso.fmu to an SLP recording through fmpy (thesis 3.4 and 4.3).
+
+The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface:
+
+1. the recording (CSV: `# grid: RxC`, `# units: m|mm`, `time,marker[i].x,...`) is read;
+2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`), or, with
+   `--slp-reference`, the FMU registers its grid and fits its skin to it (`slp.reference`,
+   as `torso fit --skin-fit`) so that its `marker[i].x|y|z` outputs are in the recording's frame;
+3. the breathing frequency comes from the recording's principal displacement (PCA of the
+   detrended marker trajectories, Hann-windowed DFT with two-bin interpolation);
+4. a linearised start (two basis runs, rib cage alone and diaphragm alone, time-shifted,
+   non-negative least squares) then scipy's bounded Nelder-Mead over
+   (drive.ribs.amplitude, drive.diaphragm.amplitude, drive.ribs.phase, drive.diaphragm.phase);
+   cost = mean marker-to-grid distance over frames and tracked points (eq. 3.1) after one
+   rigid pose correction fitted over all frames (Kabsch), as in the native fit;
+5. one FMU instance is reused: `fmi2Reset` before each run, drive parameters as start values,
+   one period of settling, then the recording window at the recording's frame times.
+
+Writes result.json with the FMI parameter names, `cost_m`, `initial_cost_m`,
+`skin_fit_error_m`, `evaluations`, `wall_s`, `delta_phase` and the fitted lung-volume CSV.
+
+Usage: python fit_slp.py --fmu fmu/BreathingTorso.fmu --slp rec.csv --out result.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+POSTURES = {"standing": 0, "sitting": 1, "supine": 2}
+SEXES = {"male": 0, "female": 1}
+AMPLITUDE_RANGE = (0.0, 1.0)
+BASIS_AMPLITUDE = 0.3
+SHIFTS = 24
+
+
+class RecordingError(ValueError):
+    """A malformed recording: the message names file, line and column."""
+
+
+def read_recording(path: Path):
+    """Reads the recording format of the project (see the module doc). Returns
+    (grid, times [s], points [frames, P, 3] in metres with NaN for untracked points)."""
+    grid, scale = None, 1.0
+    lines = path.read_text(encoding="utf-8").splitlines()
+    k = 0
+    while k < len(lines) and (lines[k].startswith("#") or not lines[k].strip()):
+        body = lines[k][1:].strip() if lines[k].startswith("#") else ""
+        if ":" in body:
+            key, value = (s.strip() for s in body.split(":", 1))
+            if key.lower() == "grid":
+                r, c = value.lower().split("x")
+                grid = (int(r), int(c))
+            elif key.lower() == "units":
+                if value not in ("m", "mm"):
+                    raise RecordingError(f"{path}:{k + 1}:1: unknown units `{value}`")
+                scale = 1e-3 if value == "mm" else 1.0
+        k += 1
+    if k >= len(lines):
+        raise RecordingError(f"{path}:0:0: no header row")
+    header = lines[k].split(",")
+    points = (len(header) - 1) // 3
+    if grid is None:
+        if points != 60:
+            raise RecordingError(f"{path}:1:1: add a `# grid: ROWSxCOLS` line")
+        grid = (10, 6)
+    times, frames = [], []
+    for no, line in enumerate(lines[k + 1 :], start=k + 2):
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise RecordingError(f"{path}:{no}:1: ragged row")
+        values = np.array([float(c) if c.strip() else np.nan for c in cells])
+        times.append(values[0])
+        frames.append(values[1:].reshape(points, 3) * scale)
+    return grid, np.array(times), np.array(frames)
+
+
+def detrend(x: np.ndarray) -> np.ndarray:
+    """Removes the least-squares line along axis 0."""
+    n = x.shape[0]
+    t = np.arange(n) - (n - 1) / 2.0
+    mean = x.mean(axis=0)
+    slope = (t[:, None] * (x - mean)).sum(axis=0) / (t**2).sum()
+    return x - mean - slope * t[:, None]
+
+
+def fill_gaps(times: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Linear interpolation of NaN gaps in each column (nearest value at the ends)."""
+    out = x.copy()
+    for j in range(x.shape[1]):
+        ok = ~np.isnan(x[:, j])
+        if ok.sum() >= 2:
+            out[:, j] = np.interp(times, times[ok], x[ok, j])
+        else:
+            out[:, j] = 0.0
+    return out
+
+
+def breathing_frequency(times: np.ndarray, pts: np.ndarray):
+    """Principal displacement (first principal component of the detrended trajectories) and
+    its frequency: Hann-windowed DFT over 0.1-1 Hz, two-bin interpolation."""
+    n = len(times)
+    fs = (n - 1) / (times[-1] - times[0])
+    x = detrend(fill_gaps(times, pts.reshape(n, -1)))
+    _, _, vt = np.linalg.svd(x, full_matrices=False)
+    axis = vt[0]
+    signal = x @ axis
+    s = detrend(signal[:, None])[:, 0]
+    w = 0.5 * (1.0 - np.cos(2.0 * np.pi * np.arange(n) / n))
+    mags = np.abs(np.fft.rfft(s * w))
+    lo, hi = max(1, int(0.1 * n / fs)), min(len(mags) - 2, int(math.ceil(1.0 * n / fs)))
+    k = lo + int(np.argmax(mags[lo : hi + 1]))
+    left, right = mags[k - 1], mags[k + 1]
+    if right >= left:
+        a = right / mags[k]
+        delta = (2 * a - 1) / (a + 1)
+    else:
+        a = left / mags[k]
+        delta = -(2 * a - 1) / (a + 1)
+    return (k + float(np.clip(delta, -1, 1))) * fs / n, signal, axis.reshape(-1, 3)
+
+
+def kabsch(model: np.ndarray, rec: np.ndarray):
+    """Rigid transform (R, t) minimising sum |R rec + t - model|^2 (Umeyama 1991)."""
+    mm, mr = model.mean(axis=0), rec.mean(axis=0)
+    cov = (model - mm).T @ (rec - mr) / len(model)
+    u, _, vt = np.linalg.svd(cov)
+    d = np.eye(3)
+    if np.linalg.det(u) * np.linalg.det(vt) < 0:
+        d[2, 2] = -1.0
+    r = u @ d @ vt
+    return r, mm - r @ mr
+
+
+def wrap(a: float) -> float:
+    """Wraps an angle to (-pi, pi]."""
+    w = (a + math.pi) % (2 * math.pi) - math.pi
+    return w + 2 * math.pi if w <= -math.pi else w
+
+
+class FmuModel:
+    """One BreathingTorso FMU instance, reset before each run."""
+
+    def __init__(self, fmu_path: Path, params: dict, strings: dict):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.md = read_model_description(str(fmu_path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.kind = {v.name: v.type for v in self.md.modelVariables}
+        self.unzip = extract(str(fmu_path))
+        self.fmu = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=self.unzip,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName="fit_slp",
+        )
+        self.fmu.instantiate()
+        self.params, self.strings = params, strings
+        self.rows, self.cols = int(params["grid.rows"]), int(params["grid.cols"])
+        n = self.rows * self.cols
+        self.marker_vrs = [self.vr[f"marker[{i + 1}].{a}"] for i in range(n) for a in "xyz"]
+        self.volume_vr = self.vr["volume.lung"]
+        self.runs = 0
+        self.fresh = True
+
+    def _set(self, values: dict):
+        for name, value in values.items():
+            kind = self.kind[name]
+            if kind == "Real":
+                self.fmu.setReal([self.vr[name]], [float(value)])
+            elif kind in ("Integer", "Enumeration"):
+                self.fmu.setInteger([self.vr[name]], [int(value)])
+            elif kind == "Boolean":
+                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+            else:
+                self.fmu.setString([self.vr[name]], [str(value)])
+
+    def run(self, drive: dict, times: np.ndarray, volumes: bool = False):
+        """Markers [len(times), P, 3] (and lung volumes) at model times `times`."""
+        if not self.fresh:
+            self.fmu.reset()
+        self.fresh = False
+        self.runs += 1
+        self._set(self.params)
+        self._set(self.strings)
+        self._set(drive)
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
+        out = np.empty((len(times), self.rows * self.cols, 3))
+        vol = np.empty(len(times))
+        t = 0.0
+        for k, target in enumerate(times):
+            if target > t:
+                self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
+                t = target
+            out[k] = np.array(self.fmu.getReal(self.marker_vrs)).reshape(-1, 3)
+            if volumes:
+                vol[k] = self.fmu.getReal([self.volume_vr])[0]
+        return out, vol
+
+    def close(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def drive_dict(f: float, x) -> dict:
+    return {
+        "drive.frequency": f,
+        "drive.ribs.amplitude": x[0],
+        "drive.diaphragm.amplitude": x[1],
+        "drive.ribs.phase": x[2],
+        "drive.diaphragm.phase": x[3],
+        "drive.abdominals.amplitude": 0.0,
+        "drive.abdominals.phase": 0.0,
+    }
+
+
+def aligned_cost(model_pts: np.ndarray, rec: np.ndarray, tracked: np.ndarray) -> float:
+    m, r = model_pts[tracked], rec[tracked]
+    rot, t = kabsch(m, r)
+    return float(np.linalg.norm(r @ rot.T + t - m, axis=1).mean())
+
+
+def linearised_start(model, rest, rec, tracked, times, f, psi, rate):
+    """Two basis runs and the best time-shifted non-negative least-squares combination."""
+    period = 1.0 / f
+    h = 1.0 / rate
+    n = int(math.ceil((times[-1] + period) / h)) + 2
+    grid = period + h * np.arange(n)
+    bases = []
+    for fam in range(2):
+        x = [BASIS_AMPLITUDE if fam == 0 else 0.0, BASIS_AMPLITUDE if fam == 1 else 0.0, psi, psi]
+        pts, _ = model.run(drive_dict(f, x), grid)
+        bases.append(pts - rest)
+    stride = max(1, len(times) // 300)
+    idx = np.arange(0, len(times), stride)
+    r = np.where(tracked[idx][..., None], rec[idx], np.nan)
+    r = r - np.nanmean(r, axis=0)
+    mask = ~np.isnan(r[..., 0])
+    r = np.nan_to_num(r)
+
+    def sample(b, s):
+        tt = times[idx] + s * period / SHIFTS
+        x = np.clip(tt / h, 0, n - 1)
+        j = np.minimum(np.floor(x).astype(int), n - 2)
+        w = (x - j)[:, None, None]
+        d = b[j] * (1 - w) + b[j + 1] * w
+        return (d - d.mean(axis=0)) * mask[..., None]
+
+    dr = [sample(bases[0], s) for s in range(SHIFTS)]
+    dd = [sample(bases[1], s) for s in range(SHIFTS)]
+    best = (math.inf, None)
+    rr = float((r * r).sum())
+    for sr, a in enumerate(dr):
+        aa, ar = float((a * a).sum()), float((a * r).sum())
+        for sd, b in enumerate(dd):
+            bb, ab, br = float((b * b).sum()), float((a * b).sum()), float((b * r).sum())
+            cands = [(max(ar / aa, 0.0) if aa > 0 else 0.0, 0.0), (0.0, max(br / bb, 0.0) if bb > 0 else 0.0)]
+            det = aa * bb - ab * ab
+            if det > 1e-12 * aa * bb:
+                cr, cd = (ar * bb - br * ab) / det, (br * aa - ar * ab) / det
+                if cr >= 0 and cd >= 0:
+                    cands.append((cr, cd))
+            for cr, cd in cands:
+                res = rr - 2 * (cr * ar + cd * br) + cr * cr * aa + 2 * cr * cd * ab + cd * cd * bb
+                if res < best[0]:
+                    ph = lambda s: psi + wrap(2 * math.pi * s / SHIFTS)
+                    best = (res, [float(np.clip(cr * BASIS_AMPLITUDE, *AMPLITUDE_RANGE)),
+                                  float(np.clip(cd * BASIS_AMPLITUDE, *AMPLITUDE_RANGE)), ph(sr), ph(sd)])
+    return best[1]
+
+
+def fit(args) -> dict:
+    from scipy.optimize import minimize
+
+    start = time.perf_counter()
+    (rows, cols), times_abs, rec = read_recording(Path(args.slp))
+    times = times_abs - times_abs[0]
+    tracked = ~np.isnan(rec[..., 0])
+    params = {
+        "subject.sex": SEXES[args.sex],
+        "subject.age": args.age,
+        "subject.stature": args.stature,
+        "subject.mass": args.mass,
+        "subject.breast_size": args.breast_size,
+        "posture": POSTURES[args.posture],
+        "scene.level_of_detail": args.lod,
+        "grid.rows": rows,
+        "grid.cols": cols,
+        "solver.rtol": args.rtol,
+    }
+    strings = {"slp.reference": str(Path(args.slp).resolve())} if args.slp_reference else {}
+    model = FmuModel(Path(args.fmu), params, strings)
+    try:
+        n_model = model.rows * model.cols
+        if n_model != rows * cols:
+            raise RecordingError(f"recording grid {rows}x{cols} does not match the model's {model.rows}x{model.cols}")
+        rest, _ = model.run(drive_dict(0.25, [0, 0, 0, 0]), np.array([0.0]))
+        rest = rest[0]
+        first = tracked[0]
+        if not args.slp_reference:
+            # Rigid registration of the first frame to the rest markers (as `torso fit`);
+            # the cost's pose correction over all frames refines it.
+            rot, t = kabsch(rest[first], rec[0][first])
+            rec = rec @ rot.T + t
+        skin_err = float(np.linalg.norm(rec[0][first] - rest[first], axis=1).mean())
+        rate = (len(times) - 1) / times[-1]
+        f, signal, loadings = breathing_frequency(times, rec)
+        # Phase of the breath's fundamental: the basis runs' phase (the shift scan covers
+        # the whole period, so the principal axis's sign does not matter).
+        c = np.stack([np.ones_like(times), np.sin(2 * np.pi * f * times), np.cos(2 * np.pi * f * times)], 1)
+        coef = np.linalg.lstsq(c, signal, rcond=None)[0]
+        psi = math.atan2(coef[2], coef[1])
+        settle = 1.0 / f
+        model_times = settle + times
+        budget = args.max_evals - 2
+        x0 = linearised_start(model, rest, rec, tracked, times, f, psi, rate)
+        x0[2], x0[3] = wrap(x0[2]), wrap(x0[3])
+        # Each phase searched within pi of its start (inside the drive's [-2 pi, 2 pi]).
+        lo = [AMPLITUDE_RANGE[0]] * 2 + [x0[2] - math.pi, x0[3] - math.pi]
+        hi = [AMPLITUDE_RANGE[1]] * 2 + [x0[2] + math.pi, x0[3] + math.pi]
+        history = []
+
+        def cost(x):
+            x = np.clip(x, lo, hi)
+            pts, _ = model.run(drive_dict(f, x), model_times)
+            value = aligned_cost(pts, rec, tracked)
+            history.append(value)
+            return value
+
+        span = np.array(hi) - np.array(lo)
+        simplex = [np.array(x0)]
+        for i in range(4):
+            v = np.array(x0, dtype=float)
+            step = 0.06 * span[i]
+            v[i] = v[i] + step if v[i] + step <= hi[i] else v[i] - step
+            simplex.append(v)
+        res = minimize(
+            cost,
+            x0,
+            method="Nelder-Mead",
+            bounds=list(zip(lo, hi)),
+            # Stopping as the native fit: simplex within 0.004 and costs within 0.4 um.
+            options={"maxfev": budget, "initial_simplex": np.array(simplex), "xatol": 4e-3, "fatol": 4e-7,
+                     "adaptive": True},
+        )
+        x = np.clip(res.x, lo, hi)
+        best = int(np.argmin(history))
+        pts, vol = model.run(drive_dict(f, x), model_times, volumes=True)
+        final_cost = aligned_cost(pts, rec, tracked)
+        evaluations = len(history) + 2
+    finally:
+        model.close()
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    csv = out.with_name(out.stem + "_lung_volume.csv")
+    with csv.open("w") as fh:
+        fh.write("time,volume.lung\n")
+        for t, v in zip(times, vol):
+            fh.write(f"{t:.6f},{v:.6f}\n")
+    result = drive_dict(f, [x[0], x[1], wrap(x[2]), wrap(x[3])])
+    result.update(
+        {
+            "cost_m": final_cost,
+            "initial_cost_m": history[0],
+            "best_history_index": best,
+            # With slp.reference the FMU registers and fits its skin to the first frame: the
+            # remaining mean distance between its rest markers and that frame. Otherwise the
+            # distance after the rigid registration.
+            "skin_fit_error_m": {"before": None if args.slp_reference else skin_err, "after": skin_err,
+                                 "skin_fitted": bool(args.slp_reference)},
+            "evaluations": evaluations,
+            "wall_s": time.perf_counter() - start,
+            "delta_phase": wrap(x[3] - x[2]),
+            "lung_volume_csv": str(csv),
+            "method": "scipy-nelder-mead",
+            "recording": str(args.slp),
+        }
+    )
+    out.write_text(json.dumps(result, indent=2) + "\n")
+    return result
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--fmu", default="fmu/BreathingTorso.fmu")
+    p.add_argument("--slp", required=True)
+    p.add_argument("--out", default="out/fit_fmpy/result.json")
+    p.add_argument("--sex", default="male", choices=sorted(SEXES))
+    p.add_argument("--age", type=float, default=30.0)
+    p.add_argument("--stature", type=float, default=1.75)
+    p.add_argument("--mass", type=float, default=75.0)
+    p.add_argument("--breast-size", type=float, default=0.0)
+    p.add_argument("--posture", default="standing", choices=sorted(POSTURES))
+    p.add_argument("--lod", type=int, default=1)
+    p.add_argument("--max-evals", type=int, default=120)
+    p.add_argument("--rtol", type=float, default=1e-6, help="solver.rtol of the FMU")
+    p.add_argument("--slp-reference", action="store_true",
+                   help="register and fit the skin inside the FMU (slp.reference), as `torso fit --skin-fit`")
+    args = p.parse_args(argv)
+    try:
+        r = fit(args)
+    except RecordingError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    print(json.dumps({k: r[k] for k in ("drive.frequency", "drive.ribs.amplitude", "drive.diaphragm.amplitude",
+                                         "delta_phase", "cost_m", "evaluations", "wall_s")}, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,471 @@
+//! SLP recordings: the CSV format shared with scripts outside the project, read and written
+//! with errors naming the file, line and column of the first problem.
+//!
+//! Format (UTF-8): optional leading comment lines starting with `#`, among them
+//! `# grid: RxC` (rows x columns) and `# units: m` or `# units: mm`; a header row `time`
+//! followed by `marker[i].x,marker[i].y,marker[i].z` for i = 1..R*C (row-major from the top
+//! row, column 1 on the subject's right); one row per frame, time in seconds, strictly
+//! increasing. An empty x, y, z triple means the point was not tracked in that frame.
+//! Without `# grid:` a 60-point recording is a 10 x 6 grid; other sizes need the line.
+//! Positions are held in metres whatever the file's unit.
+
+use crate::{Error, Result};
+use nalgebra::Point3;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Largest grid side accepted (the marker grid's own limit).
+pub const MAX_GRID_SIDE: usize = 16;
+
+/// Length unit of a recording file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Units {
+    /// Metres.
+    Metres,
+    /// Millimetres.
+    Millimetres,
+}
+
+impl Units {
+    /// Metres per file unit.
+    pub fn to_metres(self) -> f64 {
+        match self {
+            Units::Metres => 1.0,
+            Units::Millimetres => 1e-3,
+        }
+    }
+
+    /// The spelling used in `# units:` lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            Units::Metres => "m",
+            Units::Millimetres => "mm",
+        }
+    }
+}
+
+/// A structured-light recording: grid points over time, in metres.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    /// Grid size (rows, columns).
+    pub grid: (usize, usize),
+    /// Frame times [s], strictly increasing.
+    pub times: Vec<f64>,
+    /// Per frame, per grid point (row-major from the top row): the position [m], or `None`
+    /// when the point was not tracked.
+    pub frames: Vec<Vec<Option<Point3<f64>>>>,
+    /// Unit of the file it was read from (or is to be written in).
+    pub units: Units,
+}
+
+fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
+    Error::Parse {
+        path: path.to_string(),
+        line,
+        column,
+        message: message.into(),
+    }
+}
+
+/// The expected header cell of field `k` (0 = time).
+fn header_name(k: usize) -> String {
+    if k == 0 {
+        "time".into()
+    } else {
+        let i = (k - 1) / 3 + 1;
+        format!("marker[{i}].{}", ["x", "y", "z"][(k - 1) % 3])
+    }
+}
+
+/// Splits a line on commas, returning each cell with its 1-based character column.
+fn cells(line: &str) -> Vec<(usize, &str)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for (i, c) in line.char_indices() {
+        if c == ',' {
+            out.push((start, &line[start..i]));
+            start = i + 1;
+        }
+    }
+    out.push((start, &line[start..]));
+    out.into_iter()
+        .map(|(b, s)| (line[..b].chars().count() + 1, s))
+        .collect()
+}
+
+/// Parses `RxC` (also `R x C`, `R X C`).
+fn parse_grid(s: &str) -> Option<(usize, usize)> {
+    let lower = s.trim().to_ascii_lowercase();
+    let (r, c) = lower.split_once('x')?;
+    Some((r.trim().parse().ok()?, c.trim().parse().ok()?))
+}
+
+impl Recording {
+    /// Number of grid points.
+    pub fn points(&self) -> usize {
+        self.grid.0 * self.grid.1
+    }
+
+    /// Mean sampling rate [Hz] from the mean frame interval.
+    pub fn rate(&self) -> f64 {
+        let n = self.times.len();
+        if n < 2 {
+            return 0.0;
+        }
+        (n - 1) as f64 / (self.times[n - 1] - self.times[0])
+    }
+
+    /// Duration from the first to the last frame [s].
+    pub fn duration(&self) -> f64 {
+        self.times.last().unwrap_or(&0.0) - self.times.first().unwrap_or(&0.0)
+    }
+
+    /// Tracked points over all frames.
+    pub fn tracked(&self) -> usize {
+        self.frames.iter().flatten().filter(|p| p.is_some()).count()
+    }
+
+    /// Reads a recording file.
+    pub fn read(path: &Path) -> Result<Recording> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Recording::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses recording text; `name` is used in error messages.
+    pub fn parse(text: &str, name: &str) -> Result<Recording> {
+        let mut grid: Option<(usize, usize)> = None;
+        let mut grid_line = 0;
+        let mut units = Units::Metres;
+        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
+        // Leading comments, then the header.
+        let (header_no, header) = loop {
+            let Some((no, raw)) = lines.next() else {
+                return Err(parse_err(
+                    name,
+                    0,
+                    0,
+                    "no header row (`time,marker[1].x,...`) found",
+                ));
+            };
+            let line = raw.trim_end_matches('\r');
+            let Some(comment) = line.strip_prefix('#') else {
+                if line.trim().is_empty() {
+                    continue;
+                }
+                break (no, line);
+            };
+            let body = comment.trim();
+            let col_of = |key: &str| line.find(key).map_or(1, |b| b + 1);
+            if let Some((key, value)) = body.split_once(':') {
+                match key.trim().to_ascii_lowercase().as_str() {
+                    "grid" => {
+                        let g = parse_grid(value).filter(|&(r, c)| {
+                            (1..=MAX_GRID_SIDE).contains(&r) && (1..=MAX_GRID_SIDE).contains(&c)
+                        });
+                        match g {
+                            Some(g) => {
+                                grid = Some(g);
+                                grid_line = no;
+                            }
+                            None => {
+                                return Err(parse_err(
+                                    name,
+                                    no,
+                                    col_of(value.trim()),
+                                    format!(
+                                        "bad grid `{}`: expected ROWSxCOLS with 1..{MAX_GRID_SIDE} each, e.g. `# grid: 10x6`",
+                                        value.trim()
+                                    ),
+                                ));
+                            }
+                        }
+                    }
+                    "units" => {
+                        units = match value.trim() {
+                            "m" => Units::Metres,
+                            "mm" => Units::Millimetres,
+                            other => {
+                                return Err(parse_err(
+                                    name,
+                                    no,
+                                    col_of(other),
+                                    format!("unknown units `{other}`: expected `m` or `mm`"),
+                                ));
+                            }
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        };
+
+        // Header.
+        let head = cells(header);
+        for (k, (col, cell)) in head.iter().enumerate() {
+            let want = header_name(k);
+            if cell.trim() != want {
+                return Err(parse_err(
+                    name,
+                    header_no,
+                    *col,
+                    format!(
+                        "header cell {} is `{}`, expected `{want}`",
+                        k + 1,
+                        cell.trim()
+                    ),
+                ));
+            }
+        }
+        if head.len() < 4 || !(head.len() - 1).is_multiple_of(3) {
+            let col = header.chars().count() + 1;
+            return Err(parse_err(
+                name,
+                header_no,
+                col,
+                format!(
+                    "header ends after {} cells, expected `time` then x, y, z for each grid point (next: `{}`)",
+                    head.len(),
+                    header_name(head.len())
+                ),
+            ));
+        }
+        let points = (head.len() - 1) / 3;
+        let grid = match grid {
+            Some((r, c)) if r * c == points => (r, c),
+            Some((r, c)) => {
+                return Err(parse_err(
+                    name,
+                    grid_line,
+                    1,
+                    format!(
+                        "grid {r}x{c} has {} points but the header has {points}",
+                        r * c
+                    ),
+                ));
+            }
+            None if points == 60 => (10, 6),
+            None => {
+                return Err(parse_err(
+                    name,
+                    1,
+                    1,
+                    format!(
+                        "the header has {points} grid points: add a `# grid: ROWSxCOLS` line before it (only 60-point recordings default to 10x6)"
+                    ),
+                ));
+            }
+        };
+
+        // Frames.
+        let scale = units.to_metres();
+        let mut times = Vec::new();
+        let mut frames = Vec::new();
+        let mut blank_at: Option<usize> = None;
+        for (no, raw) in lines {
+            let line = raw.trim_end_matches('\r');
+            if line.trim().is_empty() {
+                blank_at.get_or_insert(no);
+                continue;
+            }
+            if let Some(b) = blank_at {
+                return Err(parse_err(name, b, 1, "empty line between frames"));
+            }
+            if line.starts_with('#') {
+                return Err(parse_err(
+                    name,
+                    no,
+                    1,
+                    "comment lines are only allowed before the header",
+                ));
+            }
+            let row = cells(line);
+            if row.len() != head.len() {
+                let col = if row.len() > head.len() {
+                    row[head.len()].0
+                } else {
+                    line.chars().count() + 1
+                };
+                return Err(parse_err(
+                    name,
+                    no,
+                    col,
+                    format!(
+                        "ragged row: {} cells, the header has {}",
+                        row.len(),
+                        head.len()
+                    ),
+                ));
+            }
+            let number = |k: usize| -> Result<Option<f64>> {
+                let (col, cell) = row[k];
+                let s = cell.trim();
+                if s.is_empty() {
+                    return Ok(None);
+                }
+                let v: f64 = s.parse().map_err(|_| {
+                    parse_err(
+                        name,
+                        no,
+                        col,
+                        format!("{}: `{s}` is not a number", header_name(k)),
+                    )
+                })?;
+                if !v.is_finite() {
+                    return Err(parse_err(
+                        name,
+                        no,
+                        col,
+                        format!(
+                            "{}: `{s}` is not finite (leave the cell empty for an untracked point)",
+                            header_name(k)
+                        ),
+                    ));
+                }
+                Ok(Some(v))
+            };
+            let t = number(0)?.ok_or_else(|| parse_err(name, no, 1, "time: empty cell"))?;
+            if let Some(&prev) = times.last()
+                && t <= prev
+            {
+                return Err(parse_err(
+                    name,
+                    no,
+                    1,
+                    format!("time {t} s does not increase (previous frame: {prev} s)"),
+                ));
+            }
+            let mut frame = Vec::with_capacity(points);
+            for i in 0..points {
+                let k = 1 + 3 * i;
+                let xyz = [number(k)?, number(k + 1)?, number(k + 2)?];
+                match xyz {
+                    [Some(x), Some(y), Some(z)] => {
+                        frame.push(Some(Point3::new(x * scale, y * scale, z * scale)))
+                    }
+                    [None, None, None] => frame.push(None),
+                    _ => {
+                        let missing = xyz.iter().position(|v| v.is_none()).unwrap_or(0);
+                        return Err(parse_err(
+                            name,
+                            no,
+                            row[k + missing].0,
+                            format!(
+                                "marker[{}]: partly empty; leave x, y and z all empty for an untracked point",
+                                i + 1
+                            ),
+                        ));
+                    }
+                }
+            }
+            times.push(t);
+            frames.push(frame);
+        }
+        if frames.len() < 2 {
+            return Err(parse_err(
+                name,
+                header_no + frames.len() + 1,
+                1,
+                format!("{} frame(s): a recording needs at least two", frames.len()),
+            ));
+        }
+        Ok(Recording {
+            grid,
+            times,
+            frames,
+            units,
+        })
+    }
+
+    /// Checks the invariants a hand-built recording must satisfy before writing or fitting.
+    pub fn validate(&self) -> Result<()> {
+        let (r, c) = self.grid;
+        if !(1..=MAX_GRID_SIDE).contains(&r) || !(1..=MAX_GRID_SIDE).contains(&c) {
+            return Err(Error::invalid(
+                "recording grid",
+                format!("{r}x{c}"),
+                format!("1..{MAX_GRID_SIDE} rows and columns"),
+            ));
+        }
+        if self.times.len() != self.frames.len() || self.times.len() < 2 {
+            return Err(Error::invalid(
+                "recording frames",
+                format!("{} times, {} frames", self.times.len(), self.frames.len()),
+                "as many times as frames, at least two",
+            ));
+        }
+        for (i, w) in self.times.windows(2).enumerate() {
+            if !(w[0].is_finite() && w[1].is_finite() && w[1] > w[0]) {
+                return Err(Error::invalid(
+                    format!("recording time of frame {}", i + 2),
+                    w[1],
+                    format!("finite and > {}", w[0]),
+                ));
+            }
+        }
+        for (i, f) in self.frames.iter().enumerate() {
+            if f.len() != r * c {
+                return Err(Error::invalid(
+                    format!("recording frame {}", i + 1),
+                    format!("{} points", f.len()),
+                    format!("{} points ({r}x{c})", r * c),
+                ));
+            }
+            if f.iter()
+                .flatten()
+                .any(|p| p.coords.iter().any(|v| !v.is_finite()))
+            {
+                return Err(Error::invalid(
+                    format!("recording frame {}", i + 1),
+                    "a non-finite coordinate",
+                    "finite coordinates or untracked points",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The file text in `self.units` (positions to 0.1 um, times to 1 ns).
+    pub fn to_csv(&self) -> Result<String> {
+        self.validate()?;
+        let scale = 1.0 / self.units.to_metres();
+        let digits = match self.units {
+            Units::Metres => 7,
+            Units::Millimetres => 4,
+        };
+        let mut s = String::new();
+        let (r, c) = self.grid;
+        // Writing to a String cannot fail.
+        let _ = writeln!(s, "# grid: {r}x{c}");
+        let _ = writeln!(s, "# units: {}", self.units.name());
+        s.push_str("time");
+        for k in 1..=3 * self.points() {
+            s.push(',');
+            s.push_str(&header_name(k));
+        }
+        s.push('\n');
+        for (t, frame) in self.times.iter().zip(&self.frames) {
+            let _ = write!(s, "{t:.9}");
+            for p in frame {
+                match p {
+                    Some(p) => {
+                        for v in p.coords.iter() {
+                            let _ = write!(s, ",{:.*}", digits, v * scale);
+                        }
+                    }
+                    None => s.push_str(",,,"),
+                }
+            }
+            s.push('\n');
+        }
+        Ok(s)
+    }
+
+    /// Writes the recording (creating the parent directory).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let text = self.to_csv()?;
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        std::fs::write(path, text).map_err(|e| Error::io(path, e))
+    }
+}

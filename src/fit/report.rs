@@ -1,0 +1,329 @@
+//! Outputs of a fit and of a synthetic recording: the result JSON (drive parameters under
+//! their FMI names), the fitted lung volume as CSV, a PNG/SVG figure (lung volume over time,
+//! a few markers recorded vs fitted), the ground-truth JSON of a synthetic recording, and
+//! the text summary printed by the CLI.
+
+use super::{Fit, Synthetic};
+use crate::anatomy::Subject;
+use crate::model::Drive;
+use crate::stats::plot::{BLUE, DARK, Mark, Panel, RED, Trace, write_figure};
+use crate::{Error, Result};
+use serde_json::{Value, json};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The drive under the FMI parameter names (`drive.frequency`, `drive.ribs.amplitude`, ...).
+pub fn drive_fmi(drive: &Drive) -> serde_json::Map<String, Value> {
+    let mut m = serde_json::Map::new();
+    m.insert("drive.frequency".into(), json!(drive.frequency));
+    for (name, w) in [
+        ("ribs", drive.ribs),
+        ("diaphragm", drive.diaphragm),
+        ("abdominals", drive.abdominals),
+    ] {
+        m.insert(format!("drive.{name}.amplitude"), json!(w.amplitude));
+        m.insert(format!("drive.{name}.phase"), json!(w.phase));
+    }
+    m
+}
+
+/// The subject under the FMI parameter names.
+pub fn subject_fmi(subject: &Subject) -> Value {
+    json!({
+        "subject.sex": subject.sex,
+        "subject.age": subject.age,
+        "subject.stature": subject.stature,
+        "subject.mass": subject.mass,
+        "subject.breast_size": subject.breast_size,
+        "posture": subject.posture,
+    })
+}
+
+/// Where a fit's outputs went.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitOutputs {
+    /// result.json.
+    pub json: PathBuf,
+    /// Fitted lung volume CSV.
+    pub volume_csv: PathBuf,
+    /// PNG report (an SVG twin sits beside it).
+    pub png: PathBuf,
+}
+
+/// The result JSON of a fit.
+pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Path) -> Value {
+    let mut m = drive_fmi(&fit.drive);
+    let rot = fit.to_model.rotation.angle().to_degrees();
+    let extra = json!({
+        "cost_m": fit.cost_m,
+        "initial_cost_m": fit.initial_cost_m,
+        "skin_fit_error_m": match fit.skin_fit {
+            Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
+            // Rigid registration only: the remaining first-frame distance, before = after.
+            None => json!({
+                "before": fit.registration_mean_m,
+                "after": fit.registration_mean_m,
+                "skin_fitted": false,
+            }),
+        },
+        "evaluations": fit.evaluations,
+        "converged": fit.converged,
+        "wall_s": fit.wall_s,
+        "delta_phase": fit.delta_phase,
+        "lung_volume_csv": volume_csv.display().to_string(),
+        "method": fit.method.name(),
+        "recording": recording.display().to_string(),
+        "frequency": {
+            "hz": fit.frequency.frequency_hz,
+            "spectral_hz": fit.frequency.spectral_hz,
+            "autocorrelation_hz": fit.frequency.autocorrelation_hz,
+            "from_autocorrelation": fit.frequency.from_autocorrelation,
+        },
+        "registration": {
+            "rms_m": fit.registration_rms_m,
+            "mean_m": fit.registration_mean_m,
+            "rotation_deg": rot,
+            "translation_m": [fit.to_model.translation.x, fit.to_model.translation.y, fit.to_model.translation.z],
+        },
+        "subject": subject_fmi(subject),
+    });
+    if let Value::Object(e) = extra {
+        m.extend(e);
+    }
+    Value::Object(m)
+}
+
+fn create_parent(path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    Ok(())
+}
+
+/// Writes result JSON at `json_path`, the lung volume CSV and the figure beside it
+/// (`<stem>_lung_volume.csv`, `<stem>_report.png` / `.svg`).
+pub fn write_fit(
+    fit: &Fit,
+    json_path: &Path,
+    recording: &Path,
+    subject: &Subject,
+) -> Result<FitOutputs> {
+    create_parent(json_path)?;
+    let dir = json_path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
+    let stem = json_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "result".into());
+    let volume_csv = dir.join(format!("{stem}_lung_volume.csv"));
+    let png = dir.join(format!("{stem}_report.png"));
+
+    let io = |p: &Path| {
+        let p = p.to_path_buf();
+        move |e| Error::io(p.clone(), e)
+    };
+    let mut w =
+        std::io::BufWriter::new(std::fs::File::create(&volume_csv).map_err(io(&volume_csv))?);
+    writeln!(w, "time,volume.lung").map_err(io(&volume_csv))?;
+    for (t, v) in fit.times.iter().zip(&fit.fitted.lung_volume) {
+        writeln!(w, "{t:.6},{v:.6}").map_err(io(&volume_csv))?;
+    }
+    w.flush().map_err(io(&volume_csv))?;
+
+    let value = fit_json(fit, recording, subject, &volume_csv);
+    let text = serde_json::to_string_pretty(&value)
+        .map_err(|e| Error::State(format!("result JSON: {e}")))?;
+    std::fs::write(json_path, text + "\n").map_err(io(json_path))?;
+
+    write_figure(
+        &dir,
+        &format!("{stem}_report"),
+        &figure_panels(fit)
+            .iter()
+            .map(|p| p.panel())
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(FitOutputs {
+        json: json_path.to_path_buf(),
+        volume_csv,
+        png,
+    })
+}
+
+/// One owned series: label, abscissae, ordinates, colour, mark.
+type Series = (String, Vec<f64>, Vec<f64>, (u8, u8, u8), Mark);
+
+/// Owned series of one panel (the plot helpers borrow slices).
+struct OwnedPanel {
+    title: String,
+    y_label: String,
+    series: Vec<Series>,
+}
+
+impl OwnedPanel {
+    fn panel(&self) -> Panel<'_> {
+        Panel {
+            title: self.title.clone(),
+            x_label: "time [s]".into(),
+            y_label: self.y_label.clone(),
+            traces: self
+                .series
+                .iter()
+                .map(|(label, x, y, color, mark)| Trace {
+                    label: label.clone(),
+                    x,
+                    y,
+                    color: *color,
+                    mark: *mark,
+                })
+                .collect(),
+            hlines: vec![],
+            bands: vec![],
+        }
+    }
+}
+
+/// Lung volume, then the ventral (x) displacement of three markers on the midline column:
+/// top row, middle row, bottom row; recorded (points, model frame after registration) and
+/// fitted (lines), relative to the fitted first frame.
+fn figure_panels(fit: &Fit) -> Vec<OwnedPanel> {
+    let mut panels = vec![OwnedPanel {
+        title: format!(
+            "Fitted lung volume ({}; cost {:.2} mm, {} evaluations)",
+            fit.method.name(),
+            fit.cost_m * 1e3,
+            fit.evaluations
+        ),
+        y_label: "lung volume [L]".into(),
+        series: vec![(
+            "fitted model".into(),
+            fit.times.clone(),
+            fit.fitted.lung_volume.clone(),
+            BLUE,
+            Mark::Line,
+        )],
+    }];
+    let Some(first) = fit.fitted.markers.first() else {
+        return panels;
+    };
+    let (rows, cols) = fit.grid;
+    let mut series = Vec::new();
+    let colors = [BLUE, RED, DARK];
+    let picks =
+        [0, rows / 2, rows.saturating_sub(1)].map(|r| (r * cols + cols / 2).min(first.len() - 1));
+    for (k, &j) in picks.iter().enumerate() {
+        let base = first[j].x;
+        let (mut tr, mut yr) = (Vec::new(), Vec::new());
+        for (t, f) in fit.times.iter().zip(&fit.recorded) {
+            if let Some(q) = f[j] {
+                tr.push(*t);
+                yr.push((q.x - base) * 1e3);
+            }
+        }
+        let yf: Vec<f64> = fit
+            .fitted
+            .markers
+            .iter()
+            .map(|m| (m[j].x - base) * 1e3)
+            .collect();
+        series.push((
+            format!("marker[{}] recorded", j + 1),
+            tr,
+            yr,
+            colors[k],
+            Mark::Points,
+        ));
+        series.push((
+            format!("marker[{}] fitted", j + 1),
+            fit.times.clone(),
+            yf,
+            colors[k],
+            Mark::Line,
+        ));
+    }
+    panels.push(OwnedPanel {
+        title: "Markers: ventral displacement, recorded vs fitted".into(),
+        y_label: "x displacement [mm]".into(),
+        series,
+    });
+    panels
+}
+
+/// The ground-truth JSON of a synthetic recording.
+pub fn truth_json(
+    s: &Synthetic,
+    subject: &Subject,
+    level_of_detail: u32,
+    options: &super::SynthOptions,
+) -> Value {
+    let mut m = drive_fmi(&s.truth);
+    let q = s.camera.rotation;
+    let r = q.to_rotation_matrix();
+    let rows: Vec<Vec<f64>> = (0..3)
+        .map(|i| (0..3).map(|j| r[(i, j)]).collect())
+        .collect();
+    let extra = json!({
+        "delta_phase": super::fitting::wrap_angle(s.truth.diaphragm.phase - s.truth.ribs.phase),
+        "subject": subject_fmi(subject),
+        "posture": subject.posture,
+        "scene.level_of_detail": level_of_detail,
+        "grid.rows": s.recording.grid.0,
+        "grid.cols": s.recording.grid.1,
+        "rate_hz": options.rate,
+        "duration_s": options.duration,
+        "noise_m": options.noise,
+        "noise_floor_m": s.noise_floor_m,
+        "variability": options.variability,
+        "dropout": options.dropout,
+        "seed": options.seed,
+        "camera": {
+            "description": "model frame -> camera frame: p_camera = R p_model + t; registration recovers the inverse",
+            "rotation_matrix": rows,
+            "quaternion_wxyz": [q.w, q.i, q.j, q.k],
+            "translation_m": [s.camera.translation.x, s.camera.translation.y, s.camera.translation.z],
+        },
+        "model_start_time_s": s.start_time,
+        "nominal_drive": drive_fmi(&options.drive),
+        "breaths": s.schedule.len().saturating_sub(1),
+    });
+    if let Value::Object(e) = extra {
+        m.extend(e);
+    }
+    Value::Object(m)
+}
+
+/// The text summary of a fit.
+pub fn summary(fit: &Fit) -> String {
+    let d = &fit.drive;
+    format!(
+        "breathing frequency   {:.4} Hz ({:.1} breaths/min)\n\
+         drive.ribs.amplitude      {:.4}\n\
+         drive.diaphragm.amplitude {:.4}\n\
+         drive.ribs.phase          {:+.4} rad\n\
+         drive.diaphragm.phase     {:+.4} rad\n\
+         delta phase (diaphragm - ribs) {:+.4} rad\n\
+         registration          mean {:.2} mm, rms {:.2} mm, rotation {:.1} deg\n\
+         cost                  {:.3} mm (start {:.3} mm)\n\
+         evaluations           {} ({}){}\n\
+         wall time             {:.2} s",
+        d.frequency,
+        d.frequency * 60.0,
+        d.ribs.amplitude,
+        d.diaphragm.amplitude,
+        d.ribs.phase,
+        d.diaphragm.phase,
+        fit.delta_phase,
+        fit.registration_mean_m * 1e3,
+        fit.registration_rms_m * 1e3,
+        fit.to_model.rotation.angle().to_degrees(),
+        fit.cost_m * 1e3,
+        fit.initial_cost_m * 1e3,
+        fit.evaluations,
+        fit.method.name(),
+        if fit.converged { ", converged" } else { "" },
+        fit.wall_s
+    )
+}

@@ -1,0 +1,93 @@
+//! `torso fit` and `torso synth` from the command line: bad recordings and bad options are
+//! rejected with messages naming the file, line, column or option.
+
+use std::process::Command;
+
+fn torso(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(args)
+        .output()
+        .expect("run torso");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout),
+    )
+}
+
+fn write(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("fit_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn header(points: usize) -> String {
+    let mut h = String::from("time");
+    for i in 1..=points {
+        h.push_str(&format!(",marker[{i}].x,marker[{i}].y,marker[{i}].z"));
+    }
+    h
+}
+
+fn rows(points: usize, frames: usize) -> String {
+    (0..frames)
+        .map(|k| {
+            let mut r = format!("{}", k as f64 / 56.0);
+            for i in 0..points {
+                r.push_str(&format!(",{},{},0.1", 0.01 * i as f64, 1.2));
+            }
+            r + "\n"
+        })
+        .collect()
+}
+
+#[test]
+fn fit_rejects_a_ragged_recording_with_its_position() {
+    let text = format!("{}\n{}0.5,1,2\n", header(60), rows(60, 3));
+    let p = write("ragged.csv", &text);
+    let (ok, msg) = torso(&["fit", "--slp", p.to_str().unwrap(), "--lod", "0"]);
+    assert!(!ok);
+    assert!(
+        msg.contains("ragged.csv:5:") && msg.contains("ragged row"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn fit_rejects_a_grid_that_is_not_the_models() {
+    let text = format!("# grid: 8x6\n{}\n{}", header(48), rows(48, 3));
+    let p = write("grid.csv", &text);
+    let (ok, msg) = torso(&["fit", "--slp", p.to_str().unwrap(), "--lod", "0"]);
+    assert!(!ok);
+    assert!(
+        msg.contains("8x6 (48 points)") && msg.contains("10x6 (60 points)"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn fit_rejects_unknown_methods_and_missing_files() {
+    let text = format!("{}\n{}", header(60), rows(60, 3));
+    let p = write("ok.csv", &text);
+    let (ok, msg) = torso(&["fit", "--slp", p.to_str().unwrap(), "--method", "simplex"]);
+    assert!(
+        !ok && msg.contains("nelder-mead, multistart or cmaes"),
+        "{msg}"
+    );
+    let (ok, msg) = torso(&["fit", "--slp", "/nonexistent/rec.csv"]);
+    assert!(!ok && msg.contains("/nonexistent/rec.csv"), "{msg}");
+}
+
+#[test]
+fn synth_rejects_bad_options() {
+    let out = std::env::temp_dir().join("fit_cli_synth.csv");
+    let truth = std::env::temp_dir().join("fit_cli_truth.json");
+    let (o, t) = (out.to_str().unwrap(), truth.to_str().unwrap());
+    let (ok, msg) = torso(&["synth", "--out", o, "--truth", t, "--camera", "fisheye"]);
+    assert!(!ok && msg.contains("random or identity"), "{msg}");
+    let (ok, msg) = torso(&["synth", "--out", o, "--truth", t, "--grid", "40x6"]);
+    assert!(!ok && msg.contains("--grid"), "{msg}");
+    let (ok, msg) = torso(&["synth", "--out", o, "--truth", t, "--dropout", "0.9"]);
+    assert!(!ok && msg.contains("--dropout"), "{msg}");
+}
