@@ -13,12 +13,13 @@ cargo clippy --all-targets --release -- -D warnings
 echo "== python venv (fmpy also supplies the official FMI 2.0 headers for the Rust tests)"
 bash scripts/python-env.sh
 
+echo "== release library and FMU (the C tests link the cdylib)"
+cargo build --release
+target/release/torso fmu build --out fmu/BreathingTorso.fmu
+
 echo "== cargo test"
 cargo test --release
 
-echo "== release library and FMU"
-cargo build --release
-target/release/torso fmu build --out fmu/BreathingTorso.fmu
 
 if [ -d python/tests ] && ls python/tests/test_*.py >/dev/null 2>&1; then
   echo "== python tests"
