@@ -288,14 +288,20 @@ pub fn random_scene(rng: &mut Pcg64, lod: u32) -> Result<Config> {
     Ok(config)
 }
 
-/// Broad physical bounds on the volumes of an adult torso [L]: anything outside means the
-/// simulation has left physiology (the subject's own lung volumes lie within 0.5-12 L).
-pub const VOLUME_BOUNDS: (f64, f64) = (0.2, 40.0);
+/// Broad physical bounds on the lung volume of an adult [L]: the largest predicted total lung
+/// capacity within the subject ranges is under 10 L (ECSC, Quanjer 1993), the smallest
+/// residual volume over 0.5 L; anything outside means the simulation has left physiology.
+pub const LUNG_BOUNDS: (f64, f64) = (0.2, 15.0);
+
+/// Bounds on every cavity volume (thorax, abdomen, trunk) relative to its value at the start
+/// of a stress run: a wall that halves or doubles a cavity has blown up.
+pub const RELATIVE_VOLUME_BOUNDS: (f64, f64) = (0.5, 2.0);
 
 /// Outcome of one stress scene.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum SceneOutcome {
-    /// Ran to the end with finite volumes within [`VOLUME_BOUNDS`]; smallest and largest
+    /// Ran to the end with a finite lung volume within [`LUNG_BOUNDS`] and cavity volumes
+    /// within [`RELATIVE_VOLUME_BOUNDS`] of their start values; smallest and largest
     /// lung volume seen [L].
     Ok {
         /// Smallest lung volume [L].
@@ -315,7 +321,8 @@ pub enum SceneOutcome {
 }
 
 /// Simulates `config` for `seconds`, checking every output frame (at `rate` Hz) that the
-/// lung, thorax, abdomen and trunk volumes are finite and within [`VOLUME_BOUNDS`].
+/// state is finite, the lung volume within [`LUNG_BOUNDS`] and the thorax, abdomen and trunk
+/// volumes within [`RELATIVE_VOLUME_BOUNDS`] of their values at the start.
 /// Errors other than [`Error::Numerical`] are returned as errors.
 pub fn stress_scene(config: &Config, seconds: f64, rate: f64) -> Result<SceneOutcome> {
     let mut torso = Torso::new(config.clone())?;
@@ -327,6 +334,15 @@ pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneO
     let t0 = torso.time();
     let frames = (seconds * rate).round().max(1.0) as usize;
     let (mut min_lung, mut max_lung) = (f64::INFINITY, f64::NEG_INFINITY);
+    let cavities = [
+        Quantity::ThoraxVolume,
+        Quantity::AbdomenVolume,
+        Quantity::TrunkVolume,
+    ];
+    let mut start = [0.0; 3];
+    for (s, q) in start.iter_mut().zip(cavities) {
+        *s = torso.read(q)?;
+    }
     for i in 0..=frames {
         if i > 0 {
             match torso.advance_to(t0 + i as f64 / rate) {
@@ -337,22 +353,23 @@ pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneO
                 Err(e) => return Err(e),
             }
         }
-        for q in [
-            Quantity::LungVolume,
-            Quantity::ThoraxVolume,
-            Quantity::AbdomenVolume,
-            Quantity::TrunkVolume,
-        ] {
+        let lung = torso.read(Quantity::LungVolume)?;
+        if !(lung.is_finite() && lung >= LUNG_BOUNDS.0 && lung <= LUNG_BOUNDS.1) {
+            return Ok(SceneOutcome::OutOfBounds {
+                time: torso.time(),
+                what: format!("LungVolume = {lung} L"),
+            });
+        }
+        min_lung = min_lung.min(lung);
+        max_lung = max_lung.max(lung);
+        for (s, q) in start.iter().zip(cavities) {
             let v = torso.read(q)?;
-            if !(v.is_finite() && v >= VOLUME_BOUNDS.0 && v <= VOLUME_BOUNDS.1) {
+            let r = v / s;
+            if !(r.is_finite() && r >= RELATIVE_VOLUME_BOUNDS.0 && r <= RELATIVE_VOLUME_BOUNDS.1) {
                 return Ok(SceneOutcome::OutOfBounds {
                     time: torso.time(),
-                    what: format!("{q:?} = {v} L"),
+                    what: format!("{q:?} = {v} L ({r} x its start value {s} L)"),
                 });
-            }
-            if q == Quantity::LungVolume {
-                min_lung = min_lung.min(v);
-                max_lung = max_lung.max(v);
             }
         }
         if torso.state().iter().any(|v| !v.is_finite()) {
