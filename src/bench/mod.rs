@@ -389,3 +389,33 @@ pub fn set_all_activations(torso: &mut Torso, value: f64) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 3.0);
+        assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn trajectory_error_is_the_max_over_frames_and_markers() {
+        let reference = Trajectory {
+            lung: vec![1.0, 2.0, 3.0],
+            markers: vec![vec![[0.0; 3], [1.0, 1.0, 1.0]]; 3],
+            ..Trajectory::default()
+        };
+        let mut run = reference.clone();
+        run.lung[1] += 0.25;
+        run.lung[2] -= 0.5;
+        run.markers[2][1] = [1.0, 4.0, 5.0];
+        let e = trajectory_error(&run, &reference).expect("same length");
+        assert_eq!(e.lung, 0.5);
+        assert_eq!(e.markers, 5.0);
+        run.lung.pop();
+        assert!(trajectory_error(&run, &reference).is_err());
+    }
+}
