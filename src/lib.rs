@@ -21,6 +21,7 @@
 //! | [`cli`] | the `torso` command-line tool |
 
 pub mod anatomy;
+pub mod bench;
 pub mod capi;
 pub mod cli;
 pub mod dynamics;

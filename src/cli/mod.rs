@@ -1,5 +1,6 @@
 //! The `torso` command-line tool: one file per subcommand.
 
+pub mod bench;
 pub mod common;
 pub mod fit;
 pub mod mesh;
@@ -50,6 +51,12 @@ pub enum Command {
         #[command(subcommand)]
         command: mesh::MeshCommand,
     },
+    /// Benchmarks: frame loops, right-hand-side cost, work-precision, stress soak.
+    Bench {
+        /// The benchmark.
+        #[command(subcommand)]
+        command: bench::BenchCommand,
+    },
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
@@ -70,6 +77,7 @@ pub fn main() -> i32 {
         Command::ExportObj(a) => skin::export_obj(&a),
         Command::RenderSkin(a) => skin::render_skin(&a),
         Command::Mesh { command } => mesh::run(command),
+        Command::Bench { command } => bench::run(command),
     };
     match result {
         Ok(()) => 0,

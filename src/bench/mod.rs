@@ -1,0 +1,421 @@
+//! Measurement kernels behind `torso bench`: timed frame loops of the model facade
+//! (volumes only or volumes plus markers), the cost of one right-hand-side evaluation,
+//! trajectories for work-precision studies (lung volume and marker positions at the output
+//! rate, with a wall-time cap), and random scenes drawn from the declared parameter ranges
+//! for the stress suite. Nothing here prints; the CLI (`src/cli/bench.rs`) formats the
+//! results and the stress tests (`tests/stress_*.rs`) assert on them.
+
+use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};
+use crate::model::{Config, Drive, Quantity, Torso, Wave};
+use crate::stats::rng::Pcg64;
+use crate::{Error, Result};
+use serde::Serialize;
+use std::f64::consts::PI;
+use std::hint::black_box;
+use std::time::Instant;
+
+/// Output rate of the SLP cameras [Hz]; every frame loop here reads at this rate.
+pub const FRAME_RATE: f64 = 56.0;
+
+/// Median of `v` (upper median for an even count); NaN for an empty slice.
+pub fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[s.len() / 2]
+}
+
+/// What a timed frame loop reads after every frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Reads {
+    /// Lung, thorax, abdomen and trunk volumes.
+    Volumes,
+    /// The volumes plus every marker of the grid (x, y, z).
+    VolumesAndMarkers,
+}
+
+/// One timed frame loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrameRun {
+    /// Wall time of the loop [s] (model build and marker-model build excluded).
+    pub wall: f64,
+    /// Right-hand-side evaluations during the loop.
+    pub rhs_evaluations: u64,
+    /// Accepted steps during the loop.
+    pub steps: u64,
+    /// Rejected steps during the loop.
+    pub rejected: u64,
+    /// Sum of everything read (kept so that nothing is optimised away).
+    pub checksum: f64,
+}
+
+/// Builds a torso for `config`, then times `frames` frames at [`FRAME_RATE`], reading `reads`
+/// after each. The marker model (built once per compiled model) is built before the clock
+/// starts when markers are read.
+pub fn frame_loop(config: &Config, frames: usize, reads: Reads) -> Result<FrameRun> {
+    let mut torso = Torso::new(config.clone())?;
+    if reads == Reads::VolumesAndMarkers {
+        torso.marker_model()?;
+    }
+    let before = torso.solver_stats();
+    let start = Instant::now();
+    let mut checksum = 0.0;
+    for i in 1..=frames {
+        torso.advance_to(i as f64 / FRAME_RATE)?;
+        for q in [
+            Quantity::LungVolume,
+            Quantity::ThoraxVolume,
+            Quantity::AbdomenVolume,
+            Quantity::TrunkVolume,
+        ] {
+            checksum += torso.read(q)?;
+        }
+        if reads == Reads::VolumesAndMarkers {
+            for p in torso.markers()? {
+                checksum += p.x + p.y + p.z;
+            }
+        }
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let after = torso.solver_stats();
+    Ok(FrameRun {
+        wall,
+        rhs_evaluations: after.rhs_evaluations - before.rhs_evaluations,
+        steps: after.steps - before.steps,
+        rejected: after.rejected - before.rejected,
+        checksum: black_box(checksum),
+    })
+}
+
+/// Cost of one right-hand-side evaluation at one level of detail.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RhsCost {
+    /// Level of detail.
+    pub level_of_detail: u32,
+    /// Length of the state vector.
+    pub state_dim: usize,
+    /// Median nanoseconds per call at the rest state (drive at t = 0).
+    pub ns_rest: f64,
+    /// Median nanoseconds per call at a breathing state (quiet drive, mid-inspiration).
+    pub ns_breathing: f64,
+}
+
+/// Times `calls` calls of [`Torso::rhs`] (in `repeats` batches, median per call) at the rest
+/// state and at the state reached after 1.5 s of quiet breathing, for `config`'s level of
+/// detail.
+pub fn rhs_cost(config: &Config, calls: usize, repeats: usize) -> Result<RhsCost> {
+    let mut config = config.clone();
+    config.drive = Drive::quiet();
+    let mut torso = Torso::new(config.clone())?;
+    let n = torso.state_dim();
+    let rest = torso.state().to_vec();
+    let t_breath = 1.5;
+    torso.advance_to(t_breath)?;
+    let breathing = torso.state().to_vec();
+    let mut dy = vec![0.0; n];
+    let mut time = |torso: &mut Torso, t: f64, y: &[f64]| -> Result<f64> {
+        let mut per_call = Vec::with_capacity(repeats);
+        for _ in 0..repeats.max(1) {
+            let start = Instant::now();
+            for _ in 0..calls.max(1) {
+                torso.rhs(t, black_box(y), &mut dy)?;
+                black_box(&dy);
+            }
+            per_call.push(start.elapsed().as_secs_f64() * 1e9 / calls.max(1) as f64);
+        }
+        Ok(median(&per_call))
+    };
+    let ns_rest = time(&mut torso, 0.0, &rest)?;
+    let ns_breathing = time(&mut torso, t_breath, &breathing)?;
+    Ok(RhsCost {
+        level_of_detail: config.scene.level_of_detail,
+        state_dim: n,
+        ns_rest,
+        ns_breathing,
+    })
+}
+
+/// Lung volume and marker positions at every output frame of one run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Trajectory {
+    /// Lung volume per frame [L] (frame 0 at t = 0).
+    pub lung: Vec<f64>,
+    /// Marker positions per frame [m], `markers[frame][marker]`.
+    pub markers: Vec<Vec<[f64; 3]>>,
+    /// Wall time of the frame loop [s] (build and marker-model build excluded).
+    pub wall: f64,
+    /// Right-hand-side evaluations.
+    pub rhs_evaluations: u64,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Whether the explicit solver's stiffness test had fired at the end of the run.
+    pub stiffness_detected: bool,
+    /// Accepted steps at which the stiffness test fired.
+    pub stiff_steps: u64,
+}
+
+/// Runs `config` for `duration` seconds, recording lung volume and markers at
+/// [`FRAME_RATE`]. Returns `Ok(None)` when the wall time exceeds `cap` seconds (the run is
+/// abandoned at the next frame).
+pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Trajectory>> {
+    let mut torso = Torso::new(config.clone())?;
+    torso.marker_model()?;
+    let frames = (duration * FRAME_RATE).round() as usize;
+    let mut out = Trajectory {
+        lung: Vec::with_capacity(frames + 1),
+        markers: Vec::with_capacity(frames + 1),
+        ..Trajectory::default()
+    };
+    let start = Instant::now();
+    for i in 0..=frames {
+        if i > 0 {
+            torso.advance_to(i as f64 / FRAME_RATE)?;
+        }
+        out.lung.push(torso.read(Quantity::LungVolume)?);
+        out.markers
+            .push(torso.markers()?.iter().map(|p| [p.x, p.y, p.z]).collect());
+        if start.elapsed().as_secs_f64() > cap {
+            return Ok(None);
+        }
+    }
+    out.wall = start.elapsed().as_secs_f64();
+    let stats = torso.solver_stats();
+    out.rhs_evaluations = stats.rhs_evaluations;
+    out.steps = stats.steps;
+    out.stiff_steps = stats.stiff_steps;
+    out.stiffness_detected = torso.stiffness_detected();
+    Ok(Some(out))
+}
+
+/// Errors of a trajectory against a reference of the same length.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct TrajectoryError {
+    /// Max over frames of |lung volume - reference| [L].
+    pub lung: f64,
+    /// Max over frames and markers of the Euclidean marker position error [m].
+    pub markers: f64,
+}
+
+/// Compares `run` with `reference` frame by frame.
+pub fn trajectory_error(run: &Trajectory, reference: &Trajectory) -> Result<TrajectoryError> {
+    if run.lung.len() != reference.lung.len() || run.markers.len() != reference.markers.len() {
+        return Err(Error::State(format!(
+            "trajectory of {} frames compared with a reference of {}",
+            run.lung.len(),
+            reference.lung.len()
+        )));
+    }
+    let lung = run
+        .lung
+        .iter()
+        .zip(&reference.lung)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    let mut markers = 0.0f64;
+    for (fa, fb) in run.markers.iter().zip(&reference.markers) {
+        for (a, b) in fa.iter().zip(fb) {
+            let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            markers = markers.max(d);
+        }
+    }
+    Ok(TrajectoryError { lung, markers })
+}
+
+/// Declared range of the drive amplitudes (fraction of the maximal activation).
+pub const AMPLITUDE_RANGE: (f64, f64) = (0.0, 1.0);
+/// Declared range of the left/right activation gains.
+pub const GAIN_RANGE: (f64, f64) = (0.0, 2.0);
+/// Body-mass-index range a subject must satisfy [kg/m^2] (see [`Subject::validate`]).
+pub const BMI_RANGE: (f64, f64) = (13.0, 60.0);
+
+fn draw(rng: &mut Pcg64, (lo, hi): (f64, f64)) -> f64 {
+    lo + (hi - lo) * rng.uniform()
+}
+
+/// A random, valid configuration drawn uniformly from every declared range: subject (sex,
+/// age, stature, mass drawn within both its range and the BMI range, breast size, posture),
+/// drive (frequency, the three amplitudes and phases), left/right gains; level of detail
+/// `lod`, other settings at their defaults.
+pub fn random_scene(rng: &mut Pcg64, lod: u32) -> Result<Config> {
+    let range = |name: &str| {
+        SUBJECT_RANGES
+            .iter()
+            .find(|r| r.0 == name)
+            .map(|r| (r.1, r.2))
+            .ok_or_else(|| Error::State(format!("no declared range for {name}")))
+    };
+    let stature = draw(rng, range("subject.stature")?);
+    let (m_lo, m_hi) = range("subject.mass")?;
+    let h2 = stature * stature;
+    let mass = draw(
+        rng,
+        (m_lo.max(BMI_RANGE.0 * h2), m_hi.min(BMI_RANGE.1 * h2)),
+    );
+    let subject = Subject {
+        sex: if rng.below(2) == 0 {
+            Sex::Male
+        } else {
+            Sex::Female
+        },
+        age: draw(rng, range("subject.age")?),
+        stature,
+        mass,
+        breast_size: draw(rng, range("subject.breast_size")?),
+        posture: [Posture::Standing, Posture::Sitting, Posture::Supine][rng.below(3)],
+    };
+    let phase = (-2.0 * PI, 2.0 * PI);
+    let wave = |rng: &mut Pcg64| Wave {
+        amplitude: draw(rng, AMPLITUDE_RANGE),
+        phase: draw(rng, phase),
+    };
+    let drive = Drive {
+        frequency: draw(rng, (0.05, 2.0)),
+        ribs: wave(rng),
+        diaphragm: wave(rng),
+        abdominals: wave(rng),
+    };
+    let mut config = Config {
+        subject,
+        drive,
+        gain_left: draw(rng, GAIN_RANGE),
+        gain_right: draw(rng, GAIN_RANGE),
+        ..Config::default()
+    };
+    config.scene.level_of_detail = lod;
+    config.validate()?;
+    Ok(config)
+}
+
+/// Broad physical bounds on the lung volume of an adult [L]: the largest predicted total lung
+/// capacity within the subject ranges is under 10 L (ECSC, Quanjer 1993), the smallest
+/// residual volume over 0.5 L; anything outside means the simulation has left physiology.
+pub const LUNG_BOUNDS: (f64, f64) = (0.2, 15.0);
+
+/// Bounds on every cavity volume (thorax, abdomen, trunk) relative to its value at the start
+/// of a stress run: a wall that halves or doubles a cavity has blown up.
+pub const RELATIVE_VOLUME_BOUNDS: (f64, f64) = (0.5, 2.0);
+
+/// Outcome of one stress scene.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum SceneOutcome {
+    /// Ran to the end with a finite lung volume within [`LUNG_BOUNDS`] and cavity volumes
+    /// within [`RELATIVE_VOLUME_BOUNDS`] of their start values; smallest and largest
+    /// lung volume seen [L].
+    Ok {
+        /// Smallest lung volume [L].
+        min_lung: f64,
+        /// Largest lung volume [L].
+        max_lung: f64,
+    },
+    /// The solver gave up with [`Error::Numerical`] (its message).
+    Numerical(String),
+    /// A volume was NaN, infinite or out of bounds at `time`.
+    OutOfBounds {
+        /// Simulated time [s].
+        time: f64,
+        /// The offending quantity and value.
+        what: String,
+    },
+}
+
+/// Simulates `config` for `seconds`, checking every output frame (at `rate` Hz) that the
+/// state is finite, the lung volume within [`LUNG_BOUNDS`] and the thorax, abdomen and trunk
+/// volumes within [`RELATIVE_VOLUME_BOUNDS`] of their values at the start.
+/// Errors other than [`Error::Numerical`] are returned as errors.
+pub fn stress_scene(config: &Config, seconds: f64, rate: f64) -> Result<SceneOutcome> {
+    let mut torso = Torso::new(config.clone())?;
+    stress_torso(&mut torso, seconds, rate)
+}
+
+/// As [`stress_scene`] on an existing torso (its inputs already set), from its current time.
+pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneOutcome> {
+    let t0 = torso.time();
+    let frames = (seconds * rate).round().max(1.0) as usize;
+    let (mut min_lung, mut max_lung) = (f64::INFINITY, f64::NEG_INFINITY);
+    let cavities = [
+        Quantity::ThoraxVolume,
+        Quantity::AbdomenVolume,
+        Quantity::TrunkVolume,
+    ];
+    let mut start = [0.0; 3];
+    for (s, q) in start.iter_mut().zip(cavities) {
+        *s = torso.read(q)?;
+    }
+    for i in 0..=frames {
+        if i > 0 {
+            match torso.advance_to(t0 + i as f64 / rate) {
+                Ok(_) => {}
+                Err(Error::Numerical { time, reason }) => {
+                    return Ok(SceneOutcome::Numerical(format!("t = {time} s: {reason}")));
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        let lung = torso.read(Quantity::LungVolume)?;
+        if !(lung.is_finite() && lung >= LUNG_BOUNDS.0 && lung <= LUNG_BOUNDS.1) {
+            return Ok(SceneOutcome::OutOfBounds {
+                time: torso.time(),
+                what: format!("LungVolume = {lung} L"),
+            });
+        }
+        min_lung = min_lung.min(lung);
+        max_lung = max_lung.max(lung);
+        for (s, q) in start.iter().zip(cavities) {
+            let v = torso.read(q)?;
+            let r = v / s;
+            if !(r.is_finite() && r >= RELATIVE_VOLUME_BOUNDS.0 && r <= RELATIVE_VOLUME_BOUNDS.1) {
+                return Ok(SceneOutcome::OutOfBounds {
+                    time: torso.time(),
+                    what: format!("{q:?} = {v} L ({r} x its start value {s} L)"),
+                });
+            }
+        }
+        if torso.state().iter().any(|v| !v.is_finite()) {
+            return Ok(SceneOutcome::OutOfBounds {
+                time: torso.time(),
+                what: "non-finite state".into(),
+            });
+        }
+    }
+    Ok(SceneOutcome::Ok { min_lung, max_lung })
+}
+
+/// Sets every muscle group's activation input of `torso` to `value`.
+pub fn set_all_activations(torso: &mut Torso, value: f64) -> Result<()> {
+    for g in MuscleGroup::ALL {
+        torso.set_activation(g, value)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 3.0);
+        assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn trajectory_error_is_the_max_over_frames_and_markers() {
+        let reference = Trajectory {
+            lung: vec![1.0, 2.0, 3.0],
+            markers: vec![vec![[0.0; 3], [1.0, 1.0, 1.0]]; 3],
+            ..Trajectory::default()
+        };
+        let mut run = reference.clone();
+        run.lung[1] += 0.25;
+        run.lung[2] -= 0.5;
+        run.markers[2][1] = [1.0, 4.0, 5.0];
+        let e = trajectory_error(&run, &reference).expect("same length");
+        assert_eq!(e.lung, 0.5);
+        assert_eq!(e.markers, 5.0);
+        run.lung.pop();
+        assert!(trajectory_error(&run, &reference).is_err());
+    }
+}

@@ -1,0 +1,541 @@
+//! `torso bench`: measured figures of the model, each reproducible by one command.
+//!
+//! - `core`: 1000 frames of quiet breathing at 56 Hz reading the volumes, then the same run
+//!   reading the 60 markers too, their ratio, and the nanoseconds per right-hand-side
+//!   evaluation per level of detail;
+//! - `work-precision`: wall time and right-hand-side evaluations against the error (lung
+//!   volume, marker positions) for every method and tolerance, against a high-order
+//!   reference at rtol 1e-12; CSV and a log-log PNG;
+//! - `soak`: many random scenes from the declared parameter ranges, each simulated for a
+//!   minute: no NaN, no blow-up, every numerical failure listed.
+
+use crate::bench::{
+    FrameRun, Reads, RhsCost, SceneOutcome, Trajectory, TrajectoryError, frame_loop, median,
+    random_scene, rhs_cost, stress_scene, trajectory, trajectory_error,
+};
+use crate::model::{Config, Drive};
+use crate::solver::Method;
+use crate::stats::plot::{BLUE, DARK, Mark, ORANGE, Panel, RED, Trace, write_figure};
+use crate::stats::rng::Pcg64;
+use crate::{Error, Result};
+use clap::{Args, Subcommand};
+use serde::Serialize;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The benchmarks.
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Frame-loop wall time (volumes only vs 60 markers) and right-hand-side cost per level of detail.
+    Core(CoreArgs),
+    /// Wall time and RHS evaluations against error for every method and tolerance.
+    WorkPrecision(WorkPrecisionArgs),
+    /// Random scenes from the declared parameter ranges: no NaN, no blow-up.
+    Soak(SoakArgs),
+}
+
+/// Options of `torso bench core`.
+#[derive(Args, Debug)]
+pub struct CoreArgs {
+    /// Frames at 56 Hz.
+    #[arg(long, default_value_t = 1000)]
+    pub frames: usize,
+    /// Timed repetitions (median reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Level of detail of the frame loops (0, 1 or 2).
+    #[arg(long, default_value_t = 1)]
+    pub lod: u32,
+    /// Right-hand-side calls per timed batch.
+    #[arg(long, default_value_t = 2000)]
+    pub rhs_calls: usize,
+    /// Also write the figures as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Options of `torso bench work-precision`.
+#[derive(Args, Debug)]
+pub struct WorkPrecisionArgs {
+    /// Output directory (CSV, PNG, SVG).
+    #[arg(long, default_value = "out/bench")]
+    pub out: PathBuf,
+    /// Scenario: quiet or forced.
+    #[arg(long, default_value = "quiet")]
+    pub scenario: String,
+    /// Simulated duration [s].
+    #[arg(long, default_value_t = 8.0)]
+    pub duration: f64,
+    /// Timed runs per combination (median reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Wall-time cap of one run [s]; slower combinations are reported as skipped.
+    #[arg(long, default_value_t = 20.0)]
+    pub cap: f64,
+    /// Level of detail.
+    #[arg(long, default_value_t = 1)]
+    pub lod: u32,
+}
+
+/// Options of `torso bench soak`.
+#[derive(Args, Debug)]
+pub struct SoakArgs {
+    /// Number of random scenes.
+    #[arg(long, default_value_t = 500)]
+    pub scenes: usize,
+    /// Simulated seconds per scene.
+    #[arg(long, default_value_t = 60.0)]
+    pub seconds: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 2011)]
+    pub seed: u64,
+    /// Level of detail.
+    #[arg(long, default_value_t = 0)]
+    pub lod: u32,
+    /// Output check rate [Hz].
+    #[arg(long, default_value_t = 56.0)]
+    pub rate: f64,
+}
+
+/// Runs `torso bench ...`.
+pub fn run(command: BenchCommand) -> Result<()> {
+    match command {
+        BenchCommand::Core(a) => core(&a),
+        BenchCommand::WorkPrecision(a) => work_precision(&a),
+        BenchCommand::Soak(a) => soak(&a),
+    }
+}
+
+/// Median figures of repeated frame loops.
+#[derive(Debug, Serialize)]
+struct LoopFigures {
+    reads: Reads,
+    frames: usize,
+    median_wall_s: f64,
+    min_wall_s: f64,
+    rhs_evaluations: u64,
+    steps: u64,
+    rejected: u64,
+    ns_per_rhs: f64,
+}
+
+fn loop_figures(runs: &[FrameRun], reads: Reads, frames: usize) -> LoopFigures {
+    let walls: Vec<f64> = runs.iter().map(|r| r.wall).collect();
+    let last = runs.last().copied().unwrap_or_default();
+    let med = median(&walls);
+    LoopFigures {
+        reads,
+        frames,
+        median_wall_s: med,
+        min_wall_s: walls.iter().copied().fold(f64::INFINITY, f64::min),
+        rhs_evaluations: last.rhs_evaluations,
+        steps: last.steps,
+        rejected: last.rejected,
+        ns_per_rhs: med * 1e9 / last.rhs_evaluations.max(1) as f64,
+    }
+}
+
+#[derive(Debug, Serialize)]
+struct CoreReport {
+    subject: String,
+    level_of_detail: u32,
+    rtol: f64,
+    volumes: LoopFigures,
+    markers: LoopFigures,
+    ratio_markers_over_volumes: f64,
+    rhs: Vec<RhsCost>,
+}
+
+fn core(args: &CoreArgs) -> Result<()> {
+    if args.frames == 0 || args.repeats == 0 || args.rhs_calls == 0 {
+        return Err(Error::invalid(
+            "--frames/--repeats/--rhs-calls",
+            0,
+            "at least 1",
+        ));
+    }
+    let mut config = Config {
+        drive: Drive::quiet(),
+        ..Config::default()
+    };
+    config.scene.level_of_detail = args.lod;
+    config.validate()?;
+    println!(
+        "quiet breathing, default subject, level of detail {}, {} rtol {:e}, {} frames at 56 Hz, median of {}",
+        args.lod,
+        config.solver.method.name(),
+        config.solver.rtol,
+        args.frames,
+        args.repeats
+    );
+    let mut figures = Vec::new();
+    for reads in [Reads::Volumes, Reads::VolumesAndMarkers] {
+        let runs = (0..args.repeats)
+            .map(|_| frame_loop(&config, args.frames, reads))
+            .collect::<Result<Vec<_>>>()?;
+        let f = loop_figures(&runs, reads, args.frames);
+        println!(
+            "{:<22} median {:8.4} s  min {:8.4} s  RHS {:7}  steps {:6} (+{} rejected)  {:8.0} ns/RHS (wall/RHS)",
+            match reads {
+                Reads::Volumes => "volumes only",
+                Reads::VolumesAndMarkers => "volumes + 60 markers",
+            },
+            f.median_wall_s,
+            f.min_wall_s,
+            f.rhs_evaluations,
+            f.steps,
+            f.rejected,
+            f.ns_per_rhs
+        );
+        figures.push(f);
+    }
+    let markers = figures
+        .pop()
+        .ok_or_else(|| Error::State("no runs".into()))?;
+    let volumes = figures
+        .pop()
+        .ok_or_else(|| Error::State("no runs".into()))?;
+    let ratio = markers.median_wall_s / volumes.median_wall_s;
+    println!("ratio (60 markers / volumes only): {ratio:.2}");
+    let mut rhs = Vec::new();
+    println!(
+        "right-hand side, median of 5 batches of {} calls:",
+        args.rhs_calls
+    );
+    for lod in 0..=2 {
+        let mut c = config.clone();
+        c.scene.level_of_detail = lod;
+        let r = rhs_cost(&c, args.rhs_calls, 5)?;
+        println!(
+            "  level of detail {lod}: state {:5}  rest {:9.0} ns  breathing {:9.0} ns",
+            r.state_dim, r.ns_rest, r.ns_breathing
+        );
+        rhs.push(r);
+    }
+    if let Some(path) = &args.json {
+        let report = CoreReport {
+            subject: "default (male, 30 y, 1.75 m, 75 kg, standing)".into(),
+            level_of_detail: args.lod,
+            rtol: config.solver.rtol,
+            volumes,
+            markers,
+            ratio_markers_over_volumes: ratio,
+            rhs,
+        };
+        let text = serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::State(format!("JSON: {e}")))?;
+        write_text(path, &text)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    let io = |e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    let mut f = std::fs::File::create(path).map_err(io)?;
+    f.write_all(text.as_bytes()).map_err(io)
+}
+
+/// One work-precision point.
+#[derive(Debug, Clone)]
+struct Point {
+    method: Method,
+    rtol: f64,
+    /// `None` when skipped (over the cap) or failed; the reason.
+    result: std::result::Result<(f64, u64, u64, TrajectoryError, bool, u64), String>,
+}
+
+fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
+    let drive = match args.scenario.as_str() {
+        "quiet" => Drive::quiet(),
+        "forced" => Drive::forced(),
+        other => return Err(Error::invalid("--scenario", other, "quiet or forced")),
+    };
+    if !(args.duration > 0.0 && args.duration <= 3600.0) {
+        return Err(Error::invalid("--duration", args.duration, "(0, 3600] s"));
+    }
+    if args.cap.is_nan() || args.cap <= 0.0 || args.repeats == 0 {
+        return Err(Error::invalid("--cap/--repeats", args.cap, "> 0"));
+    }
+    let mut base = Config {
+        drive,
+        ..Config::default()
+    };
+    base.scene.level_of_detail = args.lod;
+    let mut rc = base.clone();
+    rc.solver.method = Method::HighOrder;
+    rc.solver.rtol = 1e-12;
+    rc.solver.atol = 1e-14;
+    rc.validate()?;
+    println!(
+        "{} breathing, {} s, level of detail {}: reference {} rtol 1e-12 atol 1e-14 ...",
+        args.scenario,
+        args.duration,
+        args.lod,
+        Method::HighOrder.name()
+    );
+    let reference: Trajectory = trajectory(&rc, args.duration, f64::INFINITY)?
+        .ok_or_else(|| Error::State("reference run abandoned".into()))?;
+    println!(
+        "reference: {:.2} s, {} RHS evaluations, stiffness flag {}",
+        reference.wall, reference.rhs_evaluations, reference.stiffness_detected
+    );
+    let rtols: Vec<f64> = (3..=10).map(|k| 10f64.powi(-k)).collect();
+    let mut points = Vec::new();
+    println!(
+        "{:<11} {:>7} {:>10} {:>9} {:>8} {:>11} {:>11} {:>6}",
+        "method", "rtol", "wall [s]", "RHS", "steps", "lung [L]", "marker [m]", "stiff"
+    );
+    for method in Method::ALL {
+        let mut over_cap = false;
+        for &rtol in &rtols {
+            let mut c = base.clone();
+            c.solver.method = method;
+            c.solver.rtol = rtol;
+            // atol follows rtol two decades below (on states of order 1e-2 m), within range
+            c.solver.atol = (rtol * 1e-2).max(1e-14);
+            c.validate()?;
+            let result = if over_cap {
+                Err("skipped: a looser tolerance already exceeded the time cap".to_string())
+            } else {
+                measure(&c, args, &reference)
+            };
+            if let Err(reason) = &result
+                && reason.starts_with("skipped")
+            {
+                over_cap = true;
+            }
+            match &result {
+                Ok((wall, rhs, steps, err, stiff, _)) => println!(
+                    "{:<11} {:>7.0e} {:>10.4} {:>9} {:>8} {:>11.3e} {:>11.3e} {:>6}",
+                    method.name(),
+                    rtol,
+                    wall,
+                    rhs,
+                    steps,
+                    err.lung,
+                    err.markers,
+                    stiff
+                ),
+                Err(reason) => println!("{:<11} {:>7.0e} {reason}", method.name(), rtol),
+            }
+            points.push(Point {
+                method,
+                rtol,
+                result,
+            });
+        }
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
+        path: args.out.clone(),
+        source: e,
+    })?;
+    let name = format!("work_precision_{}", args.scenario);
+    let mut csv = String::from(
+        "method,rtol,atol,status,wall_s,rhs_evaluations,steps,lung_error_l,marker_error_m,stiffness_flag,stiff_steps\n",
+    );
+    for p in &points {
+        let atol = (p.rtol * 1e-2).max(1e-14);
+        match &p.result {
+            Ok((wall, rhs, steps, err, stiff, stiff_steps)) => csv.push_str(&format!(
+                "{},{:e},{:e},ok,{wall},{rhs},{steps},{:e},{:e},{stiff},{stiff_steps}\n",
+                p.method.name(),
+                p.rtol,
+                atol,
+                err.lung,
+                err.markers
+            )),
+            Err(reason) => csv.push_str(&format!(
+                "{},{:e},{:e},\"{}\",,,,,,,\n",
+                p.method.name(),
+                p.rtol,
+                atol,
+                reason.replace('"', "'")
+            )),
+        }
+    }
+    csv.push_str(&format!(
+        "# reference: {} rtol 1e-12 atol 1e-14, {} RHS evaluations, stiffness flag {}\n",
+        Method::HighOrder.name(),
+        reference.rhs_evaluations,
+        reference.stiffness_detected
+    ));
+    let csv_path = args.out.join(format!("{name}.csv"));
+    write_text(&csv_path, &csv)?;
+    plot(&args.out, &name, &args.scenario, &points)?;
+    println!(
+        "wrote {} and {}",
+        csv_path.display(),
+        args.out.join(format!("{name}.png")).display()
+    );
+    let flagged: Vec<String> = points
+        .iter()
+        .filter(|p| matches!(p.result, Ok((_, _, _, _, true, _))))
+        .map(|p| format!("{} {:e}", p.method.name(), p.rtol))
+        .collect();
+    if flagged.is_empty() {
+        println!("explicit solver's stiffness flag: not raised in any run");
+    } else {
+        println!(
+            "explicit solver's stiffness flag raised in: {} (a stiff method would suit these)",
+            flagged.join(", ")
+        );
+    }
+    Ok(())
+}
+
+type Measured = (f64, u64, u64, TrajectoryError, bool, u64);
+
+fn measure(
+    c: &Config,
+    args: &WorkPrecisionArgs,
+    reference: &Trajectory,
+) -> std::result::Result<Measured, String> {
+    let mut walls = Vec::new();
+    let mut last = None;
+    for _ in 0..args.repeats {
+        match trajectory(c, args.duration, args.cap) {
+            Ok(Some(t)) => {
+                walls.push(t.wall);
+                last = Some(t);
+            }
+            Ok(None) => return Err(format!("skipped: over the {} s time cap", args.cap)),
+            Err(e) => return Err(format!("failed: {e}")),
+        }
+    }
+    let t = last.ok_or_else(|| "no run".to_string())?;
+    let err = trajectory_error(&t, reference).map_err(|e| e.to_string())?;
+    Ok((
+        median(&walls),
+        t.rhs_evaluations,
+        t.steps,
+        err,
+        t.stiffness_detected,
+        t.stiff_steps,
+    ))
+}
+
+/// Label, colour, log10 wall times, log10 lung errors, log10 marker errors.
+type Series = (String, (u8, u8, u8), Vec<f64>, Vec<f64>, Vec<f64>);
+
+fn plot(dir: &Path, name: &str, scenario: &str, points: &[Point]) -> Result<()> {
+    let colors = [BLUE, RED, ORANGE, DARK];
+    let mut series: Vec<Series> = Vec::new();
+    for (i, m) in Method::ALL.iter().enumerate() {
+        let (mut x, mut yl, mut ym) = (Vec::new(), Vec::new(), Vec::new());
+        for p in points.iter().filter(|p| p.method == *m) {
+            if let Ok((wall, _, _, err, _, _)) = &p.result {
+                x.push(wall.max(1e-9).log10());
+                yl.push(err.lung.max(1e-16).log10());
+                ym.push(err.markers.max(1e-16).log10());
+            }
+        }
+        series.push((m.name().to_string(), colors[i % colors.len()], x, yl, ym));
+    }
+    let panel = |title: &str, y_label: &str, lung: bool| Panel {
+        title: title.to_string(),
+        x_label: "log10 wall time [s]".into(),
+        y_label: y_label.to_string(),
+        traces: series
+            .iter()
+            .flat_map(|(label, color, x, yl, ym)| {
+                let y = if lung { yl } else { ym };
+                [
+                    Trace {
+                        label: label.clone(),
+                        x,
+                        y,
+                        color: *color,
+                        mark: Mark::Line,
+                    },
+                    Trace {
+                        label: String::new(),
+                        x,
+                        y,
+                        color: *color,
+                        mark: Mark::Points,
+                    },
+                ]
+            })
+            .collect(),
+        hlines: Vec::new(),
+        bands: Vec::new(),
+    };
+    write_figure(
+        dir,
+        name,
+        &[
+            panel(
+                &format!("Work-precision, {scenario} breathing: lung volume"),
+                "log10 max |lung volume error| [L]",
+                true,
+            ),
+            panel(
+                &format!("Work-precision, {scenario} breathing: 60 markers"),
+                "log10 max marker error [m]",
+                false,
+            ),
+        ],
+    )
+}
+
+fn soak(args: &SoakArgs) -> Result<()> {
+    if args.scenes == 0
+        || args.seconds.is_nan()
+        || args.seconds <= 0.0
+        || args.rate.is_nan()
+        || args.rate <= 0.0
+    {
+        return Err(Error::invalid(
+            "--scenes/--seconds/--rate",
+            args.scenes,
+            "positive values",
+        ));
+    }
+    let mut rng = Pcg64::new(args.seed, 6);
+    let (mut ok, mut numerical, mut bounds) = (0, 0, 0);
+    let start = std::time::Instant::now();
+    for i in 0..args.scenes {
+        let config = random_scene(&mut rng, args.lod)?;
+        match stress_scene(&config, args.seconds, args.rate)? {
+            SceneOutcome::Ok { .. } => ok += 1,
+            SceneOutcome::Numerical(reason) => {
+                numerical += 1;
+                println!("scene {i}: numerical failure: {reason}\n  {config:?}");
+            }
+            SceneOutcome::OutOfBounds { time, what } => {
+                bounds += 1;
+                println!("scene {i}: out of bounds at t = {time} s: {what}\n  {config:?}");
+            }
+        }
+        if (i + 1) % 10 == 0 {
+            println!(
+                "{} scenes, {:.0} s wall: {ok} ok, {numerical} numerical failures, {bounds} out of bounds",
+                i + 1,
+                start.elapsed().as_secs_f64()
+            );
+        }
+    }
+    println!(
+        "soak: {} scenes x {} s (seed {}, level of detail {}): {ok} ok, {numerical} numerical failures, {bounds} out of bounds, {:.0} s wall",
+        args.scenes,
+        args.seconds,
+        args.seed,
+        args.lod,
+        start.elapsed().as_secs_f64()
+    );
+    if numerical + bounds > 0 {
+        return Err(Error::State(format!(
+            "{} of {} scenes failed",
+            numerical + bounds,
+            args.scenes
+        )));
+    }
+    Ok(())
+}

@@ -1,0 +1,123 @@
+//! The `torso bench` commands on tiny workloads: they run, and what they write is complete
+//! and consistent (JSON fields, one CSV row per method and tolerance, a PNG plot).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("torso-bench-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch directory");
+    dir
+}
+
+fn torso(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(args)
+        .output()
+        .expect("torso runs");
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "torso {args:?} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+#[test]
+fn bench_core_writes_consistent_json() {
+    let dir = scratch("core");
+    let json = dir.join("core.json");
+    let stdout = torso(&[
+        "bench",
+        "core",
+        "--frames",
+        "28",
+        "--repeats",
+        "1",
+        "--lod",
+        "0",
+        "--rhs-calls",
+        "5",
+        "--json",
+        json.to_str().expect("utf-8 path"),
+    ]);
+    assert!(stdout.contains("ratio (60 markers / volumes only)"));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json written"))
+            .expect("valid JSON");
+    let volumes = &v["volumes"];
+    let markers = &v["markers"];
+    assert_eq!(volumes["frames"], 28);
+    let rhs = volumes["rhs_evaluations"].as_u64().expect("count");
+    assert!(rhs > 28, "at least one evaluation per frame, got {rhs}");
+    // the same integration whatever is read
+    assert_eq!(volumes["rhs_evaluations"], markers["rhs_evaluations"]);
+    assert!(volumes["median_wall_s"].as_f64().expect("wall") > 0.0);
+    let levels = v["rhs"].as_array().expect("rhs per level");
+    assert_eq!(levels.len(), 3);
+    let dims: Vec<u64> = levels
+        .iter()
+        .map(|l| l["state_dim"].as_u64().expect("dim"))
+        .collect();
+    assert!(dims[0] < dims[1] && dims[1] < dims[2], "{dims:?}");
+    for l in levels {
+        assert!(l["ns_rest"].as_f64().expect("ns") > 0.0);
+        assert!(l["ns_breathing"].as_f64().expect("ns") > 0.0);
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bench_work_precision_writes_every_combination_and_a_plot() {
+    let dir = scratch("wp");
+    torso(&[
+        "bench",
+        "work-precision",
+        "--scenario",
+        "forced",
+        "--duration",
+        "0.25",
+        "--repeats",
+        "1",
+        "--lod",
+        "0",
+        "--out",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    let csv = std::fs::read_to_string(dir.join("work_precision_forced.csv")).expect("csv");
+    let rows: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .filter(|l| !l.starts_with('#'))
+        .collect();
+    assert_eq!(rows.len(), 3 * 8, "3 methods x 8 tolerances:\n{csv}");
+    let mut previous_error = f64::INFINITY;
+    for row in rows.iter().filter(|r| r.starts_with("dopri5,")) {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f[3], "ok", "{row}");
+        let lung: f64 = f[7].parse().expect("lung error");
+        assert!(lung.is_finite() && lung >= 0.0);
+        previous_error = previous_error.min(lung);
+    }
+    assert!(
+        previous_error < 1e-6,
+        "tight tolerances approach the reference"
+    );
+    assert!(dir.join("work_precision_forced.png").exists());
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bench_rejects_bad_arguments() {
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "work-precision", "--scenario", "panting"])
+        .output()
+        .expect("torso runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--scenario") && err.contains("quiet or forced"),
+        "{err}"
+    );
+}
