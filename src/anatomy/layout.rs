@@ -5,9 +5,7 @@
 //! above: thesis 1.3.2).
 
 use super::abdomen::{Abdomen, VertexRole, azimuth};
-use super::skeleton::{
-    Rib, STERNUM_HALF_WIDTH, Side, Spine, Sternum, point_at, polyline_length, rib_index,
-};
+use super::skeleton::{Rib, Side, Spine, Sternum, point_at, polyline_length, rib_index};
 use super::{Anchor, Body, MuscleGroup, push_anchor};
 use nalgebra::{Point3, Vector3};
 
@@ -82,7 +80,7 @@ fn on_bone(rib: &Rib, f: f64, anchors: &mut Vec<Anchor>) -> u32 {
 
 /// The cartilage joints: for ribs 1-7 the cartilage end meets the sternum's costal notch; for
 /// ribs 8-10 it meets the middle of the cartilage above.
-pub fn cartilage_joints(ribs: &[Rib], sternum: &Sternum, anchors: &mut Vec<Anchor>) -> Vec<Joint> {
+pub fn cartilage_joints(ribs: &[Rib], anchors: &mut Vec<Anchor>) -> Vec<Joint> {
     let mut joints = Vec::new();
     for side in [Side::Right, Side::Left] {
         for level in 1..=10 {
@@ -100,7 +98,6 @@ pub fn cartilage_joints(ribs: &[Rib], sternum: &Sternum, anchors: &mut Vec<Ancho
             joints.push(Joint { a, b });
         }
     }
-    let _ = (sternum, STERNUM_HALF_WIDTH);
     joints
 }
 

@@ -103,7 +103,7 @@ impl Anatomy {
             &mut anchors,
         )?;
         let lining_triangles = lining::build(&ribs, &sternum, &abdomen, &mut anchors);
-        let joints = layout::cartilage_joints(&ribs, &sternum, &mut anchors);
+        let joints = layout::cartilage_joints(&ribs, &mut anchors);
         let muscles = layout::muscles(
             &ribs,
             &sternum,

@@ -5,7 +5,7 @@
 //! p = x + R(q)(p0 - x0), v = x' + w x (p - x). Free vertices are read directly.
 
 use super::Data;
-use super::model::{Carrier, Model, RIBS};
+use super::model::{Model, RIBS};
 use super::state::Layout;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
@@ -56,5 +56,4 @@ pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &
         data.vel[a] = Vector3::new(y[pv], y[pv + 1], y[pv + 2]);
     }
     debug_assert!(model.carrier.len() == data.pos.len());
-    let _ = Carrier::Ground;
 }

@@ -170,8 +170,6 @@ pub struct Model {
     pub thorax_rest_volume: f64,
     /// Gravity vector [m/s^2].
     pub gravity: Vector3<f64>,
-    /// Free abdominal vertices of the dome crown (for the diaphragm displacement).
-    pub dome_crown: Vec<u32>,
     /// Anchor at the middle of the sternum (for its displacement).
     pub sternum_probe: u32,
 }
@@ -440,13 +438,6 @@ impl Model {
         let thorax_triangles = anatomy.thorax_triangles();
         let abdomen_rest_volume = volume(&rest, &abdomen_triangles);
         let thorax_rest_volume = volume(&rest, &thorax_triangles);
-        let dome_crown: Vec<u32> = (0..ab.len())
-            .filter(|&v| ab.roles[v] == VertexRole::Dome && ab.sphere[v].y > 0.75)
-            .filter_map(|v| match carrier[ab.anchor[v] as usize] {
-                Carrier::Vertex(j) => Some(j),
-                _ => None,
-            })
-            .collect();
         let st = &anatomy.sternum;
         let sternum_com = st.centre_of_mass();
         rest.push(nalgebra::center(&st.angle, &st.xiphisternal));
@@ -489,7 +480,6 @@ impl Model {
             abdomen_rest_volume,
             thorax_rest_volume,
             gravity,
-            dome_crown,
             sternum_probe,
             params,
         };
@@ -514,7 +504,6 @@ impl Model {
         let y = super::state::rest_state(self);
         let mut dy = vec![0.0; y.len()];
         super::rhs(self, &mut data, &super::Activations::default(), &y, &mut dy);
-        let layout = super::state::Layout::new(self);
         for r in 0..RIBS {
             self.rib_preload[r] = -data.rib_torque[r];
         }
@@ -523,7 +512,6 @@ impl Model {
             self.vertex_preload[j] =
                 -data.force[self.vertex_anchor[j] as usize] - self.gravity * self.vertex_mass[j];
         }
-        let _ = layout;
     }
 
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers).
