@@ -108,7 +108,7 @@ fn apply_pressure(tris: &[[u32; 3]], pressure: f64, data: &mut Data) {
         return;
     }
     for t in tris {
-        let [a, b, c] = t.map(|i| i as usize);
+        let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
         let f = (data.pos[b] - data.pos[a]).cross(&(data.pos[c] - data.pos[a])) * (pressure / 6.0);
         data.force[a] += f;
         data.force[b] += f;

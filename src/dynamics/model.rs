@@ -178,8 +178,13 @@ pub struct Model {
 pub fn volume(points: &[Point3<f64>], tris: &[[u32; 3]]) -> f64 {
     tris.iter()
         .map(|t| {
-            let [a, b, c] = t.map(|i| points[i as usize].coords);
-            a.dot(&b.cross(&c))
+            // Indexed rather than `t.map(..)`, which the optimiser leaves as a call here.
+            let (a, b, c) = (
+                &points[t[0] as usize].coords,
+                &points[t[1] as usize].coords,
+                &points[t[2] as usize].coords,
+            );
+            a.dot(&b.cross(c))
         })
         .sum::<f64>()
         / 6.0
