@@ -335,6 +335,13 @@ fn bad_directories_are_refused_with_the_file_and_the_reason() {
     io::write(&skin, open.join("skin.obj")).unwrap();
     let m = build(&open);
     assert!(m.contains("skin.obj") && m.contains("open surface"), "{m}");
+    // A skin in millimetres.
+    let mm = scratch("millimetres");
+    let mut skin = io::read(prepared_dir().join("skin.obj")).unwrap();
+    skin.scale(&Point3::origin(), &Vector3::repeat(1000.0));
+    io::write(&skin, mm.join("skin.obj")).unwrap();
+    let m = build(&mm);
+    assert!(m.contains("skin.obj") && m.contains("millimetres"), "{m}");
     // A cavity outside the skin.
     let outside = scratch("outside");
     std::fs::copy(prepared_dir().join("skin.obj"), outside.join("skin.obj")).unwrap();
