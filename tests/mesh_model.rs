@@ -449,6 +449,13 @@ fn c_abi_builds_on_a_mesh_directory_and_reports_a_bad_one() {
         );
         let good = CString::new(prepared_dir().display().to_string()).unwrap();
         c.subject_mesh_dir = good.as_ptr();
+        // A String parameter by name points to the struct field.
+        assert_eq!(
+            bt_config_set(&mut c, c"subject.mesh_dir".as_ptr(), 1.0),
+            BT_ERR_INVALID
+        );
+        let msg = CStr::from_ptr(bt_creation_error()).to_str().unwrap();
+        assert!(msg.contains("subject_mesh_dir"), "{msg}");
         // bt_config_set keeps the pointer.
         assert_eq!(bt_config_set(&mut c, c"grid.rows".as_ptr(), 8.0), BT_OK);
         assert_eq!(c.subject_mesh_dir, good.as_ptr());

@@ -443,6 +443,14 @@ pub unsafe extern "C" fn bt_config_set(
             crate::fmi::variables::ScalarType::Integer if value.fract() == 0.0 => {
                 crate::fmi::variables::Value::Integer(value as i32)
             }
+            crate::fmi::variables::ScalarType::String => {
+                return Err(Failure(
+                    BT_ERR_INVALID,
+                    format!(
+                        "`{name}` is a String parameter: set it through the BtConfig field (slp_reference, subject_mesh_dir)"
+                    ),
+                ));
+            }
             _ => {
                 return Err(Failure(
                     BT_ERR_INVALID,
