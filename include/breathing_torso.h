@@ -196,6 +196,12 @@ typedef struct BtConfig {
    * Activation gain of the right side, 0-2.
    */
   double gain_right;
+  /**
+   * Subject mesh directory written by `torso mesh prepare` (NUL-terminated path; FMI
+   * `subject.mesh_dir`): its skin and cavity replace the generated ones. NULL or `""`:
+   * generated geometry. Copied by `bt_create`.
+   */
+  const char *subject_mesh_dir;
 } BtConfig;
 
 /**
@@ -243,7 +249,8 @@ int bt_config_default(struct BtConfig *config);
 /**
  * Sets one configuration field by its FMI parameter name (`"subject.age"`, `"grid.rows"`,
  * `"drive.ribs.amplitude"`, ...); Integer parameters take integral values. The value is
- * range-checked (message in `bt_creation_error`). `slp.reference` is set through the struct.
+ * range-checked (message in `bt_creation_error`). The String parameters `slp.reference` and
+ * `subject.mesh_dir` are set through the struct's pointers.
  *
  * # Safety
  * `config` must be NULL or a valid, writable configuration; `name` NULL or NUL-terminated.
@@ -457,7 +464,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{ee661842-ffcf-9eb2-55bc-3bd1edf3c67e}"
+#define BT_FMI_GUID "{ed6367f3-4203-64a5-2328-1965ca78ca07}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -488,6 +495,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_GRID_ROWS 203u
 #define BT_VR_GRID_COLS 204u
 #define BT_VR_SLP_REFERENCE 300u
+#define BT_VR_SUBJECT_MESH_DIR 301u
 #define BT_VR_SOLVER_METHOD 205u
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u

@@ -119,9 +119,11 @@ pub fn azimuth(x: f64, z: f64, axis_x: f64) -> f64 {
 }
 
 /// A closed polyline (the costal margin) with the carrier of each vertex.
-struct Margin {
-    points: Vec<Point3<f64>>,
-    bodies: Vec<Body>,
+pub(super) struct Margin {
+    /// Vertices of the loop, dorsal midline first, via the right side, ventral, to the left.
+    pub(super) points: Vec<Point3<f64>>,
+    /// Carrier of each vertex.
+    pub(super) bodies: Vec<Body>,
 }
 
 impl Margin {
@@ -161,7 +163,7 @@ impl Margin {
 
 /// The costal margin, inset by the wall thickness: xiphoid, 7th costal cartilage, ends of ribs
 /// 8-12 and the spine at the first lumbar level, on both sides.
-fn costal_margin(
+pub(super) fn costal_margin(
     ribs: &[Rib],
     sternum: &Sternum,
     spine: &Spine,

@@ -113,7 +113,7 @@ pub fn muscles(
     let mut out = Vec::new();
     intercostals(ribs, f, anchors, &mut out);
     scalenes(ribs, spine, f, anchors, &mut out);
-    diaphragm(abdomen, f, anchors, &mut out);
+    diaphragm(abdomen, f, &mut out);
     abdominals(ribs, sternum, abdomen, f, anchors, &mut out);
     out
 }
@@ -215,7 +215,7 @@ fn scalenes(
 /// dome vertices, so that their shortening lowers the dome like a piston while pulling the
 /// insertions (and the lower ribs) cranially. One fibre per insertion vertex; the elements
 /// number about the thesis's 500 at full detail.
-fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<MuscleElement>) {
+fn diaphragm(abdomen: &Abdomen, f: f64, out: &mut Vec<MuscleElement>) {
     let group = MuscleGroup::Diaphragm;
     let n = abdomen.len();
     let mut neighbours = vec![Vec::new(); n];
@@ -312,10 +312,12 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
         .collect();
     let force = DIAPHRAGM_FORCE / paths.len().max(1) as f64;
     for path in paths {
-        let p = anchors[abdomen.anchor[path[0]] as usize].rest;
-        let side = if p.z > 1e-9 {
+        // Side from the layout's parametric direction (a fitted cavity's midline vertices
+        // are off z = 0 by the subject's asymmetry).
+        let z = dir[path[0]].z;
+        let side = if z > 1e-9 {
             Some(Side::Right)
-        } else if p.z < -1e-9 {
+        } else if z < -1e-9 {
             Some(Side::Left)
         } else {
             None
@@ -337,9 +339,18 @@ fn diaphragm(abdomen: &Abdomen, f: f64, anchors: &mut [Anchor], out: &mut Vec<Mu
 /// Height on the unit sphere above which the dome is central tendon (no muscle fibres).
 pub const CENTRAL_TENDON: f64 = 0.85;
 
-/// The mirror image (z -> -z) of anchor `n`: an existing anchor at the mirrored position on the
-/// mirrored body if there is one, else a new one.
-fn mirror_anchor(n: u32, anchors: &mut Vec<Anchor>) -> u32 {
+/// The mirror image (z -> -z) of anchor `n`: for a vertex of the abdominal surface, the
+/// vertex of mirrored parametric direction (`vertex_mirror`, so that a fitted, slightly
+/// asymmetric cavity keeps left and right paired); otherwise an existing anchor at the
+/// mirrored position on the mirrored body if there is one, else a new one.
+fn mirror_anchor(
+    n: u32,
+    anchors: &mut Vec<Anchor>,
+    vertex_mirror: &std::collections::HashMap<u32, u32>,
+) -> u32 {
+    if let Some(&m) = vertex_mirror.get(&n) {
+        return m;
+    }
     let a = anchors[n as usize];
     let body = match a.body {
         Body::Rib(i) => Body::Rib(if i < 12 { i + 12 } else { i - 12 }),
@@ -383,6 +394,7 @@ fn abdominals(
     if wall.is_empty() {
         return;
     }
+    let vertex_mirror = abdomen_mirror(abdomen);
     // The wall's parametric surface: (azimuth, height) -> nearest wall vertex.
     let axis_x = abdomen.axis_x;
     let wall_pts: Vec<(u32, Point3<f64>)> = wall
@@ -445,8 +457,10 @@ fn abdominals(
                         .nth(lane)
                         .cloned()
                     {
-                        let mirrored: Vec<u32> =
-                            right.iter().map(|&n| mirror_anchor(n, anchors)).collect();
+                        let mirrored: Vec<u32> = right
+                            .iter()
+                            .map(|&n| mirror_anchor(n, anchors, &vertex_mirror))
+                            .collect();
                         chains.push((Side::Left, mirrored));
                     }
                     continue;
@@ -541,4 +555,32 @@ fn abdominals(
             });
         }
     }
+}
+
+/// Anchor of each abdominal-surface vertex -> anchor of the vertex whose parametric direction
+/// is its mirror image (z -> -z).
+fn abdomen_mirror(abdomen: &Abdomen) -> std::collections::HashMap<u32, u32> {
+    let key = |d: &Vector3<f64>| {
+        (
+            (d.x * 1e9).round() as i64,
+            (d.y * 1e9).round() as i64,
+            (d.z * 1e9).round() as i64,
+        )
+    };
+    let by_dir: std::collections::HashMap<(i64, i64, i64), usize> = abdomen
+        .sphere
+        .iter()
+        .enumerate()
+        .map(|(v, d)| (key(d), v))
+        .collect();
+    abdomen
+        .sphere
+        .iter()
+        .enumerate()
+        .filter_map(|(v, d)| {
+            by_dir
+                .get(&key(&Vector3::new(d.x, d.y, -d.z)))
+                .map(|&m| (abdomen.anchor[v], abdomen.anchor[m]))
+        })
+        .collect()
 }

@@ -11,6 +11,7 @@ mod data;
 mod layout;
 mod lining;
 mod muscles;
+pub mod prepared;
 mod skeleton;
 pub mod skin;
 mod subject;
@@ -18,11 +19,13 @@ mod subject;
 pub use abdomen::{Abdomen, VertexRole, azimuth};
 pub use layout::{CENTRAL_TENDON, Joint, MuscleElement};
 pub use muscles::MuscleGroup;
+pub use prepared::{CavityFit, SubjectMesh};
 pub use skeleton::{Rib, Scale, Side, Spine, Sternum, rib_index};
 pub use subject::{Posture, SUBJECT_RANGES, Sex, Subject};
 
 use crate::Result;
 use nalgebra::Point3;
+use std::sync::Arc;
 
 /// The body that carries a point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -78,11 +81,38 @@ pub struct Anatomy {
     pub muscles: Vec<MuscleElement>,
     /// Cartilage joints (ball joints as stiff zero-length springs).
     pub joints: Vec<Joint>,
+    /// The subject's own surfaces the skin and cavity were fitted to (`None`: generated).
+    pub subject_mesh: Option<Arc<SubjectMesh>>,
+    /// How the cavity was fitted to the subject's (`None`: generated cavity).
+    pub cavity_fit: Option<CavityFit>,
 }
 
 impl Anatomy {
     /// Builds the anatomy of `subject` at `level_of_detail` (0, 1 or 2).
     pub fn build(subject: &Subject, level_of_detail: u32) -> Result<Anatomy> {
+        Anatomy::build_with(subject, level_of_detail, None)
+    }
+
+    /// Builds the anatomy on a prepared subject directory (see [`prepared`]) when `mesh_dir`
+    /// is given: its skin replaces the generated skin and its cavity (if any) the generated
+    /// cavity; the skeleton is the subject's generated one.
+    pub fn build_on(
+        subject: &Subject,
+        level_of_detail: u32,
+        mesh_dir: Option<&std::path::Path>,
+    ) -> Result<Anatomy> {
+        let mesh = mesh_dir.map(SubjectMesh::load).transpose()?;
+        Anatomy::build_with(subject, level_of_detail, mesh.map(Arc::new))
+    }
+
+    /// Builds the anatomy of `subject` at `level_of_detail`, fitted to the subject's own
+    /// surfaces when given: the generated cavity is re-sampled onto `abdomen.obj` (insertions
+    /// re-derived by geometry) before the muscles are laid out on it.
+    pub fn build_with(
+        subject: &Subject,
+        level_of_detail: u32,
+        subject_mesh: Option<Arc<SubjectMesh>>,
+    ) -> Result<Anatomy> {
         subject.validate()?;
         let lod = level_of_detail.min(2) as usize;
         let ansur = data::ansur2();
@@ -102,7 +132,32 @@ impl Anatomy {
             LOD_SUBDIVISIONS[lod],
             &mut anchors,
         )?;
+        let mut abdomen = abdomen;
+        // The lining is zipped to the generated rim (its topology stays the layout's); the
+        // fit then moves the rim's anchors, and with them the lining's lower edge.
         let lining_triangles = lining::build(&ribs, &sternum, &abdomen, &mut anchors);
+        let mut cavity_fit = None;
+        if let Some(mesh) = &subject_mesh {
+            match &mesh.abdomen {
+                Some(surface) => {
+                    let margin =
+                        abdomen::costal_margin(&ribs, &sternum, &spine, abdomen.axis_x, &scale);
+                    cavity_fit = Some(prepared::fit_cavity(
+                        &mut abdomen,
+                        &mut anchors,
+                        surface,
+                        &margin,
+                        &mesh.dir.join("abdomen.obj"),
+                    )?);
+                }
+                None => prepared::check_cavity_inside(
+                    &abdomen,
+                    &anchors,
+                    &mesh.skin,
+                    &mesh.dir.join("skin.obj"),
+                )?,
+            }
+        }
         let joints = layout::cartilage_joints(&ribs, &mut anchors);
         let muscles = layout::muscles(
             &ribs,
@@ -124,6 +179,8 @@ impl Anatomy {
             lining_triangles,
             muscles,
             joints,
+            subject_mesh,
+            cavity_fit,
         })
     }
 

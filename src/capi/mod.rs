@@ -125,6 +125,10 @@ pub struct BtConfig {
     pub gain_left: f64,
     /// Activation gain of the right side, 0-2.
     pub gain_right: f64,
+    /// Subject mesh directory written by `torso mesh prepare` (NUL-terminated path; FMI
+    /// `subject.mesh_dir`): its skin and cavity replace the generated ones. NULL or `""`:
+    /// generated geometry. Copied by `bt_create`.
+    pub subject_mesh_dir: *const c_char,
 }
 
 /// Statistics of one `bt_advance_to` call.
@@ -283,21 +287,28 @@ fn int(name: &str, v: c_int, range: &str) -> Result<usize> {
     usize::try_from(v).map_err(|_| Error::invalid(name, v, range))
 }
 
-/// Converts a C configuration (the SLP path pointer must be NULL or NUL-terminated).
+/// A path from a NULL or NUL-terminated C string (`None` for NULL or empty).
 ///
 /// # Safety
-/// `c.slp_reference` must be NULL or a NUL-terminated string.
+/// `p` must be NULL or a NUL-terminated string.
+unsafe fn c_path(p: *const c_char) -> Option<PathBuf> {
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: by the caller's contract.
+    let p = unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
+    (!p.is_empty()).then(|| PathBuf::from(p))
+}
+
+/// Converts a C configuration (the path pointers must be NULL or NUL-terminated).
+///
+/// # Safety
+/// `c.slp_reference` and `c.subject_mesh_dir` must be NULL or NUL-terminated strings.
 unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
     let s = &c.subject;
-    let slp_reference = if c.slp_reference.is_null() {
-        None
-    } else {
-        // SAFETY: by the caller's contract.
-        let p = unsafe { CStr::from_ptr(c.slp_reference) }
-            .to_string_lossy()
-            .into_owned();
-        (!p.is_empty()).then(|| PathBuf::from(p))
-    };
+    // SAFETY: by the caller's contract.
+    let (slp_reference, subject_mesh_dir) =
+        unsafe { (c_path(c.slp_reference), c_path(c.subject_mesh_dir)) };
     let config = Config {
         subject: crate::anatomy::Subject {
             sex: Sex::from_code(s.sex.into())?,
@@ -329,11 +340,16 @@ unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         lung_ratio: c.lung_ratio,
         gain_left: c.gain_left,
         gain_right: c.gain_right,
+        subject_mesh_dir,
     };
     Ok(config)
 }
 
-fn config_to_c(c: &Config, slp_reference: *const c_char) -> BtConfig {
+fn config_to_c(
+    c: &Config,
+    slp_reference: *const c_char,
+    subject_mesh_dir: *const c_char,
+) -> BtConfig {
     let s = &c.subject;
     BtConfig {
         subject: BtSubject {
@@ -356,6 +372,7 @@ fn config_to_c(c: &Config, slp_reference: *const c_char) -> BtConfig {
         lung_ratio: c.lung_ratio,
         gain_left: c.gain_left,
         gain_right: c.gain_right,
+        subject_mesh_dir,
     }
 }
 
@@ -387,7 +404,7 @@ pub unsafe extern "C" fn bt_config_default(config: *mut BtConfig) -> c_int {
     without_handle(|| unsafe {
         put(
             config,
-            config_to_c(&Config::default(), std::ptr::null()),
+            config_to_c(&Config::default(), std::ptr::null(), std::ptr::null()),
             "config",
         )
     })
@@ -395,7 +412,8 @@ pub unsafe extern "C" fn bt_config_default(config: *mut BtConfig) -> c_int {
 
 /// Sets one configuration field by its FMI parameter name (`"subject.age"`, `"grid.rows"`,
 /// `"drive.ribs.amplitude"`, ...); Integer parameters take integral values. The value is
-/// range-checked (message in `bt_creation_error`). `slp.reference` is set through the struct.
+/// range-checked (message in `bt_creation_error`). The String parameters `slp.reference` and
+/// `subject.mesh_dir` are set through the struct's pointers.
 ///
 /// # Safety
 /// `config` must be NULL or a valid, writable configuration; `name` NULL or NUL-terminated.
@@ -425,6 +443,14 @@ pub unsafe extern "C" fn bt_config_set(
             crate::fmi::variables::ScalarType::Integer if value.fract() == 0.0 => {
                 crate::fmi::variables::Value::Integer(value as i32)
             }
+            crate::fmi::variables::ScalarType::String => {
+                return Err(Failure(
+                    BT_ERR_INVALID,
+                    format!(
+                        "`{name}` is a String parameter: set it through the BtConfig field (slp_reference, subject_mesh_dir)"
+                    ),
+                ));
+            }
             _ => {
                 return Err(Failure(
                     BT_ERR_INVALID,
@@ -432,10 +458,10 @@ pub unsafe extern "C" fn bt_config_set(
                 ));
             }
         };
-        let slp = (*config).slp_reference;
+        let (slp, mesh_dir) = ((*config).slp_reference, (*config).subject_mesh_dir);
         let mut rust = config_from_c(&*config)?;
         p.set(&mut rust, v)?;
-        *config = config_to_c(&rust, slp);
+        *config = config_to_c(&rust, slp, mesh_dir);
         Ok(())
     })
 }

@@ -34,6 +34,10 @@ pub struct SimulateArgs {
     /// Write every N-th output frame to the VTK series.
     #[arg(long, default_value_t = 4)]
     pub vtk_stride: usize,
+    /// Subject mesh directory from `torso mesh prepare`: its skin and cavity replace the
+    /// generated ones (FMI `subject.mesh_dir`).
+    #[arg(long)]
+    pub mesh_dir: Option<PathBuf>,
 }
 
 /// Runs `torso simulate`.
@@ -45,7 +49,8 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
         return Err(Error::invalid("--rate", args.rate, "(0, 10000] Hz"));
     }
     let drive = args.drive.drive()?;
-    let config = args.subject.config(drive)?;
+    let mut config = args.subject.config(drive)?;
+    config.subject_mesh_dir = args.mesh_dir.clone();
     let subject = config.subject.clone();
     let start = std::time::Instant::now();
     let mut torso = Torso::new(config)?;

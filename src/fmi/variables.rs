@@ -172,6 +172,8 @@ pub enum Parameter {
     GridCols,
     /// `slp.reference` (String).
     SlpReference,
+    /// `subject.mesh_dir` (String): a prepared subject mesh directory.
+    MeshDir,
     /// `solver.method` (Integer).
     SolverMethod,
     /// `solver.rtol`.
@@ -230,6 +232,13 @@ impl Parameter {
                     .map(|p| p.display().to_string())
                     .unwrap_or_default(),
             ),
+            MeshDir => Value::String(
+                config
+                    .subject_mesh_dir
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default(),
+            ),
             SolverMethod => Value::Integer(config.solver.method.code()),
             SolverRtol => Value::Real(config.solver.rtol),
             SolverAtol => Value::Real(config.solver.atol),
@@ -267,6 +276,15 @@ impl Parameter {
                 config.scene.slp_reference = if v.is_empty() {
                     None
                 } else {
+                    Some(PathBuf::from(v))
+                }
+            }
+            (MeshDir, Value::String(v)) => {
+                config.subject_mesh_dir = if v.is_empty() {
+                    None
+                } else {
+                    // Read and checked now, so that a bad directory is refused when set.
+                    crate::anatomy::SubjectMesh::load(&v)?;
                     Some(PathBuf::from(v))
                 }
             }
@@ -717,6 +735,13 @@ fn build() -> Vec<Variable> {
             Str,
             P::SlpReference,
             "SLP recording whose first frame registers the marker grid (absolute, or relative to the FMU's resources/); empty: default grid",
+        ),
+        par(
+            "subject.mesh_dir",
+            301,
+            Str,
+            P::MeshDir,
+            "Subject mesh directory written by `torso mesh prepare` (skin.obj, optional abdomen.obj) replacing the generated skin and cavity; empty: generated geometry",
         ),
         par(
             "solver.method",

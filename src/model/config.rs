@@ -73,6 +73,12 @@ pub struct Config {
     pub gain_left: f64,
     /// Activation gain of the subject's right side, in [0, 2].
     pub gain_right: f64,
+    /// A subject mesh directory written by `torso mesh prepare` (FMI `subject.mesh_dir`): its
+    /// `skin.obj` replaces the generated skin and its `abdomen.obj`, when present, the
+    /// generated abdominal cavity (see [`crate::anatomy::prepared`]); `None`: generated
+    /// geometry.
+    #[serde(default)]
+    pub subject_mesh_dir: Option<PathBuf>,
 }
 
 impl Default for Config {
@@ -85,6 +91,7 @@ impl Default for Config {
             lung_ratio: 0.75,
             gain_left: 1.0,
             gain_right: 1.0,
+            subject_mesh_dir: None,
         }
     }
 }
@@ -115,6 +122,9 @@ impl Config {
         check("lung.ratio", self.lung_ratio, (0.3, 1.0))?;
         check("gain.left", self.gain_left, (0.0, 2.0))?;
         check("gain.right", self.gain_right, (0.0, 2.0))?;
+        if let Some(dir) = &self.subject_mesh_dir {
+            crate::anatomy::prepared::check_dir(dir)?;
+        }
         Ok(())
     }
 }

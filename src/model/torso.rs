@@ -42,7 +42,11 @@ impl Compiled {
     /// detail).
     pub fn build(config: &Config) -> Result<Compiled> {
         config.validate()?;
-        let anatomy = Anatomy::build(&config.subject, config.scene.level_of_detail)?;
+        let anatomy = Anatomy::build_on(
+            &config.subject,
+            config.scene.level_of_detail,
+            config.subject_mesh_dir.as_deref(),
+        )?;
         let model = Model::compile(&anatomy, Params::for_posture(config.subject.posture));
         let compartments = Compartments::new(&model);
         let fingerprint = model.fingerprint();

@@ -489,10 +489,25 @@ impl Skin {
 
     /// Generates the skin of `anatomy`'s subject enclosing its bones with
     /// [`SkinOptions::bone_clearance`] and its free abdominal wall with [`WALL_CLEARANCE`] of
-    /// radial room ([`anatomy_clearance`]).
+    /// radial room ([`anatomy_clearance`]). When the anatomy was built on a prepared subject
+    /// directory, the generated skin is then re-sampled onto the subject's `skin.obj` along
+    /// rays from its axis (see [`crate::anatomy::prepared`]): the rings, their heights on the
+    /// side and the landmarks stay, the shape becomes the subject's.
     pub fn for_anatomy(anatomy: &Anatomy, options: &SkinOptions) -> Result<Skin> {
         let clear = anatomy_clearance(anatomy, options.bone_clearance);
-        Skin::generate_with(&anatomy.subject, options, &clear)
+        let mut skin = Skin::generate_with(&anatomy.subject, options, &clear)?;
+        if let Some(mesh) = &anatomy.subject_mesh {
+            let lm = &skin.landmarks;
+            let (axis_x, ends) = (lm.axis_x, (lm.bottom_height, lm.top_height));
+            crate::anatomy::prepared::fit_skin(
+                &mut skin.vertices,
+                &skin.triangles,
+                axis_x,
+                ends,
+                mesh,
+            )?;
+        }
+        Ok(skin)
     }
 
     /// Generates a skin from the subject's ANSUR II dimensions at the given resolution, then
