@@ -6,9 +6,9 @@
 
 use breathing_torso::fmi::instance::{CAVITY_BOUNDS, Instance, LogSink, Phase, mask};
 use breathing_torso::fmi::table;
-use breathing_torso::fmi::variables::ScalarType;
 use breathing_torso::fmi::types::fmi2Status::{self, *};
 use breathing_torso::fmi::types::{fmi2LastSuccessfulTime, fmi2Terminated};
+use breathing_torso::fmi::variables::ScalarType;
 use std::cell::RefCell;
 use std::rc::Rc;
 

@@ -473,12 +473,7 @@ pub fn random_steps(
     (0..sequences)
         .map(|k| {
             let points = random_points(&mut rng, end, lo, hi);
-            stepped(
-                config,
-                format!("random sequence {k}"),
-                &points,
-                &reference,
-            )
+            stepped(config, format!("random sequence {k}"), &points, &reference)
         })
         .collect()
 }

@@ -12,8 +12,8 @@
 
 use crate::bench::SceneOutcome;
 use crate::bench::stress::{
-    ActivationRun, Drift, SteppedRun, communication_steps, held_maximal, quiet_drift,
-    random_steps, square_waves,
+    ActivationRun, Drift, SteppedRun, communication_steps, held_maximal, quiet_drift, random_steps,
+    square_waves,
 };
 use crate::model::{Config, Drive};
 use crate::stats::plot::{BLUE, HLine, Mark, Panel, RED, Trace, write_figure};
@@ -273,9 +273,7 @@ pub fn run(args: &StressArgs) -> Result<()> {
             d.work.rejected,
             d.work.rhs_evaluations
         );
-        if !(matches!(d.outcome, SceneOutcome::Ok { .. })
-            && d.first_to_last.abs() < DRIFT_TARGET)
-        {
+        if !(matches!(d.outcome, SceneOutcome::Ok { .. }) && d.first_to_last.abs() < DRIFT_TARGET) {
             failures.push("drift");
         }
         drift_outputs(&args.out, &d)?;
@@ -313,7 +311,7 @@ pub fn run(args: &StressArgs) -> Result<()> {
         print_stepped(&runs);
         if runs
             .iter()
-            .any(|r| !(r.state_error <= STEPPED_STATE_TOLERANCE))
+            .any(|r| r.state_error.is_nan() || r.state_error > STEPPED_STATE_TOLERANCE)
         {
             failures.push("steps");
         }

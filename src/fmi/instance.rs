@@ -152,9 +152,8 @@ pub type LogSink = Box<dyn FnMut(fmi2Status, &str, &str)>;
 
 /// Categories enabled when the master instantiates with `loggingOn = fmi2False`: errors and
 /// discarded steps (a master must always be able to learn why a step was refused).
-const ERRORS_ONLY: u32 = (1 << Category::Error as u32)
-    | (1 << Category::Fatal as u32)
-    | (1 << Category::Discard as u32);
+const ERRORS_ONLY: u32 =
+    (1 << Category::Error as u32) | (1 << Category::Fatal as u32) | (1 << Category::Discard as u32);
 const ALL_CATEGORIES: u32 = (1 << 6) - 1;
 
 /// Seconds of relative tolerance when comparing the master's communication point with the
@@ -887,12 +886,7 @@ impl Instance {
                     self.phase = Phase::Error;
                     return self.error(&format!("fmi2DoStep: {e}"));
                 }
-                self.discard(
-                    t,
-                    target,
-                    t,
-                    &format!("at t = {target}: {violation}"),
-                )
+                self.discard(t, target, t, &format!("at t = {target}: {violation}"))
             }
             Err(Error::Numerical { time, reason }) => {
                 self.discard(t, target, start + time, &reason)
