@@ -12,7 +12,8 @@
 //! which checks every memory access of the library itself. Its absence is reported on the
 //! test's output; the sanitizer run above is the check that always happens.
 //!
-//! `FMI_FUZZ_SEQUENCES` and `FMI_FUZZ_CALLS` enlarge the run (defaults 40 x 200).
+//! `FMI_FUZZ_SEQUENCES` and `FMI_FUZZ_CALLS` enlarge the run (defaults 40 x 200), and
+//! `FMI_FUZZ_VALGRIND_SEQUENCES` the memcheck run (default 2).
 
 use breathing_torso::fmi::table;
 use std::path::{Path, PathBuf};
@@ -143,7 +144,7 @@ fn random_call_sequences_under_valgrind_memcheck() {
         .arg(library())
         .arg(table().guid())
         .arg("2012")
-        .arg(env_count("FMI_FUZZ_VALGRIND_SEQUENCES", 3))
+        .arg(env_count("FMI_FUZZ_VALGRIND_SEQUENCES", 2))
         .arg(env_count("FMI_FUZZ_CALLS", 200))
         .output()
         .expect("valgrind runs");
