@@ -121,3 +121,44 @@ fn bench_rejects_bad_arguments() {
         "{err}"
     );
 }
+
+#[test]
+fn bench_stress_runs_short_items_and_rejects_unknown_ones() {
+    let dir = scratch("stress");
+    let stdout = torso(&[
+        "bench",
+        "stress",
+        "--items",
+        "hold,drift",
+        "--lod",
+        "0",
+        "--seconds",
+        "0.5",
+        "--drift-lod",
+        "0",
+        "--drift-seconds",
+        "12",
+        "--out",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    assert!(stdout.contains("every item passed"), "{stdout}");
+    let hold: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("stress_hold.json")).expect("hold json"),
+    )
+    .expect("valid JSON");
+    assert_eq!(hold["seconds"], 0.5);
+    assert_eq!(hold["monitor"]["checks"], 28);
+    let csv = std::fs::read_to_string(dir.join("stress_drift.csv")).expect("drift csv");
+    // 12 s at 0.25 Hz: the minima at about 3, 7 and 11 s (the last within half a breath of
+    // the end is left out)
+    assert_eq!(csv.lines().count(), 1 + 2, "{csv}");
+    assert!(dir.join("stress_drift.png").exists());
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "stress", "--items", "hold,panting"])
+        .output()
+        .expect("torso runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--items") && err.contains("panting"), "{err}");
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -5,6 +5,8 @@
 //! for the stress suite. Nothing here prints; the CLI (`src/cli/bench.rs`) formats the
 //! results and the stress tests (`tests/stress_*.rs`) assert on them.
 
+pub mod stress;
+
 use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};
 use crate::model::{Config, Drive, Quantity, Torso, Wave};
 use crate::stats::rng::Pcg64;

@@ -32,6 +32,8 @@ pub enum BenchCommand {
     WorkPrecision(WorkPrecisionArgs),
     /// Random scenes from the declared parameter ranges: no NaN, no blow-up.
     Soak(SoakArgs),
+    /// Square waves, held maximal activation, an hour's drift, communication steps.
+    Stress(super::bench_stress::StressArgs),
 }
 
 /// Options of `torso bench core`.
@@ -103,6 +105,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Core(a) => core(&a),
         BenchCommand::WorkPrecision(a) => work_precision(&a),
         BenchCommand::Soak(a) => soak(&a),
+        BenchCommand::Stress(a) => super::bench_stress::run(&a),
     }
 }
 

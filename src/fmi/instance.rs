@@ -21,7 +21,7 @@ use super::variables::{
     Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output, table,
 };
 use crate::anatomy::MuscleGroup;
-use crate::model::{Config, Snapshot, Torso};
+use crate::model::{Config, Quantity, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -150,13 +150,50 @@ impl Category {
 /// The receiver of log messages: (status, category name, message).
 pub type LogSink = Box<dyn FnMut(fmi2Status, &str, &str)>;
 
-/// Categories enabled when the master instantiates with `loggingOn = fmi2False`: errors only.
-const ERRORS_ONLY: u32 = (1 << Category::Error as u32) | (1 << Category::Fatal as u32);
+/// Categories enabled when the master instantiates with `loggingOn = fmi2False`: errors and
+/// discarded steps (a master must always be able to learn why a step was refused).
+const ERRORS_ONLY: u32 =
+    (1 << Category::Error as u32) | (1 << Category::Fatal as u32) | (1 << Category::Discard as u32);
 const ALL_CATEGORIES: u32 = (1 << 6) - 1;
 
 /// Seconds of relative tolerance when comparing the master's communication point with the
 /// instance's time.
 pub const TIME_TOLERANCE: f64 = 1e-9;
+
+/// Bounds of the thorax, abdomen and trunk cavity volumes after a communication step, as
+/// multiples of their volumes in the rest state of the same model (muscles relaxed: the
+/// functional residual capacity). In adults the residual volume is about half the functional
+/// residual capacity and the total lung capacity about twice it (ECSC reference values,
+/// Quanjer et al. 1993, Eur Respir J 6 Suppl 16: e.g. 30 y, 1.75 m man: RV 1.7 L, FRC 3.3 L,
+/// TLC 7.0 L), so a cavity leaving [0.5, 2] x rest has left physiology: the step is
+/// discarded (`fmi2Discard`) rather than continued with an unphysical state.
+pub const CAVITY_BOUNDS: (f64, f64) = (0.5, 2.0);
+
+/// The cavity volumes checked against [`CAVITY_BOUNDS`], with their FMI names.
+const CHECKED_VOLUMES: [(Quantity, &str); 3] = [
+    (Quantity::ThoraxVolume, "volume.thorax"),
+    (Quantity::AbdomenVolume, "volume.abdomen"),
+    (Quantity::TrunkVolume, "volume.trunk"),
+];
+
+/// Why the state of `torso` is unphysical: a non-finite state variable, or a cavity volume
+/// outside [`CAVITY_BOUNDS`] x `rest`; `None` when it is within bounds.
+fn physiology_violation(torso: &mut Torso, rest: &[f64; 3]) -> Result<Option<String>> {
+    if let Some(i) = torso.state().iter().position(|v| !v.is_finite()) {
+        return Ok(Some(format!("state variable {i} is not finite")));
+    }
+    for ((q, name), r) in CHECKED_VOLUMES.into_iter().zip(rest) {
+        let v = torso.read(q)?;
+        let ratio = v / r;
+        if !(ratio.is_finite() && (CAVITY_BOUNDS.0..=CAVITY_BOUNDS.1).contains(&ratio)) {
+            return Ok(Some(format!(
+                "{name} = {v:.4} L is {ratio:.3} x its rest value {r:.4} L, outside the physiological bounds [{}, {}] x rest (residual volume to total lung capacity)",
+                CAVITY_BOUNDS.0, CAVITY_BOUNDS.1
+            )));
+        }
+    }
+    Ok(None)
+}
 
 /// An FMU instance.
 pub struct Instance {
@@ -176,6 +213,9 @@ pub struct Instance {
     last_successful_time: f64,
     last_step_status: fmi2Status,
     strings: Vec<CString>,
+    /// Thorax, abdomen and trunk volumes [L] of the rest state of the built model, with the
+    /// model's fingerprint (the reference of [`CAVITY_BOUNDS`]).
+    rest_volumes: Option<(u64, [f64; 3])>,
     /// Addresses of the FMU states handed out and not yet freed (managed by the C layer).
     pub(crate) fmu_states: std::collections::HashSet<usize>,
 }
@@ -315,6 +355,7 @@ impl Instance {
             last_successful_time: 0.0,
             last_step_status: fmi2OK,
             strings: Vec::new(),
+            rest_volumes: None,
             fmu_states: Default::default(),
         }
     }
@@ -815,6 +856,13 @@ impl Instance {
             ));
         }
         let start = self.start_time;
+        let rest = match self.rest_volumes() {
+            Ok(r) => r,
+            Err(e) => {
+                self.phase = Phase::Error;
+                return self.error(&format!("fmi2DoStep: {e}"));
+            }
+        };
         let torso = match self.ensure_torso() {
             Ok(t) => t,
             Err(e) => {
@@ -822,30 +870,65 @@ impl Instance {
                 return self.error(&format!("fmi2DoStep: {e}"));
             }
         };
-        match torso.advance_to(target - start) {
-            Ok(_) => {
+        let before = torso.snapshot();
+        let advanced = torso
+            .advance_to(target - start)
+            .and_then(|_| physiology_violation(torso, &rest));
+        match advanced {
+            Ok(None) => {
                 self.time = target;
                 self.last_successful_time = target;
                 self.last_step_status = fmi2OK;
                 fmi2OK
             }
+            Ok(Some(violation)) => {
+                if let Err(e) = torso.restore(&before) {
+                    self.phase = Phase::Error;
+                    return self.error(&format!("fmi2DoStep: {e}"));
+                }
+                self.discard(t, target, t, &format!("at t = {target}: {violation}"))
+            }
             Err(Error::Numerical { time, reason }) => {
-                let at = start + time;
-                self.time = at;
-                self.last_successful_time = at;
-                self.last_step_status = fmi2Discard;
-                self.phase = Phase::StepFailed;
-                let message = format!(
-                    "fmi2DoStep: step from {t} to {target} discarded: {reason}; the model stays at its last successful time {at}"
-                );
-                self.log(fmi2Discard, Category::Discard, &message);
-                fmi2Discard
+                self.discard(t, target, start + time, &reason)
             }
             Err(e) => {
                 self.phase = Phase::Error;
                 self.error(&format!("fmi2DoStep: {e}"))
             }
         }
+    }
+
+    /// Ends a step with `fmi2Discard`: the model stays at `at`, the reason is logged.
+    fn discard(&mut self, t: f64, target: f64, at: f64, reason: &str) -> fmi2Status {
+        self.time = at;
+        self.last_successful_time = at;
+        self.last_step_status = fmi2Discard;
+        self.phase = Phase::StepFailed;
+        let message = format!(
+            "fmi2DoStep: step from {t} to {target} discarded: {reason}; the model stays at its last successful time {at}"
+        );
+        self.log(fmi2Discard, Category::Discard, &message);
+        fmi2Discard
+    }
+
+    /// The cavity volumes of the rest state of the model to be built (or built), computed
+    /// once per compiled model.
+    fn rest_volumes(&mut self) -> Result<[f64; 3]> {
+        let torso = self.ensure_torso()?;
+        let fingerprint = torso.compiled().fingerprint;
+        if let Some((f, v)) = self.rest_volumes
+            && f == fingerprint
+        {
+            return Ok(v);
+        }
+        let torso = self.ensure_torso()?;
+        let mut rest = Torso::with_compiled(torso.config().clone(), torso.compiled().clone())?;
+        let mut v = [0.0; 3];
+        for (x, (q, _)) in v.iter_mut().zip(CHECKED_VOLUMES) {
+            *x = rest.read(q)?;
+        }
+        self.rest_volumes = Some((fingerprint, v));
+        Ok(v)
     }
 
     /// `fmi2GetStatus`: `fmi2DoStepStatus` answers the last step's status.

@@ -460,7 +460,13 @@ pub fn weld(mesh: &TriMesh, tolerance: f64) -> TriMesh {
             'search: for dx in -1..=1 {
                 for dy in -1..=1 {
                     for dz in -1..=1 {
-                        if let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
+                        // saturating: far coordinates over a fine tolerance reach i64::MAX
+                        let key = [
+                            c[0].saturating_add(dx),
+                            c[1].saturating_add(dy),
+                            c[2].saturating_add(dz),
+                        ];
+                        if let Some(list) = grid.get(&key) {
                             for &j in list {
                                 if (vertices[j as usize] - p).norm() <= tol {
                                     found = Some(j);
@@ -537,6 +543,12 @@ impl<'a> Stream<'a> {
         Ok(t)
     }
 
+    /// Tokens not read yet: the most items any count in the file can still describe, so
+    /// that a header count never reserves more memory than the file can fill.
+    fn remaining(&self) -> usize {
+        self.toks.len() - self.pos
+    }
+
     fn peek(&self) -> Option<&'a str> {
         self.toks.get(self.pos).map(|t| t.2)
     }
@@ -611,14 +623,14 @@ pub fn parse_off(text: &str, name: &str) -> Result<TriMesh> {
     let (nv, ..) = s.usize("the vertex count")?;
     let (nf, ..) = s.usize("the face count")?;
     let _ = s.usize("the edge count")?;
-    let mut vertices = Vec::with_capacity(nv);
+    let mut vertices = Vec::with_capacity(nv.min(s.remaining() / 3));
     for _ in 0..nv {
         let x = s.f64("a vertex coordinate")?;
         let y = s.f64("a vertex coordinate")?;
         let z = s.f64("a vertex coordinate")?;
         vertices.push(Point3::new(x, y, z));
     }
-    let mut triangles = Vec::with_capacity(nf);
+    let mut triangles = Vec::with_capacity(nf.min(s.remaining() / 4));
     for _ in 0..nf {
         let (k, l, c) = s.usize("the face's vertex count")?;
         if k < 3 {
@@ -694,7 +706,7 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
             "POINTS" => {
                 let (n, ..) = s.usize("the point count")?;
                 let _ = s.next("the point data type")?;
-                vertices.reserve(n);
+                vertices.reserve(n.min(s.remaining() / 3));
                 for _ in 0..n {
                     let x = s.f64("a point coordinate")?;
                     let y = s.f64("a point coordinate")?;
@@ -712,7 +724,7 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
                     if s.peek().is_some_and(|t| t.eq_ignore_ascii_case("OFFSETS")) {
                         s.next("OFFSETS")?;
                         let _ = s.next("the offsets type")?;
-                        let mut offs = Vec::with_capacity(a);
+                        let mut offs = Vec::with_capacity(a.min(s.remaining()));
                         for _ in 0..a {
                             offs.push(s.usize("an offset")?);
                         }
@@ -721,7 +733,7 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
                         let conn = (0..b)
                             .map(|_| s.index(nv, "point index"))
                             .collect::<Result<Vec<_>>>()?;
-                        let mut cells = Vec::with_capacity(a.saturating_sub(1));
+                        let mut cells = Vec::with_capacity(offs.len().saturating_sub(1));
                         for w in offs.windows(2) {
                             let ((o0, ..), (o1, l1, c1)) = (w[0], w[1]);
                             if o1 < o0 || o1 > conn.len() {
@@ -736,11 +748,11 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
                         }
                         cells
                     } else {
-                        let mut cells = Vec::with_capacity(a);
-                        let mut used = 0;
+                        let mut cells = Vec::with_capacity(a.min(s.remaining()));
+                        let mut used = 0usize;
                         for _ in 0..a {
                             let (k, ..) = s.usize("the cell's point count")?;
-                            used += k + 1;
+                            used = used.saturating_add(k).saturating_add(1);
                             cells.push(
                                 (0..k)
                                     .map(|_| s.index(nv, "point index"))
