@@ -192,21 +192,75 @@ def run_scipy(torso, method, rtol, t_eval, cap):
     """One solve_ivp run from the rest state: (wall, rhs calls, solution) or raises OverCap."""
     y0 = torso.y0.copy()
     torso.calls = 0
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     torso.deadline = start + cap
     try:
         sol = solve_ivp(torso.rhs, (0.0, t_eval[-1]), y0, method=method, t_eval=t_eval,
                         rtol=rtol, atol=rtol * 1e-2)
     finally:
         torso.deadline = math.inf
-    wall = time.perf_counter() - start
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+    run_scipy.cpu = cpu
     return wall, torso.calls, sol
+
+
+NATIVE = {"dopri5": 0, "bs3": 1, "high-order": 2}
+
+
+def run_native(lib, parameters, method, rtol, t_eval, cap):
+    """The library's own integrator through the C ABI in this process (`bt_advance_to` frame by
+    frame, reading lung volume and markers every frame, as the Rust bench does): a row dict."""
+    torso = Torso(lib, {**parameters, "solver.method": NATIVE[method], "solver.rtol": rtol,
+                        "solver.atol": rtol * 1e-2})
+    lung, markers, v = [], [], ctypes.c_double()
+    xyz = np.empty(3 * torso.markers_n)
+    try:
+        # the marker model (skin and weights) is built on the first marker read, once per compiled
+        # model; the Rust bench builds it before its clock starts too
+        torso._check(lib.bt_read_markers(torso.h, xyz.ctypes.data, xyz.size, None))
+        start, cpu = time.perf_counter(), time.process_time()
+        for t in t_eval:
+            if t > 0:
+                torso._check(torso.lib.bt_advance_to(torso.h, t, None))
+            torso._check(lib.bt_read_by_name(torso.h, b"volume.lung", ctypes.byref(v)))
+            torso._check(lib.bt_read_markers(torso.h, xyz.ctypes.data, xyz.size, None))
+            lung.append(v.value)
+            markers.append(xyz.reshape(-1, 3).copy())
+            if time.perf_counter() - start > cap:
+                raise OverCap()
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        torso._check(lib.bt_read_by_name(torso.h, b"solver.rhs_evaluations", ctypes.byref(v)))
+        return wall, cpu, int(v.value), np.array(lung), np.array(markers)
+    finally:
+        torso.close()
+
+
+def measure_native(lib, parameters, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
+    """A CSV row (dict) for the library's own method `method` at `rtol`, run from Python."""
+    row = {"method": f"native-{method}", "rtol": rtol, "atol": rtol * 1e-2}
+    walls, cpus = [], []
+    for k in range(repeats):
+        try:
+            wall, cpu, calls, lung, markers = run_native(lib, parameters, method, rtol, t_eval, cap)
+        except OverCap:
+            row["status"] = f"skipped: over the {cap:g} s time cap"
+            return row
+        walls.append(wall)
+        cpus.append(cpu)
+        if wall > 5.0:
+            break
+    lung_err = float(np.max(np.abs(lung - ref_lung)))
+    marker_err = float(np.max(np.linalg.norm(markers - ref_markers, axis=2)))
+    row.update(status="ok", wall_s=statistics.median(walls), cpu_s=statistics.median(cpus), runs=len(walls),
+               rhs_evaluations=calls, nfev=calls, njev=0, nlu=0, lung_error_l=lung_err,
+               marker_error_m=marker_err)
+    return row
 
 
 def measure(torso, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
     """A CSV row (dict) for one method and tolerance."""
     row = {"method": f"scipy-{method}", "rtol": rtol, "atol": rtol * 1e-2}
-    walls = []
+    walls, cpus = [], []
     for k in range(repeats):
         try:
             wall, calls, sol = run_scipy(torso, method, rtol, t_eval, cap)
@@ -217,10 +271,12 @@ def measure(torso, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
             row["status"] = f"failed: {sol.message}"
             return row
         walls.append(wall)
+        cpus.append(run_scipy.cpu)
         if wall > 5.0:
             break
     lung_err, marker_err = errors(torso, t_eval, sol.y, ref_lung, ref_markers)
-    row.update(status="ok", wall_s=statistics.median(walls), runs=len(walls), rhs_evaluations=calls,
+    row.update(status="ok", wall_s=statistics.median(walls), cpu_s=statistics.median(cpus), runs=len(walls),
+               rhs_evaluations=calls,
                nfev=sol.nfev, njev=sol.njev, nlu=sol.nlu, lung_error_l=lung_err,
                marker_error_m=marker_err)
     return row
@@ -244,7 +300,7 @@ def series(rows, label_key="method"):
         setting = r.get("rtol") or r.get("step_s")
         out.setdefault(r[label_key], []).append(
             (float(r["wall_s"]), float(r["rhs_evaluations"]), float(r["lung_error_l"]),
-             float(r["marker_error_m"]), setting))
+             float(r["marker_error_m"]), setting, float(r.get("cpu_s") or "nan")))
     return out
 
 
@@ -302,6 +358,8 @@ def main(argv=None):
     ap.add_argument("--dir", default="out/bench", help="folder of the Rust bench's CSVs; outputs go here too")
     ap.add_argument("--scenario", default="quiet")
     ap.add_argument("--methods", default=",".join(METHODS))
+    ap.add_argument("--native", default="dopri5",
+                    help="the library's own methods to run from this process too, interleaved (empty: none)")
     ap.add_argument("--rtols", default=",".join(f"{r:g}" for r in RTOLS))
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--cap", type=float, default=60.0, help="wall-time cap of one run [s]")
@@ -322,27 +380,32 @@ def main(argv=None):
         print(f"finite-difference Jacobian fill at the rest state: {jacobian_fill(torso, torso.y0):.3f}")
 
     rows = []
-    print(f"{'method':<13} {'rtol':>6} {'wall [s]':>9} {'RHS':>8} {'nfev':>8} {'njev':>5} {'nlu':>5} "
+    print(f"{'method':<13} {'rtol':>6} {'wall [s]':>9} {'cpu [s]':>8} {'RHS':>8} {'nfev':>8} {'njev':>5} {'nlu':>5} "
           f"{'lung [L]':>10} {'marker [m]':>10}")
-    for method in args.methods.split(","):
+    jobs = [("native", m) for m in args.native.split(",") if m] + [("scipy", m) for m in args.methods.split(",")]
+    for kind, method in jobs:
         skip = None
         for rtol in (float(r) for r in args.rtols.split(",")):
             if skip:
-                row = {"method": f"scipy-{method}", "rtol": rtol, "atol": rtol * 1e-2, "status": skip}
+                row = {"method": f"{kind}-{method}", "rtol": rtol, "atol": rtol * 1e-2, "status": skip}
+            elif kind == "native":
+                row = measure_native(lib, scene_parameters(scene), method, rtol, t_eval, ref_lung, ref_markers,
+                                     args.repeats, args.cap)
             else:
                 row = measure(torso, method, rtol, t_eval, ref_lung, ref_markers, args.repeats, args.cap)
                 if row["status"] != "ok":
                     skip = "skipped: a looser tolerance did not finish"
             rows.append(row)
             if row["status"] == "ok":
-                print(f"{row['method']:<13} {rtol:>6.0e} {row['wall_s']:>9.3f} {row['rhs_evaluations']:>8} "
+                print(f"{row['method']:<13} {rtol:>6.0e} {row['wall_s']:>9.3f} {row['cpu_s']:>8.3f} "
+                      f"{row['rhs_evaluations']:>8} "
                       f"{row['nfev']:>8} {row['njev']:>5} {row['nlu']:>5} {row['lung_error_l']:>10.3e} "
                       f"{row['marker_error_m']:>10.3e}", flush=True)
             else:
                 print(f"{row['method']:<13} {rtol:>6.0e} {row['status']}", flush=True)
     torso.close()
 
-    fields = ["method", "rtol", "atol", "status", "wall_s", "runs", "rhs_evaluations", "nfev", "njev", "nlu",
+    fields = ["method", "rtol", "atol", "status", "wall_s", "cpu_s", "runs", "rhs_evaluations", "nfev", "njev", "nlu",
               "lung_error_l", "marker_error_m"]
     csv_path = out / f"{name}_scipy.csv"
     with open(csv_path, "w", newline="") as f:
@@ -363,21 +426,26 @@ def main(argv=None):
     for target in (float(x) for x in args.targets.split(",")):
         table = matched(all_series, target)
         print(f"\nmatched error: lung-volume error <= {target:g} L")
-        print(f"{'series':<20} {'fastest: setting':>17} {'wall [s]':>9} {'RHS':>9}   "
+        print(f"{'series':<20} {'fastest: setting':>17} {'wall [s]':>9} {'cpu [s]':>8} {'RHS':>9}   "
               f"{'fewest RHS: setting':>20} {'RHS':>9} {'wall [s]':>9}")
         for s_name, (fast, few, best) in sorted(table.items()):
             if fast is None:
                 print(f"{s_name:<20} not reached (smallest error {best:.2e} L)")
                 continue
-            print(f"{s_name:<20} {fast[4]:>17} {fast[0]:>9.3f} {fast[1]:>9.0f}   {few[4]:>20} {few[1]:>9.0f} "
+            print(f"{s_name:<20} {fast[4]:>17} {fast[0]:>9.3f} {fast[5]:>8.3f} {fast[1]:>9.0f}   "
+                  f"{few[4]:>20} {few[1]:>9.0f} "
                   f"{few[0]:>9.3f}")
-        ours = table.get("dopri5", (None, None, None))
-        if ours[0] is not None:
+        for base in ("dopri5", "native-dopri5"):
+            ours = table.get(base, (None, None, None))
+            if ours[0] is None:
+                continue
             for ref in ("scipy-RK45", "scipy-DOP853", "scipy-LSODA", "scipy-BDF", "scipy-Radau"):
                 other = table.get(ref, (None, None, None))
                 if other[0] is not None:
-                    print(f"  {ref} / dopri5: wall {other[0][0] / ours[0][0]:.1f}x, "
-                          f"RHS {other[1][1] / ours[1][1]:.2f}x")
+                    cpu = other[0][5] / ours[0][5]
+                    print(f"  {ref} / {base}: wall {other[0][0] / ours[0][0]:.1f}x"
+                          + ("" if math.isnan(cpu) else f", cpu {cpu:.1f}x")
+                          + f", RHS {other[1][1] / ours[1][1]:.2f}x")
     return 0
 
 

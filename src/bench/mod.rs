@@ -511,6 +511,60 @@ mod tests {
         assert!(median(&[]).is_nan());
     }
 
+    fn quiet_lod0() -> Config {
+        let mut c = Config {
+            drive: Drive::quiet(),
+            ..Config::default()
+        };
+        c.scene.level_of_detail = 0;
+        c
+    }
+
+    #[test]
+    fn configuration_rates_are_the_position_part_of_the_rhs() {
+        let mut torso = Torso::new(quiet_lod0()).expect("model");
+        torso.advance_to(0.7).expect("breathing state");
+        let y = torso.state().to_vec();
+        let mut ode = TorsoSecondOrder::new(&mut torso);
+        let p = ode.configuration_len();
+        let mut f = vec![0.0; ode.dim()];
+        ode.rhs(0.7, &y, &mut f);
+        let mut dq = vec![0.0; p];
+        ode.configuration_rates(&y, &mut dq);
+        let scale = f[..p].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0, "the torso moves");
+        for (i, (a, b)) in dq.iter().zip(&f[..p]).enumerate() {
+            assert!((a - b).abs() <= 1e-12 * scale, "entry {i}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn semi_implicit_euler_converges_at_first_order_on_the_torso_and_fails_when_unstable() {
+        let mut c = quiet_lod0();
+        c.solver.rtol = 1e-10;
+        c.solver.atol = 1e-12;
+        let duration = 0.1;
+        let reference = trajectory(&c, duration, f64::INFINITY)
+            .expect("reference")
+            .expect("no cap");
+        let lung_error = |h: f64| {
+            let run = trajectory_semi_implicit(&c, duration, h, f64::INFINITY)
+                .expect("stable")
+                .expect("no cap");
+            assert_eq!(run.rhs_evaluations, run.steps);
+            trajectory_error(&run, &reference)
+                .expect("same frames")
+                .lung
+        };
+        let (e1, e2) = (lung_error(4e-4), lung_error(2e-4));
+        assert!(e2 > 0.0 && (1.6..2.4).contains(&(e1 / e2)), "{e1} / {e2}");
+        // one step per 56 Hz frame is far beyond the stability limit
+        match trajectory_semi_implicit(&c, 0.5, 1.0 / FRAME_RATE, f64::INFINITY) {
+            Err(Error::Numerical { .. }) => {}
+            other => panic!("expected a numerical failure, got {:?}", other.map(|_| ())),
+        }
+    }
+
     #[test]
     fn trajectory_error_is_the_max_over_frames_and_markers() {
         let reference = Trajectory {

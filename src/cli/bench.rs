@@ -297,6 +297,15 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
         "reference: {:.2} s, {} RHS evaluations, stiffness flag {}",
         reference.wall, reference.rhs_evaluations, reference.stiffness_detected
     );
+    let name = format!("work_precision_{}", args.scenario);
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
+        path: args.out.clone(),
+        source: e,
+    })?;
+    // written now, so that an external integrator can be scored while the sweep runs
+    let reference_path = args.out.join(format!("{name}_reference.csv"));
+    write_reference(&reference_path, args, &base, &reference)?;
+    println!("reference frames: {}", reference_path.display());
     let rtols: Vec<f64> = (3..=10).map(|k| 10f64.powi(-k)).collect();
     let mut points = Vec::new();
     println!(
@@ -343,11 +352,6 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
             });
         }
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
-        path: args.out.clone(),
-        source: e,
-    })?;
-    let name = format!("work_precision_{}", args.scenario);
     let mut csv = String::from(
         "method,rtol,atol,status,wall_s,rhs_evaluations,steps,lung_error_l,marker_error_m,stiffness_flag,stiff_steps\n",
     );
@@ -379,12 +383,6 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     ));
     let csv_path = args.out.join(format!("{name}.csv"));
     write_text(&csv_path, &csv)?;
-    write_reference(
-        &args.out.join(format!("{name}_reference.csv")),
-        args,
-        &base,
-        &reference,
-    )?;
     let fixed = fixed_step_sweep(&base, args, &reference)?;
     write_text(
         &args.out.join(format!("{name}_fixed.csv")),
@@ -392,8 +390,9 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     )?;
     plot(&args.out, &name, &args.scenario, &points, &fixed)?;
     println!(
-        "wrote {} and {}",
+        "wrote {}, {}_fixed.csv and {}",
         csv_path.display(),
+        name,
         args.out.join(format!("{name}.png")).display()
     );
     let flagged: Vec<String> = points
