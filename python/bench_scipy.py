@@ -30,6 +30,9 @@ the C call, so they include the finite-difference Jacobian columns; scipy's own 
     cargo build --release
     target/release/torso bench work-precision --scenario quiet --duration 4 --out docs/bench
     .venv/bin/python python/bench_scipy.py --dir docs/bench --scenario quiet
+
+The script may start as soon as the reference file exists (the Rust bench writes it before its
+sweep); `--plot-only` redraws the combined plot and tables once both have finished.
 """
 
 import argparse
@@ -366,7 +369,15 @@ def main(argv=None):
     ap.add_argument("--lib", default=str(LIB))
     ap.add_argument("--targets", default="1e-5,1e-6", help="lung errors [L] of the matched-error table")
     ap.add_argument("--sparsity", action="store_true", help="measure the Jacobian's fill at the rest state")
+    ap.add_argument("--plot-only", action="store_true",
+                    help="run nothing: redraw the plot and tables from the CSVs already in --dir")
     args = ap.parse_args(argv)
+    if args.plot_only:
+        name = f"work_precision_{args.scenario}"
+        out = pathlib.Path(args.dir)
+        with open(out / f"{name}_reference.csv") as f:
+            scene = dict(kv.split("=", 1) for kv in f.readline()[1:].split())
+        return report(out, name, args, scene, read_rows(out / f"{name}_scipy.csv"))
 
     out = pathlib.Path(args.dir)
     name = f"work_precision_{args.scenario}"
@@ -405,6 +416,11 @@ def main(argv=None):
                 print(f"{row['method']:<13} {rtol:>6.0e} {row['status']}", flush=True)
     torso.close()
 
+    return report(out, name, args, scene, rows)
+
+
+def report(out, name, args, scene, rows):
+    """Writes the scipy CSV, the combined plot and prints the matched-error tables."""
     fields = ["method", "rtol", "atol", "status", "wall_s", "cpu_s", "runs", "rhs_evaluations", "nfev", "njev", "nlu",
               "lung_error_l", "marker_error_m"]
     csv_path = out / f"{name}_scipy.csv"
@@ -416,7 +432,7 @@ def main(argv=None):
 
     all_series = series(read_rows(out / f"{name}.csv"))
     all_series.update(series(read_rows(out / f"{name}_fixed.csv")))
-    all_series.update(series([{**r, "rtol": f"{r['rtol']:g}"} for r in rows]))
+    all_series.update(series([{**r, "rtol": f"{float(r['rtol']):g}"} for r in rows]))
     png = out / f"{name}_combined.png"
     plot(all_series, png, f"Work-precision, {args.scenario} breathing, level of detail "
                           f"{scene['scene.level_of_detail']}: our solvers, scipy solve_ivp on the same RHS "
