@@ -438,9 +438,9 @@ int bt_state_dim(struct BtTorso *h, size_t *n);
 int bt_get_state(struct BtTorso *h, double *y, size_t n);
 
 /**
- * For external integrators: sets the model to time `t` and state y (n doubles), so that the
- * quantities read afterwards (`bt_read`) are those of that state. `BT_ERR_UNAVAILABLE` until
- * the model accepts an external state.
+ * For external integrators: sets the model to time `t` and state y (n doubles, finite), so
+ * that the quantities read afterwards (`bt_read`, `bt_read_markers`) are those of that state
+ * and the next `bt_advance_to` continues from it. On error nothing changes.
  *
  * # Safety
  * `h` must be NULL or a live handle; `y` NULL or `n` readable doubles.
@@ -448,8 +448,11 @@ int bt_get_state(struct BtTorso *h, double *y, size_t n);
 int bt_set_state(struct BtTorso *h, double t, const double *y, size_t n);
 
 /**
- * For external integrators: evaluates dy/dt = f(t, y) with the current inputs and drive,
- * writing n doubles into `dydt`. Does not change the model's own state.
+ * For external integrators: evaluates dy/dt = f(t, y) with the current activation inputs
+ * plus the built-in drive evaluated at `t` (thesis eq. 2.4; clamped to 0-1, times the side
+ * gains), writing n doubles into `dydt`. Does not change the model's own state or time, so
+ * an integrator may call it at any t and y; `bt_set_state` then reads quantities off its
+ * solution.
  *
  * # Safety
  * `h` must be NULL or a live handle; `y` NULL or `n` readable doubles; `dydt` NULL or `n`

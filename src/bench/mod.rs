@@ -1,14 +1,17 @@
 //! Measurement kernels behind `torso bench`: timed frame loops of the model facade
 //! (volumes only or volumes plus markers), the cost of one right-hand-side evaluation,
 //! trajectories for work-precision studies (lung volume and marker positions at the output
-//! rate, with a wall-time cap), and random scenes drawn from the declared parameter ranges
-//! for the stress suite. Nothing here prints; the CLI (`src/cli/bench.rs`) formats the
+//! rate, with a wall-time cap, by the model's own adaptive solver or by a fixed-step
+//! semi-implicit Euler of the kind game engines use), and random scenes drawn from the
+//! declared parameter ranges for the stress suite. Nothing here prints; the CLI (`src/cli/bench.rs`) formats the
 //! results and the stress tests (`tests/stress_*.rs`) assert on them.
 
 pub mod stress;
 
 use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};
+use crate::dynamics::{Layout, RIBS};
 use crate::model::{Config, Drive, Quantity, Torso, Wave};
+use crate::solver::{Ode, SecondOrder, SemiImplicitEuler};
 use crate::stats::rng::Pcg64;
 use crate::{Error, Result};
 use serde::Serialize;
@@ -188,6 +191,113 @@ pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Tra
     out.steps = stats.steps;
     out.stiff_steps = stats.stiff_steps;
     out.stiffness_detected = torso.stiffness_detected();
+    Ok(Some(out))
+}
+
+/// The torso seen as a second-order system for [`SemiImplicitEuler`]: the configuration is
+/// rib angles, sternum position and quaternion, free vertex positions (the first
+/// `Layout::theta_dot` entries of the state), the rest are velocities; the right-hand side is
+/// [`Torso::rhs`] (current inputs plus the drive at t).
+pub struct TorsoSecondOrder<'a> {
+    /// The torso whose right-hand side is integrated (its own state is not touched).
+    pub torso: &'a mut Torso,
+    layout: Layout,
+}
+
+impl<'a> TorsoSecondOrder<'a> {
+    /// Wraps `torso`.
+    pub fn new(torso: &'a mut Torso) -> Self {
+        let layout = Layout::new(&torso.compiled().model);
+        TorsoSecondOrder { torso, layout }
+    }
+}
+
+impl Ode for TorsoSecondOrder<'_> {
+    fn dim(&self) -> usize {
+        self.layout.len
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        // the only error is a length mismatch, which the solver rules out; poison the
+        // result rather than panic if it ever happened
+        if self.torso.rhs(t, y, dydt).is_err() {
+            dydt.fill(f64::NAN);
+        }
+    }
+}
+
+impl SecondOrder for TorsoSecondOrder<'_> {
+    fn configuration_len(&self) -> usize {
+        self.layout.theta_dot
+    }
+
+    /// Rib angles, sternum and vertex positions move with their velocities; the sternum
+    /// quaternion with q' = (0, w) q / 2, w the world-frame angular velocity (as in
+    /// `dynamics::accelerations`).
+    fn configuration_rates(&self, y: &[f64], dq: &mut [f64]) {
+        let l = &self.layout;
+        dq[l.theta..l.theta + RIBS].copy_from_slice(&y[l.theta_dot..l.theta_dot + RIBS]);
+        dq[l.sternum_x..l.sternum_x + 3].copy_from_slice(&y[l.sternum_v..l.sternum_v + 3]);
+        let n3 = 3 * l.vertices;
+        dq[l.vertex_x..l.vertex_x + n3].copy_from_slice(&y[l.vertex_v..l.vertex_v + n3]);
+        let [w0, x0, y0, z0] = [0, 1, 2, 3].map(|i| y[l.sternum_q + i]);
+        let [wx, wy, wz] = [0, 1, 2].map(|i| y[l.sternum_w + i]);
+        // (0, w) * q, Hamilton product, halved
+        dq[l.sternum_q] = 0.5 * (-wx * x0 - wy * y0 - wz * z0);
+        dq[l.sternum_q + 1] = 0.5 * (wx * w0 + wy * z0 - wz * y0);
+        dq[l.sternum_q + 2] = 0.5 * (wy * w0 + wz * x0 - wx * z0);
+        dq[l.sternum_q + 3] = 0.5 * (wz * w0 + wx * y0 - wy * x0);
+    }
+
+    /// Renormalises the sternum quaternion.
+    fn project(&self, y: &mut [f64]) {
+        let q = &mut y[self.layout.sternum_q..self.layout.sternum_q + 4];
+        let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm > 0.0 && norm.is_finite() {
+            q.iter_mut().for_each(|v| *v /= norm);
+        }
+    }
+}
+
+/// As [`trajectory`], integrated by the fixed-step semi-implicit Euler method with nominal
+/// step `h` [s] (each 1/56 s frame in equal steps no larger than h) instead of the model's
+/// adaptive solver; lung volume and markers are read off the state at every frame through
+/// [`Torso::set_state`]. A step that leaves the finite numbers (h beyond the stability
+/// limit) is returned as [`Error::Numerical`].
+pub fn trajectory_semi_implicit(
+    config: &Config,
+    duration: f64,
+    h: f64,
+    cap: f64,
+) -> Result<Option<Trajectory>> {
+    let mut torso = Torso::new(config.clone())?;
+    torso.marker_model()?;
+    let frames = (duration * FRAME_RATE).round() as usize;
+    let mut solver = SemiImplicitEuler::new(h, torso.state_dim())?;
+    let mut y = torso.state().to_vec();
+    let mut t = torso.time();
+    let mut out = Trajectory {
+        lung: Vec::with_capacity(frames + 1),
+        markers: Vec::with_capacity(frames + 1),
+        ..Trajectory::default()
+    };
+    let start = Instant::now();
+    for i in 0..=frames {
+        if i > 0 {
+            let mut ode = TorsoSecondOrder::new(&mut torso);
+            solver.integrate(&mut ode, &mut t, &mut y, i as f64 / FRAME_RATE)?;
+            torso.set_state(t, &y)?;
+        }
+        out.lung.push(torso.read(Quantity::LungVolume)?);
+        out.markers
+            .push(torso.markers()?.iter().map(|p| [p.x, p.y, p.z]).collect());
+        if start.elapsed().as_secs_f64() > cap {
+            return Ok(None);
+        }
+    }
+    out.wall = start.elapsed().as_secs_f64();
+    let stats = solver.stats();
+    out.rhs_evaluations = stats.rhs_evaluations;
+    out.steps = stats.steps;
     Ok(Some(out))
 }
 
@@ -401,6 +511,60 @@ mod tests {
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 3.0);
         assert!(median(&[]).is_nan());
+    }
+
+    fn quiet_lod0() -> Config {
+        let mut c = Config {
+            drive: Drive::quiet(),
+            ..Config::default()
+        };
+        c.scene.level_of_detail = 0;
+        c
+    }
+
+    #[test]
+    fn configuration_rates_are_the_position_part_of_the_rhs() {
+        let mut torso = Torso::new(quiet_lod0()).expect("model");
+        torso.advance_to(0.7).expect("breathing state");
+        let y = torso.state().to_vec();
+        let mut ode = TorsoSecondOrder::new(&mut torso);
+        let p = ode.configuration_len();
+        let mut f = vec![0.0; ode.dim()];
+        ode.rhs(0.7, &y, &mut f);
+        let mut dq = vec![0.0; p];
+        ode.configuration_rates(&y, &mut dq);
+        let scale = f[..p].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0, "the torso moves");
+        for (i, (a, b)) in dq.iter().zip(&f[..p]).enumerate() {
+            assert!((a - b).abs() <= 1e-12 * scale, "entry {i}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn semi_implicit_euler_converges_at_first_order_on_the_torso_and_fails_when_unstable() {
+        let mut c = quiet_lod0();
+        c.solver.rtol = 1e-10;
+        c.solver.atol = 1e-12;
+        let duration = 0.1;
+        let reference = trajectory(&c, duration, f64::INFINITY)
+            .expect("reference")
+            .expect("no cap");
+        let lung_error = |h: f64| {
+            let run = trajectory_semi_implicit(&c, duration, h, f64::INFINITY)
+                .expect("stable")
+                .expect("no cap");
+            assert_eq!(run.rhs_evaluations, run.steps);
+            trajectory_error(&run, &reference)
+                .expect("same frames")
+                .lung
+        };
+        let (e1, e2) = (lung_error(4e-4), lung_error(2e-4));
+        assert!(e2 > 0.0 && (1.6..2.4).contains(&(e1 / e2)), "{e1} / {e2}");
+        // one step per 56 Hz frame is far beyond the stability limit
+        match trajectory_semi_implicit(&c, 0.5, 1.0 / FRAME_RATE, f64::INFINITY) {
+            Err(Error::Numerical { .. }) => {}
+            other => panic!("expected a numerical failure, got {:?}", other.map(|_| ())),
+        }
     }
 
     #[test]

@@ -888,27 +888,30 @@ pub unsafe extern "C" fn bt_get_state(h: *mut BtTorso, y: *mut f64, n: usize) ->
     }
 }
 
-/// For external integrators: sets the model to time `t` and state y (n doubles), so that the
-/// quantities read afterwards (`bt_read`) are those of that state. `BT_ERR_UNAVAILABLE` until
-/// the model accepts an external state.
+/// For external integrators: sets the model to time `t` and state y (n doubles, finite), so
+/// that the quantities read afterwards (`bt_read`, `bt_read_markers`) are those of that state
+/// and the next `bt_advance_to` continues from it. On error nothing changes.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `y` NULL or `n` readable doubles.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn bt_set_state(h: *mut BtTorso, t: f64, y: *const f64, n: usize) -> c_int {
-    let _ = (t, y);
     unsafe {
         with_handle(h, |b| {
             check_dim(b, n)?;
-            Err(unavailable(
-                "setting an external state is not available in this build of the model",
-            ))
+            if y.is_null() {
+                return Err(Failure(BT_ERR_NULL, "argument `y` is NULL".into()));
+            }
+            Ok(b.torso.set_state(t, std::slice::from_raw_parts(y, n))?)
         })
     }
 }
 
-/// For external integrators: evaluates dy/dt = f(t, y) with the current inputs and drive,
-/// writing n doubles into `dydt`. Does not change the model's own state.
+/// For external integrators: evaluates dy/dt = f(t, y) with the current activation inputs
+/// plus the built-in drive evaluated at `t` (thesis eq. 2.4; clamped to 0-1, times the side
+/// gains), writing n doubles into `dydt`. Does not change the model's own state or time, so
+/// an integrator may call it at any t and y; `bt_set_state` then reads quantities off its
+/// solution.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `y` NULL or `n` readable doubles; `dydt` NULL or `n`

@@ -5,13 +5,16 @@
 //!   evaluation per level of detail;
 //! - `work-precision`: wall time and right-hand-side evaluations against the error (lung
 //!   volume, marker positions) for every method and tolerance, against a high-order
-//!   reference at rtol 1e-12; CSV and a log-log PNG;
+//!   reference at rtol 1e-12, and for a fixed-step semi-implicit Euler at a range of step
+//!   sizes; CSV (and the reference frames, for external integrators to compare against) and
+//!   a log-log PNG;
 //! - `soak`: many random scenes from the declared parameter ranges, each simulated for a
 //!   minute: no NaN, no blow-up, every numerical failure listed.
 
 use crate::bench::{
-    FrameRun, Reads, RhsCost, SceneOutcome, Trajectory, TrajectoryError, frame_loop, median,
-    random_scene, rhs_cost, stress_scene, trajectory, trajectory_error,
+    FRAME_RATE, FrameRun, Reads, RhsCost, SceneOutcome, Trajectory, TrajectoryError, frame_loop,
+    median, random_scene, rhs_cost, stress_scene, trajectory, trajectory_error,
+    trajectory_semi_implicit,
 };
 use crate::model::{Config, Drive};
 use crate::solver::Method;
@@ -77,6 +80,14 @@ pub struct WorkPrecisionArgs {
     /// Level of detail.
     #[arg(long, default_value_t = 1)]
     pub lod: u32,
+    /// Nominal step sizes [s] of the fixed-step semi-implicit Euler runs, comma-separated,
+    /// largest first (an empty list skips them).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "2e-3,1e-3,5e-4,2e-4,1e-4,5e-5,2e-5,1e-5"
+    )]
+    pub fixed_steps: Vec<f64>,
 }
 
 /// Options of `torso bench soak`.
@@ -289,6 +300,15 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
         "reference: {:.2} s, {} RHS evaluations, stiffness flag {}",
         reference.wall, reference.rhs_evaluations, reference.stiffness_detected
     );
+    let name = format!("work_precision_{}", args.scenario);
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
+        path: args.out.clone(),
+        source: e,
+    })?;
+    // written now, so that an external integrator can be scored while the sweep runs
+    let reference_path = args.out.join(format!("{name}_reference.csv"));
+    write_reference(&reference_path, args, &base, &reference)?;
+    println!("reference frames: {}", reference_path.display());
     let rtols: Vec<f64> = (3..=10).map(|k| 10f64.powi(-k)).collect();
     let mut points = Vec::new();
     println!(
@@ -335,11 +355,6 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
             });
         }
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
-        path: args.out.clone(),
-        source: e,
-    })?;
-    let name = format!("work_precision_{}", args.scenario);
     let mut csv = String::from(
         "method,rtol,atol,status,wall_s,rhs_evaluations,steps,lung_error_l,marker_error_m,stiffness_flag,stiff_steps\n",
     );
@@ -371,10 +386,16 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     ));
     let csv_path = args.out.join(format!("{name}.csv"));
     write_text(&csv_path, &csv)?;
-    plot(&args.out, &name, &args.scenario, &points)?;
+    let fixed = fixed_step_sweep(&base, args, &reference)?;
+    write_text(
+        &args.out.join(format!("{name}_fixed.csv")),
+        &fixed_csv(&fixed),
+    )?;
+    plot(&args.out, &name, &args.scenario, &points, &fixed)?;
     println!(
-        "wrote {} and {}",
+        "wrote {}, {}_fixed.csv and {}",
         csv_path.display(),
+        name,
         args.out.join(format!("{name}.png")).display()
     );
     let flagged: Vec<String> = points
@@ -412,10 +433,19 @@ fn measure(
             Err(e) => return Err(format!("failed: {e}")),
         }
     }
+    finish(last, &walls, reference)
+}
+
+/// Median wall time, counts and error of the last of repeated runs.
+fn finish(
+    last: Option<Trajectory>,
+    walls: &[f64],
+    reference: &Trajectory,
+) -> std::result::Result<Measured, String> {
     let t = last.ok_or_else(|| "no run".to_string())?;
     let err = trajectory_error(&t, reference).map_err(|e| e.to_string())?;
     Ok((
-        median(&walls),
+        median(walls),
         t.rhs_evaluations,
         t.steps,
         err,
@@ -427,7 +457,13 @@ fn measure(
 /// Label, colour, log10 wall times, log10 lung errors, log10 marker errors.
 type Series = (String, (u8, u8, u8), Vec<f64>, Vec<f64>, Vec<f64>);
 
-fn plot(dir: &Path, name: &str, scenario: &str, points: &[Point]) -> Result<()> {
+fn plot(
+    dir: &Path,
+    name: &str,
+    scenario: &str,
+    points: &[Point],
+    fixed: &[FixedPoint],
+) -> Result<()> {
     let colors = [BLUE, RED, ORANGE, DARK];
     let mut series: Vec<Series> = Vec::new();
     for (i, m) in Method::ALL.iter().enumerate() {
@@ -441,6 +477,15 @@ fn plot(dir: &Path, name: &str, scenario: &str, points: &[Point]) -> Result<()> 
         }
         series.push((m.name().to_string(), colors[i % colors.len()], x, yl, ym));
     }
+    let (mut x, mut yl, mut ym) = (Vec::new(), Vec::new(), Vec::new());
+    for p in fixed {
+        if let Ok((wall, _, _, err, _, _)) = &p.result {
+            x.push(wall.max(1e-9).log10());
+            yl.push(err.lung.max(1e-16).log10());
+            ym.push(err.markers.max(1e-16).log10());
+        }
+    }
+    series.push((SEMI_IMPLICIT.to_string(), GREEN, x, yl, ym));
     let panel = |title: &str, y_label: &str, lung: bool| Panel {
         title: title.to_string(),
         x_label: "log10 wall time [s]".into(),
@@ -486,6 +531,153 @@ fn plot(dir: &Path, name: &str, scenario: &str, points: &[Point]) -> Result<()> 
             ),
         ],
     )
+}
+
+/// Name of the fixed-step semi-implicit Euler runs in tables and plots.
+const SEMI_IMPLICIT: &str = "semi-implicit-euler";
+/// Plot colour of the semi-implicit Euler runs.
+const GREEN: (u8, u8, u8) = (40, 150, 60);
+
+/// One fixed-step run of the semi-implicit Euler method.
+#[derive(Debug, Clone)]
+struct FixedPoint {
+    step: f64,
+    result: std::result::Result<Measured, String>,
+}
+
+/// The semi-implicit Euler method at every `--fixed-steps` size: an unstable step size
+/// (non-finite state) is reported as such; once a size exceeds the time cap the smaller ones
+/// are skipped.
+fn fixed_step_sweep(
+    base: &Config,
+    args: &WorkPrecisionArgs,
+    reference: &Trajectory,
+) -> Result<Vec<FixedPoint>> {
+    if let Some(h) = args
+        .fixed_steps
+        .iter()
+        .find(|h| !(h.is_finite() && **h > 0.0 && **h <= 1.0 / FRAME_RATE))
+    {
+        return Err(Error::invalid(
+            "--fixed-steps",
+            h,
+            format!("(0, {:e}] s (one frame)", 1.0 / FRAME_RATE),
+        ));
+    }
+    let mut out = Vec::new();
+    let mut over_cap = false;
+    for &step in &args.fixed_steps {
+        let result = if over_cap {
+            Err("skipped: a larger step already exceeded the time cap".to_string())
+        } else {
+            let mut walls = Vec::new();
+            let mut last = None;
+            let mut failure = None;
+            for _ in 0..args.repeats {
+                match trajectory_semi_implicit(base, args.duration, step, args.cap) {
+                    Ok(Some(t)) => {
+                        walls.push(t.wall);
+                        last = Some(t);
+                    }
+                    Ok(None) => {
+                        over_cap = true;
+                        failure = Some(format!("skipped: over the {} s time cap", args.cap));
+                        break;
+                    }
+                    Err(Error::Numerical { time, .. }) => {
+                        failure = Some(format!("unstable: non-finite state at t = {time:.4} s"));
+                        break;
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            match failure {
+                Some(reason) => Err(reason),
+                None => finish(last, &walls, reference),
+            }
+        };
+        match &result {
+            Ok((wall, rhs, steps, err, _, _)) => println!(
+                "{:<19} h {:>7.0e} {:>10.4} {:>9} {:>8} {:>11.3e} {:>11.3e}",
+                SEMI_IMPLICIT, step, wall, rhs, steps, err.lung, err.markers
+            ),
+            Err(reason) => println!("{SEMI_IMPLICIT:<19} h {step:>7.0e} {reason}"),
+        }
+        out.push(FixedPoint { step, result });
+    }
+    Ok(out)
+}
+
+/// CSV of the fixed-step runs.
+fn fixed_csv(fixed: &[FixedPoint]) -> String {
+    let mut csv = String::from(
+        "method,step_s,status,wall_s,rhs_evaluations,steps,lung_error_l,marker_error_m\n",
+    );
+    for p in fixed {
+        match &p.result {
+            Ok((wall, rhs, steps, err, _, _)) => csv.push_str(&format!(
+                "{SEMI_IMPLICIT},{:e},ok,{wall},{rhs},{steps},{:e},{:e}\n",
+                p.step, err.lung, err.markers
+            )),
+            Err(reason) => csv.push_str(&format!(
+                "{SEMI_IMPLICIT},{:e},\"{}\",,,,,\n",
+                p.step,
+                reason.replace('"', "'")
+            )),
+        }
+    }
+    csv
+}
+
+/// Writes the reference solution's frames (time, lung volume, every marker) so that an
+/// external integrator of the same right-hand side can be scored against the same reference;
+/// the first line records the run and, under their FMI parameter names (for `bt_config_set`),
+/// the level of detail and the drive, as `key=value` pairs.
+fn write_reference(
+    path: &Path,
+    args: &WorkPrecisionArgs,
+    base: &Config,
+    reference: &Trajectory,
+) -> Result<()> {
+    use std::fmt::Write as _;
+    let markers = reference.markers.first().map_or(0, Vec::len);
+    let d = &base.drive;
+    let mut s = format!(
+        "# scenario={} duration={} frame_rate={} method={} rtol=1e-12 atol=1e-14 \
+         rhs_evaluations={} scene.level_of_detail={} drive.frequency={}",
+        args.scenario,
+        args.duration,
+        FRAME_RATE,
+        Method::HighOrder.name(),
+        reference.rhs_evaluations,
+        base.scene.level_of_detail,
+        d.frequency
+    );
+    for (group, w) in [
+        ("ribs", d.ribs),
+        ("diaphragm", d.diaphragm),
+        ("abdominals", d.abdominals),
+    ] {
+        let _ = write!(
+            s,
+            " drive.{group}.amplitude={} drive.{group}.phase={}",
+            w.amplitude, w.phase
+        );
+    }
+    s.push('\n');
+    s.push_str("t_s,lung_l");
+    for m in 1..=markers {
+        let _ = write!(s, ",m{m}_x,m{m}_y,m{m}_z");
+    }
+    s.push('\n');
+    for (i, (lung, frame)) in reference.lung.iter().zip(&reference.markers).enumerate() {
+        let _ = write!(s, "{},{lung}", i as f64 / FRAME_RATE);
+        for p in frame {
+            let _ = write!(s, ",{},{},{}", p[0], p[1], p[2]);
+        }
+        s.push('\n');
+    }
+    write_text(path, &s)
 }
 
 fn soak(args: &SoakArgs) -> Result<()> {

@@ -304,6 +304,34 @@ impl Torso {
         &self.y
     }
 
+    /// Sets the time and the state vector, for external integrators: what is read afterwards
+    /// ([`Torso::read`], markers) is that of `y` at `t`, and the next [`Torso::advance_to`]
+    /// continues from it. `y` must have [`Torso::state_dim`] finite elements and `t` must be
+    /// finite; on error nothing changes. The state is taken as given (a sternum quaternion
+    /// off the unit sphere is normalised wherever it is used).
+    pub fn set_state(&mut self, t: f64, y: &[f64]) -> Result<()> {
+        let n = self.y.len();
+        if y.len() != n {
+            return Err(Error::invalid("state length", y.len(), format!("{n}")));
+        }
+        if !t.is_finite() {
+            return Err(Error::invalid("time", t, "a finite time"));
+        }
+        if let Some(i) = y.iter().position(|v| !v.is_finite()) {
+            return Err(Error::invalid(
+                format!("state[{i}]"),
+                y[i],
+                "a finite value",
+            ));
+        }
+        self.time = t;
+        self.y.copy_from_slice(y);
+        self.integrator.invalidate();
+        self.observation = None;
+        self.markers.invalidate();
+        Ok(())
+    }
+
     /// Evaluates the right-hand side f(t, y) with the current inputs and drive, for external
     /// integrators. `y` and `dydt` must have [`Torso::state_dim`] elements.
     pub fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<()> {

@@ -8,7 +8,8 @@
 //!
 //! Layout: `tableau.rs` holds the coefficients of the pairs (Dormand & Prince 1980,
 //! Bogacki & Shampine 1989, DOP853 of Hairer, Norsett & Wanner), `integrator.rs` the
-//! stepping, step control and dense output ([`Integrator`]); this file the public types.
+//! stepping, step control and dense output ([`Integrator`]), `symplectic.rs` a fixed-step
+//! semi-implicit Euler for comparison ([`SemiImplicitEuler`]); this file the public types.
 //!
 //! ```
 //! use breathing_torso::solver::{Integrator, Method, Ode, Options};
@@ -36,9 +37,11 @@
 //! ```
 
 mod integrator;
+mod symplectic;
 pub mod tableau;
 
 pub use integrator::Integrator;
+pub use symplectic::{SecondOrder, SemiImplicitEuler};
 pub use tableau::Tableau;
 
 /// A first-order system of ordinary differential equations y' = f(t, y).
