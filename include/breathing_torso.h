@@ -165,7 +165,8 @@ typedef struct BtConfig {
    */
   const char *slp_reference;
   /**
-   * Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order).
+   * Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order,
+   * 3 Rosenbrock-W for stiff scenes).
    */
   int solver_method;
   /**
@@ -457,7 +458,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{ee661842-ffcf-9eb2-55bc-3bd1edf3c67e}"
+#define BT_FMI_GUID "{05fb79f8-5009-e9d8-ffe5-366921aa6947}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u

@@ -176,6 +176,8 @@ pub struct Instance {
     last_successful_time: f64,
     last_step_status: fmi2Status,
     strings: Vec<CString>,
+    /// Whether the explicit solver's stiffness flag has been logged.
+    stiffness_logged: bool,
     /// Addresses of the FMU states handed out and not yet freed (managed by the C layer).
     pub(crate) fmu_states: std::collections::HashSet<usize>,
 }
@@ -306,6 +308,7 @@ impl Instance {
             phase: Phase::Instantiated,
             config: Config::default(),
             rtol_explicit: false,
+            stiffness_logged: false,
             inputs: [0.0; 8],
             torso: None,
             start_time: 0.0,
@@ -822,7 +825,22 @@ impl Instance {
                 return self.error(&format!("fmi2DoStep: {e}"));
             }
         };
-        match torso.advance_to(target - start) {
+        let result = torso.advance_to(target - start);
+        let stiff = torso.stiffness_detected();
+        if stiff && !self.stiffness_logged {
+            self.stiffness_logged = true;
+            self.log(
+                fmi2Warning,
+                Category::Warning,
+                &format!(
+                    "fmi2DoStep: the explicit solver detected stiffness near t = {target}; the stiff \
+                     method (parameter solver.method = {}, Rosenbrock-W with a sparse Jacobian) \
+                     may take far fewer steps",
+                    crate::solver::Method::Rosenbrock.code()
+                ),
+            );
+        }
+        match result {
             Ok(_) => {
                 self.time = target;
                 self.last_successful_time = target;
