@@ -163,7 +163,11 @@ fn core(args: &CoreArgs) -> Result<()> {
     };
     config.scene.level_of_detail = args.lod;
     config.solver.method = Method::from_name(&args.method).ok_or_else(|| {
-        Error::invalid("--method", &args.method, "dopri5, bs3, high-order or rosenbrock")
+        Error::invalid(
+            "--method",
+            &args.method,
+            "dopri5, bs3, high-order or rosenbrock",
+        )
     })?;
     config.validate()?;
     println!(
