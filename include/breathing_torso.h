@@ -165,7 +165,8 @@ typedef struct BtConfig {
    */
   const char *slp_reference;
   /**
-   * Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order).
+   * Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order,
+   * 3 Rosenbrock-W for stiff scenes).
    */
   int solver_method;
   /**
@@ -467,7 +468,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{ed6367f3-4203-64a5-2328-1965ca78ca07}"
+#define BT_FMI_GUID "{4a32bd39-da6e-b787-f357-b836457cac3e}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u

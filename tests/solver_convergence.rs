@@ -85,8 +85,8 @@ fn usable_errors(m: Method, p: &Problem) -> Vec<(u32, f64)> {
 
 #[test]
 fn observed_order_matches_nominal() {
-    for m in Method::ALL {
-        let nominal = m.tableau().order as f64;
+    for m in Method::EMBEDDED {
+        let nominal = m.tableau().unwrap().order as f64;
         for p in &PROBLEMS {
             let errs = usable_errors(m, p);
             assert!(

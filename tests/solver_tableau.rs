@@ -163,8 +163,8 @@ fn worst_row_sum(c: &[f64], a: &[&[f64]]) -> f64 {
 
 #[test]
 fn row_sums_equal_abscissae() {
-    for m in Method::ALL {
-        let tab = m.tableau();
+    for m in Method::EMBEDDED {
+        let tab = m.tableau().unwrap();
         assert_eq!(tab.c.len(), tab.stages, "{m:?}");
         assert_eq!(tab.a.len(), tab.stages, "{m:?}");
         for (i, row) in tab.a.iter().enumerate() {
@@ -183,7 +183,7 @@ fn row_sums_equal_abscissae() {
 #[test]
 fn row_sum_check_catches_a_wrong_abscissa() {
     // the defect of a popular crate's DOP853: c12 = 0 instead of 1
-    let tab = Method::HighOrder.tableau();
+    let tab = Method::HighOrder.tableau().unwrap();
     let mut c = tab.c.to_vec();
     c[11] = 0.0;
     assert!(worst_row_sum(&c, tab.a) > 0.5);
@@ -191,8 +191,8 @@ fn row_sum_check_catches_a_wrong_abscissa() {
 
 #[test]
 fn fsal_structure_and_estimator_consistency() {
-    for m in Method::ALL {
-        let tab = m.tableau();
+    for m in Method::EMBEDDED {
+        let tab = m.tableau().unwrap();
         let s = tab.stages;
         assert_eq!(tab.c[s - 1], 1.0, "{m:?}: last stage must be at c = 1");
         let b = tab.a[s - 1];
@@ -234,7 +234,7 @@ fn order_conditions_hold() {
         (Method::HighOrder, 8, 5, 3),
     ];
     for (m, p, p_hat, p_low) in cases {
-        let tab = m.tableau();
+        let tab = m.tableau().unwrap();
         let a = full_a(tab);
         let mm = a.len();
         let phi = stage_weights(&a, &all);
@@ -265,8 +265,8 @@ fn order_conditions_hold() {
 #[test]
 fn continuous_extensions_have_their_order() {
     let all = trees(8);
-    for m in Method::ALL {
-        let tab = m.tableau();
+    for m in Method::EMBEDDED {
+        let tab = m.tableau().unwrap();
         let a = full_a(tab);
         let phi = stage_weights(&a, &all);
         let q = tab.dense.order as usize;

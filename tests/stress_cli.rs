@@ -91,7 +91,12 @@ fn bench_work_precision_writes_every_combination_and_a_plot() {
         .skip(1)
         .filter(|l| !l.starts_with('#'))
         .collect();
-    assert_eq!(rows.len(), 3 * 8, "3 methods x 8 tolerances:\n{csv}");
+    let methods = breathing_torso::solver::Method::ALL.len();
+    assert_eq!(
+        rows.len(),
+        methods * 8,
+        "{methods} methods x 8 tolerances:\n{csv}"
+    );
     let mut previous_error = f64::INFINITY;
     for row in rows.iter().filter(|r| r.starts_with("dopri5,")) {
         let f: Vec<&str> = row.split(',').collect();

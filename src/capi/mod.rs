@@ -109,7 +109,8 @@ pub struct BtConfig {
     /// SLP recording registering the marker grid (NUL-terminated path), or NULL for the
     /// default grid. Copied by `bt_create`.
     pub slp_reference: *const c_char,
-    /// Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order).
+    /// Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order,
+    /// 3 Rosenbrock-W for stiff scenes).
     pub solver_method: c_int,
     /// Relative tolerance, 1e-12 .. 1e-2.
     pub solver_rtol: f64,

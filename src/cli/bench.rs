@@ -54,6 +54,9 @@ pub struct CoreArgs {
     /// Right-hand-side calls per timed batch.
     #[arg(long, default_value_t = 2000)]
     pub rhs_calls: usize,
+    /// Solver method of the frame loops: dopri5, bs3, high-order or rosenbrock.
+    #[arg(long, default_value = "dopri5")]
+    pub method: String,
     /// Also write the figures as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -173,6 +176,13 @@ fn core(args: &CoreArgs) -> Result<()> {
         ..Config::default()
     };
     config.scene.level_of_detail = args.lod;
+    config.solver.method = Method::from_name(&args.method).ok_or_else(|| {
+        Error::invalid(
+            "--method",
+            &args.method,
+            "dopri5, bs3, high-order or rosenbrock",
+        )
+    })?;
     config.validate()?;
     println!(
         "quiet breathing, default subject, level of detail {}, {} rtol {:e}, {} frames at 56 Hz, median of {}",

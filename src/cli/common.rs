@@ -30,7 +30,7 @@ pub struct SubjectArgs {
     /// Level of detail 0, 1 or 2.
     #[arg(long, default_value_t = 1)]
     pub lod: u32,
-    /// Solver method: dopri5, bs3 or high-order.
+    /// Solver method: dopri5, bs3, high-order or rosenbrock (stiff scenes).
     #[arg(long, default_value = "dopri5")]
     pub method: String,
     /// Relative tolerance.
@@ -66,8 +66,13 @@ impl SubjectArgs {
             ..Config::default()
         };
         c.scene.level_of_detail = self.lod;
-        c.solver.method = Method::from_name(&self.method)
-            .ok_or_else(|| Error::invalid("--method", &self.method, "dopri5, bs3 or high-order"))?;
+        c.solver.method = Method::from_name(&self.method).ok_or_else(|| {
+            Error::invalid(
+                "--method",
+                &self.method,
+                "dopri5, bs3, high-order or rosenbrock",
+            )
+        })?;
         c.solver.rtol = self.rtol;
         c.validate()?;
         Ok(c)

@@ -107,7 +107,7 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
     );
     if torso.stiffness_detected() {
         println!(
-            "note: the explicit solver reported stiffness; consider a larger tolerance or a lower level of detail"
+            "note: the explicit solver reported stiffness; the stiff method may be faster (--method rosenbrock, FMI solver.method = 3), or use a lower level of detail"
         );
     }
     println!("wrote {}", args.out.display());

@@ -15,13 +15,28 @@ use nalgebra::Vector3;
 
 /// Computes `data.force` for every anchor.
 pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
+    local_forces(model, data, act);
+    abdominal_pressure(model, data);
+    pleural_pressure(model, data);
+}
+
+/// As [`accumulate`], but with the abdominal and pleural pressures held at the given values
+/// `[abdominal, pleural]` [Pa] instead of computed from the volumes: the local part of the
+/// forces, whose Jacobian is sparse (used by `dynamics::jacobian`). `data`'s volumes and
+/// pressures are left as they were.
+pub fn accumulate_frozen(model: &Model, data: &mut Data, act: &Activations, pressures: [f64; 2]) {
+    local_forces(model, data, act);
+    apply_pressure(&model.abdomen_triangles, pressures[0], data);
+    apply_pressure(&model.thorax_triangles, pressures[1], data);
+}
+
+/// Element and vector-spring forces (everything but the pressures).
+fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
     for f in data.force.iter_mut() {
         *f = Vector3::zeros();
     }
     elements(model, data, act);
     vector_springs(model, data);
-    abdominal_pressure(model, data);
-    pleural_pressure(model, data);
 }
 
 /// Muscle and membrane elements. An element along a path p_0 .. p_m has length

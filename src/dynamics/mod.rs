@@ -17,6 +17,7 @@
 pub mod accelerations;
 pub mod energy;
 pub mod forces;
+pub mod jacobian;
 pub mod kinematics;
 mod model;
 mod params;

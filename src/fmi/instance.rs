@@ -216,6 +216,8 @@ pub struct Instance {
     /// Thorax, abdomen and trunk volumes [L] of the rest state of the built model, with the
     /// model's fingerprint (the reference of [`CAVITY_BOUNDS`]).
     rest_volumes: Option<(u64, [f64; 3])>,
+    /// Whether the explicit solver's stiffness flag has been logged.
+    stiffness_logged: bool,
     /// Addresses of the FMU states handed out and not yet freed (managed by the C layer).
     pub(crate) fmu_states: std::collections::HashSet<usize>,
 }
@@ -346,6 +348,7 @@ impl Instance {
             phase: Phase::Instantiated,
             config: Config::default(),
             rtol_explicit: false,
+            stiffness_logged: false,
             inputs: [0.0; 8],
             torso: None,
             start_time: 0.0,
@@ -874,6 +877,24 @@ impl Instance {
         let advanced = torso
             .advance_to(target - start)
             .and_then(|_| physiology_violation(torso, &rest));
+        let stiff = torso.stiffness_detected();
+        let restored = match &advanced {
+            Ok(Some(_)) => Some(torso.restore(&before)),
+            _ => None,
+        };
+        if stiff && !self.stiffness_logged {
+            self.stiffness_logged = true;
+            self.log(
+                fmi2Warning,
+                Category::Warning,
+                &format!(
+                    "fmi2DoStep: the explicit solver detected stiffness near t = {target}; a stiff \
+                     method is available (parameter solver.method = {}, Rosenbrock-W with a sparse \
+                     Jacobian), worth trying on stiff scenes (stiff cartilage, high bulk modulus)",
+                    crate::solver::Method::Rosenbrock.code()
+                ),
+            );
+        }
         match advanced {
             Ok(None) => {
                 self.time = target;
@@ -882,7 +903,7 @@ impl Instance {
                 fmi2OK
             }
             Ok(Some(violation)) => {
-                if let Err(e) = torso.restore(&before) {
+                if let Some(Err(e)) = restored {
                     self.phase = Phase::Error;
                     return self.error(&format!("fmi2DoStep: {e}"));
                 }

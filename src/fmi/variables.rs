@@ -748,7 +748,7 @@ fn build() -> Vec<Variable> {
             205,
             Integer,
             P::SolverMethod,
-            "Integration method: 0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high-order pair",
+            "Integration method: 0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high-order pair, 3 Rosenbrock-W (stiff)",
         )
         .range(0.0, methods),
         par("solver.rtol", 130, Real, P::SolverRtol, "Relative tolerance of the integrator").range(1e-12, 1e-2),

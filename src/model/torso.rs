@@ -2,10 +2,13 @@
 
 use super::{Config, Drive, Quantity, Snapshot};
 use crate::anatomy::{Anatomy, MuscleGroup};
+use crate::dynamics::jacobian::TorsoJacobian;
 use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
 use crate::observe::markers::{MarkerCache, MarkerOutputs};
 use crate::observe::{self, Compartments, Observation};
-use crate::solver::{Integrator, Ode, Options, Stats};
+use crate::solver::{
+    Integrator, Jacobian, JacobianStructure, Method, Ode, Options, Stats, StiffOde,
+};
 use crate::{Error, Result};
 use std::sync::Arc;
 
@@ -68,6 +71,8 @@ struct System<'a> {
     drive: &'a Drive,
     gain_right: f64,
     gain_left: f64,
+    /// Jacobian memory, when the stiff method is in use.
+    jacobian: Option<&'a mut TorsoJacobian>,
 }
 
 impl System<'_> {
@@ -89,6 +94,29 @@ impl Ode for System<'_> {
         let act = self.activations(t);
         dynamics::rhs(self.model, self.data, &act, y, dydt);
     }
+    fn as_stiff(&mut self) -> Option<&mut dyn StiffOde> {
+        if self.jacobian.is_some() {
+            Some(self)
+        } else {
+            None
+        }
+    }
+}
+
+impl StiffOde for System<'_> {
+    fn jacobian_structure(&mut self) -> JacobianStructure {
+        match &self.jacobian {
+            Some(j) => j.structure(),
+            None => JacobianStructure::default(),
+        }
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Jacobian) -> u64 {
+        let act = self.activations(t);
+        match &mut self.jacobian {
+            Some(j) => j.evaluate(self.model, self.data, &act, y, f0, jac),
+            None => 0,
+        }
+    }
 }
 
 /// A breathing torso: a compiled model plus its mutable data.
@@ -102,6 +130,8 @@ pub struct Torso {
     integrator: Integrator,
     observation: Option<Observation>,
     markers: MarkerOutputs,
+    /// Jacobian pattern and scratch of the stiff method (built when it is used).
+    jacobian: Option<Box<TorsoJacobian>>,
 }
 
 fn solver_options(config: &Config) -> Options {
@@ -136,6 +166,8 @@ impl Torso {
             integrator,
             observation: None,
             markers: MarkerOutputs::default(),
+            jacobian: (config.solver.method == Method::Rosenbrock)
+                .then(|| Box::new(TorsoJacobian::new(model))),
             config,
             compiled,
         })
@@ -207,6 +239,7 @@ impl Torso {
                 inputs,
                 integrator,
                 config,
+                jacobian,
                 ..
             } = self;
             let mut system = System {
@@ -216,6 +249,7 @@ impl Torso {
                 drive: &config.drive,
                 gain_right: config.gain_right,
                 gain_left: config.gain_left,
+                jacobian: jacobian.as_deref_mut(),
             };
             let result = integrator.integrate(&mut system, time, y, t);
             self.observation = None;
@@ -357,6 +391,7 @@ impl Torso {
             drive: &config.drive,
             gain_right: config.gain_right,
             gain_left: config.gain_left,
+            jacobian: None,
         };
         system.rhs(t, y, dydt);
         Ok(())
@@ -404,6 +439,9 @@ impl Torso {
             return Err(Error::State(
                 "snapshot solver memory has the wrong dimension".into(),
             ));
+        }
+        if integrator.method() == Method::Rosenbrock && self.jacobian.is_none() {
+            self.jacobian = Some(Box::new(TorsoJacobian::new(&self.compiled.model)));
         }
         self.integrator = integrator;
         self.time = snapshot.time;

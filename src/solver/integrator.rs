@@ -12,7 +12,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::tableau::Tableau;
+use super::rosenbrock::Rosenbrock;
+use super::tableau::{DOPRI5, Tableau};
 use super::{Method, Ode, Options, SolverError, Stats};
 
 /// Safety factor of the step-size controller.
@@ -71,6 +72,9 @@ pub struct Integrator {
     stats: Stats,
     stiff_hits: u32,
     nonstiff_run: u32,
+    /// Memory of the stiff method when it is the method in use.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    stiff: Option<Box<Rosenbrock>>,
     #[serde(skip)]
     work: Work,
 }
@@ -105,9 +109,12 @@ impl Integrator {
             stats: Stats::default(),
             stiff_hits: 0,
             nonstiff_run: 0,
+            stiff: (method == Method::Rosenbrock).then(|| Box::new(Rosenbrock::new(options, dim))),
             work: Work::default(),
         };
-        it.ensure_workspace();
+        if it.stiff.is_none() {
+            it.ensure_workspace();
+        }
         Ok(it)
     }
 
@@ -125,6 +132,9 @@ impl Integrator {
     pub fn set_options(&mut self, options: Options) -> Result<(), SolverError> {
         options.validate()?;
         self.options = options;
+        if let Some(r) = &mut self.stiff {
+            r.options = options;
+        }
         Ok(())
     }
 
@@ -135,12 +145,18 @@ impl Integrator {
 
     /// Cumulative statistics since creation or the last [`Integrator::reset`].
     pub fn stats(&self) -> Stats {
-        self.stats
+        match &self.stiff {
+            Some(r) => r.stats,
+            None => self.stats,
+        }
     }
 
     /// The step size the next step will try (0 before the first step).
     pub fn step_size(&self) -> f64 {
-        self.h_next
+        match &self.stiff {
+            Some(r) => r.h_next,
+            None => self.h_next,
+        }
     }
 
     /// Whether Hairer's stiffness test currently considers the problem stiff: it fired on
@@ -153,6 +169,9 @@ impl Integrator {
     /// keep the step size and controller memory.
     pub fn invalidate(&mut self) {
         self.fsal_valid = false;
+        if let Some(r) = &mut self.stiff {
+            r.invalidate();
+        }
     }
 
     /// Forgets everything: step size, controller memory, FSAL stage, statistics.
@@ -163,6 +182,9 @@ impl Integrator {
         self.stats = Stats::default();
         self.stiff_hits = 0;
         self.nonstiff_run = 0;
+        if let Some(r) = &mut self.stiff {
+            r.reset();
+        }
     }
 
     /// Advances `(t, y)` exactly to `t_end` (>= t) with adaptive steps; the last step is
@@ -229,10 +251,24 @@ impl Integrator {
         if t_end == *t {
             return Ok(());
         }
-        self.ensure_workspace();
-        self.ensure_fsal(ode, *t, y)?;
         let t0 = *t;
         let span = t_end - t0;
+        if self.method == Method::Rosenbrock && self.stiff.is_none() {
+            // memory serialised without its stiff part: start it afresh
+            self.stiff = Some(Box::new(Rosenbrock::new(self.options, self.dim)));
+        }
+        if let Some(r) = &mut self.stiff {
+            let n = ((span / h) * (1.0 - 1e-9)).ceil().max(1.0);
+            if n > self.options.max_steps as f64 {
+                return Err(SolverError::TooManySteps {
+                    t: *t,
+                    steps: self.options.max_steps,
+                });
+            }
+            return r.run_fixed(ode, t, y, t_end, n as u64);
+        }
+        self.ensure_workspace();
+        self.ensure_fsal(ode, *t, y)?;
         let n = ((span / h) * (1.0 - 1e-9)).ceil().max(1.0);
         if n > self.options.max_steps as f64 {
             return Err(SolverError::TooManySteps {
@@ -257,8 +293,9 @@ impl Integrator {
 
     // -----------------------------------------------------------------------------------
 
+    /// The explicit pair in use (the stiff method never reaches the explicit paths).
     fn tableau(&self) -> &'static Tableau {
-        self.method.tableau()
+        self.method.tableau().unwrap_or(&DOPRI5)
     }
 
     fn check_call<O: Ode + ?Sized>(
@@ -360,6 +397,13 @@ impl Integrator {
         self.check_call(ode, *t, y, t_end)?;
         if t_end == *t {
             return Ok(());
+        }
+        if self.method == Method::Rosenbrock && self.stiff.is_none() {
+            // memory serialised without its stiff part: start it afresh
+            self.stiff = Some(Box::new(Rosenbrock::new(self.options, self.dim)));
+        }
+        if let Some(r) = &mut self.stiff {
+            return r.run(ode, t, y, t_end, output_times, callback);
         }
         self.ensure_workspace();
         self.ensure_fsal(ode, *t, y)?;
@@ -671,7 +715,7 @@ impl Integrator {
         ode.rhs(t + h0, ytmp, f1);
         self.stats.rhs_evaluations += 1;
         let d2 = rms(&|i| (f1[i] - f0[i]) / sc(i)) / h0;
-        let p = self.method.tableau().error_order as f64;
+        let p = self.tableau().error_order as f64;
         let h1 = if !d2.is_finite() {
             h0 * 1e-3
         } else {

@@ -8,8 +8,12 @@
 //!
 //! Layout: `tableau.rs` holds the coefficients of the pairs (Dormand & Prince 1980,
 //! Bogacki & Shampine 1989, DOP853 of Hairer, Norsett & Wanner), `integrator.rs` the
-//! stepping, step control and dense output ([`Integrator`]), `symplectic.rs` a fixed-step
-//! semi-implicit Euler for comparison ([`SemiImplicitEuler`]); this file the public types.
+//! stepping, step control and dense output ([`Integrator`]); `rosenbrock.rs` the stiff
+//! method ([`Method::Rosenbrock`], ROS34PW2), `sparse.rs` its sparse Jacobian, colouring and
+//! linear solver; `symplectic.rs` a fixed-step semi-implicit Euler for comparison
+//! ([`SemiImplicitEuler`]); this file the public types. A problem offers its Jacobian's
+//! structure to the stiff method through [`StiffOde`] (found by [`Ode::as_stiff`]); without
+//! it the stiff method differences densely.
 //!
 //! ```
 //! use breathing_torso::solver::{Integrator, Method, Ode, Options};
@@ -37,10 +41,14 @@
 //! ```
 
 mod integrator;
+mod rosenbrock;
+pub mod sparse;
 mod symplectic;
 pub mod tableau;
 
 pub use integrator::Integrator;
+pub use rosenbrock::JacobianStructure;
+pub use sparse::{Colouring, Jacobian, Pattern};
 pub use symplectic::{SecondOrder, SemiImplicitEuler};
 pub use tableau::Tableau;
 
@@ -53,6 +61,21 @@ pub trait Ode {
     fn dim(&self) -> usize;
     /// Writes f(t, y) into `dydt` (same length as `y`).
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]);
+    /// The problem's Jacobian interface for the stiff method, if it has one; the default
+    /// (`None`) makes [`Method::Rosenbrock`] difference the whole Jacobian densely.
+    fn as_stiff(&mut self) -> Option<&mut dyn StiffOde> {
+        None
+    }
+}
+
+/// A problem that supplies its Jacobian J = S + U V^T to the stiff method: a sparse part S
+/// on a fixed pattern and a low-rank part (e.g. the coupling through a global pressure).
+pub trait StiffOde: Ode {
+    /// Pattern of S, block grouping of the unknowns and rank of U V^T (asked once).
+    fn jacobian_structure(&mut self) -> JacobianStructure;
+    /// Fills `jac` (values of S on the pattern, U and V) at (t, y), `f0` = f(t, y).
+    /// Returns the number of right-hand-side evaluations it made.
+    fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Jacobian) -> u64;
 }
 
 use serde::{Deserialize, Serialize};
@@ -68,11 +91,21 @@ pub enum Method {
     /// A high-order pair (code 2): DOP853 of Hairer, Norsett & Wanner, 8th order with
     /// 5th/3rd-order error estimators and 7th-order dense output.
     HighOrder,
+    /// The stiff method (code 3): ROS34PW2, a linearly implicit Rosenbrock-W method of
+    /// order 3(2) (Rang & Angermann 2005) with a sparse Jacobian; for stiff scenes.
+    Rosenbrock,
 }
 
 impl Method {
     /// All methods, by code.
-    pub const ALL: [Method; 3] = [Method::Dopri5, Method::BogackiShampine3, Method::HighOrder];
+    pub const ALL: [Method; 4] = [
+        Method::Dopri5,
+        Method::BogackiShampine3,
+        Method::HighOrder,
+        Method::Rosenbrock,
+    ];
+    /// The explicit embedded Runge-Kutta pairs (those with a [`Tableau`]).
+    pub const EMBEDDED: [Method; 3] = [Method::Dopri5, Method::BogackiShampine3, Method::HighOrder];
     /// FMI code of the method.
     pub fn code(self) -> i32 {
         self as i32
@@ -89,6 +122,7 @@ impl Method {
             Method::Dopri5 => "dopri5",
             Method::BogackiShampine3 => "bs3",
             Method::HighOrder => "high-order",
+            Method::Rosenbrock => "rosenbrock",
         }
     }
     /// Method from its short name.
@@ -108,6 +142,12 @@ pub struct Stats {
     pub rhs_evaluations: u64,
     /// Accepted steps at which the stiffness test fired.
     pub stiff_steps: u64,
+    /// Jacobian evaluations (stiff method).
+    #[serde(default)]
+    pub jacobian_evaluations: u64,
+    /// LU factorisations (stiff method).
+    #[serde(default)]
+    pub factorizations: u64,
 }
 
 /// Tolerances and limits of the adaptive integrator.

@@ -525,12 +525,13 @@ pub static DOP853: Tableau = Tableau {
 };
 
 impl super::Method {
-    /// The Butcher tableau of the method.
-    pub fn tableau(self) -> &'static Tableau {
+    /// The Butcher tableau of an explicit pair; `None` for the stiff method.
+    pub fn tableau(self) -> Option<&'static Tableau> {
         match self {
-            super::Method::Dopri5 => &DOPRI5,
-            super::Method::BogackiShampine3 => &BS3,
-            super::Method::HighOrder => &DOP853,
+            super::Method::Dopri5 => Some(&DOPRI5),
+            super::Method::BogackiShampine3 => Some(&BS3),
+            super::Method::HighOrder => Some(&DOP853),
+            super::Method::Rosenbrock => None,
         }
     }
 }

@@ -1,0 +1,290 @@
+//! The Jacobian of the right-hand side for the stiff method, as a sparse part plus a rank-2
+//! part: J = S + u_A (dP_A/dV_A) (dV_A/dy)^T + u_T (dP_T/dV_T) (dV_T/dy)^T.
+//!
+//! - S is the Jacobian with the abdominal and pleural pressures frozen
+//!   ([`super::forces::accumulate_frozen`]): every force is then local (elements, springs,
+//!   the pressure acting on each triangle), so S is sparse. Its pattern is built per body
+//!   ("carrier": a rib, the sternum or a free vertex): the accelerations of a body depend on
+//!   the positions and velocities of the bodies it shares an element, a spring or a pressure
+//!   triangle with. S is estimated by forward differences, one evaluation per colour of a
+//!   distance-2 column colouring (Curtis, Powell & Reid 1974).
+//! - The two global pressures (thesis eq. 2.5: P_A = K (V0/V - 1); lung recoil
+//!   P_T = -E_L (V_T - V_T0)) couple every wall point to every other. Their part is exact in
+//!   rank: u = ∂f/∂P, the response of the accelerations to a unit pressure (f is linear in
+//!   each pressure, so one evaluation with P + 1 gives it exactly), times dP/dV
+//!   (-K V0 / V^2 and -E_L), times the volume gradient dV/dy: for a free vertex the
+//!   area-weighted normal Σ (b x c)/6 over its triangles (divergence theorem), for the ribs
+//!   and the sternum (whose anchors carry wall points) central differences of the volume.
+
+use super::forces;
+use super::model::{Carrier, Model, RIBS, volume};
+use super::state::Layout;
+use super::{Activations, Data, kinematics};
+use crate::solver::{Colouring, Jacobian, JacobianStructure, Pattern};
+use nalgebra::{Point3, Vector3};
+
+/// The pattern, colouring and scratch memory of the torso's Jacobian, built once per model.
+#[derive(Clone, Debug)]
+pub struct TorsoJacobian {
+    structure: JacobianStructure,
+    colouring: Colouring,
+    floor: Vec<f64>,
+    ypert: Vec<f64>,
+    f1: Vec<f64>,
+    f2: Vec<f64>,
+    grad: Vec<Vector3<f64>>,
+}
+
+/// Block index of a body: ribs 0..24, the sternum 24, free vertex j 25 + j.
+fn body_of(c: Carrier) -> Option<usize> {
+    match c {
+        Carrier::Ground => None,
+        Carrier::Rib(r) => Some(r as usize),
+        Carrier::Sternum => Some(RIBS),
+        Carrier::Vertex(j) => Some(RIBS + 1 + j as usize),
+    }
+}
+
+/// State entries of body `b` (positions and velocities).
+fn body_columns(l: &Layout, b: usize) -> Vec<u32> {
+    let c = |r: std::ops::Range<usize>| r.map(|i| i as u32).collect::<Vec<_>>();
+    if b < RIBS {
+        vec![(l.theta + b) as u32, (l.theta_dot + b) as u32]
+    } else if b == RIBS {
+        let mut v = c(l.sternum_x..l.sternum_x + 7);
+        v.extend(c(l.sternum_v..l.sternum_v + 6));
+        v
+    } else {
+        let j = b - RIBS - 1;
+        let mut v = c(l.vertex_x + 3 * j..l.vertex_x + 3 * j + 3);
+        v.extend(c(l.vertex_v + 3 * j..l.vertex_v + 3 * j + 3));
+        v
+    }
+}
+
+impl TorsoJacobian {
+    /// Pattern (per body pair that interacts), block grouping (one block per body) and
+    /// colouring for `model`.
+    pub fn new(model: &Model) -> TorsoJacobian {
+        let l = Layout::new(model);
+        let bodies = RIBS + 1 + l.vertices;
+        let mut adj: Vec<Vec<u32>> = (0..bodies).map(|b| vec![b as u32]).collect();
+        let mut link = |anchors: &mut dyn Iterator<Item = u32>| {
+            let mut set: Vec<usize> = anchors
+                .filter_map(|a| body_of(model.carrier[a as usize]))
+                .collect();
+            set.sort_unstable();
+            set.dedup();
+            for &a in &set {
+                adj[a].extend(set.iter().map(|&b| b as u32));
+            }
+        };
+        let el = &model.elements;
+        for e in 0..el.len() {
+            link(&mut el.path_of(e).iter().copied());
+        }
+        for i in 0..model.springs.a.len() {
+            link(&mut [model.springs.a[i], model.springs.b[i]].into_iter());
+        }
+        for t in model
+            .abdomen_triangles
+            .iter()
+            .chain(&model.thorax_triangles)
+        {
+            link(&mut t.iter().copied());
+        }
+        let mut rows: Vec<Vec<u32>> = vec![Vec::new(); l.len];
+        let mut groups = vec![0u32; l.len];
+        for (b, nb) in adj.iter_mut().enumerate() {
+            nb.sort_unstable();
+            nb.dedup();
+            let mut cols = Vec::new();
+            for &o in nb.iter() {
+                cols.extend(body_columns(&l, o as usize));
+            }
+            for &i in &body_columns(&l, b) {
+                groups[i as usize] = b as u32;
+            }
+            // acceleration rows
+            let acc: Vec<usize> = if b < RIBS {
+                vec![l.theta_dot + b]
+            } else if b == RIBS {
+                (l.sternum_v..l.sternum_v + 6).collect()
+            } else {
+                let j = b - RIBS - 1;
+                (l.vertex_v + 3 * j..l.vertex_v + 3 * j + 3).collect()
+            };
+            for i in acc {
+                rows[i] = cols.clone();
+            }
+        }
+        // kinematic rows: position rates are the velocities; q' = (0, w) q / 2
+        for r in 0..RIBS {
+            rows[l.theta + r] = vec![(l.theta_dot + r) as u32];
+        }
+        for k in 0..3 {
+            rows[l.sternum_x + k] = vec![(l.sternum_v + k) as u32];
+        }
+        for k in 0..4 {
+            rows[l.sternum_q + k] = (l.sternum_q..l.sternum_q + 4)
+                .chain(l.sternum_w..l.sternum_w + 3)
+                .map(|i| i as u32)
+                .collect();
+        }
+        for i in 0..3 * l.vertices {
+            rows[l.vertex_x + i] = vec![(l.vertex_v + i) as u32];
+        }
+        let pattern = Pattern::from_rows(rows);
+        let colouring = Colouring::new(&pattern);
+        let n = l.len;
+        TorsoJacobian {
+            structure: JacobianStructure {
+                pattern,
+                groups,
+                rank: 2,
+            },
+            colouring,
+            floor: vec![1e-2; n],
+            ypert: vec![0.0; n],
+            f1: vec![0.0; n],
+            f2: vec![0.0; n],
+            grad: vec![Vector3::zeros(); model.rest.len()],
+        }
+    }
+
+    /// Pattern, grouping and rank, for the solver.
+    pub fn structure(&self) -> JacobianStructure {
+        self.structure.clone()
+    }
+
+    /// Number of colours (right-hand-side evaluations per sparse part).
+    pub fn colours(&self) -> usize {
+        self.colouring.colours
+    }
+
+    /// Fills `jac` at `y` (f0 = f(y) with activations `act`). Returns the number of
+    /// right-hand-side evaluations made.
+    pub fn evaluate(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        act: &Activations,
+        y: &[f64],
+        f0: &[f64],
+        jac: &mut Jacobian,
+    ) -> u64 {
+        let l = Layout::new(model);
+        let n = l.len;
+        // the pressures at y (and the volumes they come from)
+        kinematics::positions_and_velocities(model, data, &l, y);
+        let va = volume(&data.pos, &model.abdomen_triangles);
+        let vt = volume(&data.pos, &model.thorax_triangles);
+        let p = &model.params;
+        let pa = p.bulk_modulus * (model.abdomen_rest_volume / va - 1.0);
+        let pt = -p.lung_elastance * (vt - model.thorax_rest_volume);
+        let frozen = [pa, pt];
+        let mut f = |yy: &[f64], out: &mut [f64]| rhs_frozen(model, data, act, yy, out, frozen);
+        let mut evals = self.colouring.differences(
+            &mut f,
+            y,
+            f0,
+            &self.floor,
+            &mut self.ypert,
+            &mut self.f1,
+            &mut jac.values,
+        );
+        // u = ∂f/∂P (exact: f is affine in each pressure); V = (dP/dV) dV/dy
+        let slopes = [
+            -p.bulk_modulus * model.abdomen_rest_volume / (va * va),
+            -p.lung_elastance,
+        ];
+        for k in 0..2 {
+            let mut bumped = frozen;
+            bumped[k] += 1.0;
+            rhs_frozen(model, data, act, y, &mut self.f2, bumped);
+            evals += 1;
+            // f0 is the right-hand side with exactly these pressures
+            for ((u, &a), &b) in jac.u[k * n..(k + 1) * n].iter_mut().zip(&self.f2).zip(f0) {
+                *u = a - b;
+            }
+            let tris = if k == 0 {
+                &model.abdomen_triangles
+            } else {
+                &model.thorax_triangles
+            };
+            let vk = &mut jac.v[k * n..(k + 1) * n];
+            volume_gradient(
+                model,
+                data,
+                &l,
+                y,
+                tris,
+                &mut self.grad,
+                &mut self.ypert,
+                vk,
+            );
+            vk.iter_mut().for_each(|v| *v *= slopes[k]);
+        }
+        evals
+    }
+}
+
+/// The right-hand side with the two pressures held at `pressures` = [abdominal, pleural].
+pub fn rhs_frozen(
+    model: &Model,
+    data: &mut Data,
+    act: &Activations,
+    y: &[f64],
+    dy: &mut [f64],
+    pressures: [f64; 2],
+) {
+    let layout = Layout::new(model);
+    kinematics::positions_and_velocities(model, data, &layout, y);
+    forces::accumulate_frozen(model, data, act, pressures);
+    super::accelerations::compute(model, data, &layout, y, dy);
+}
+
+/// dV/dy of the volume enclosed by `tris` at state `y` into `out`: analytic for free
+/// vertices, central differences for the rib angles and the sternum pose; zero for
+/// velocities. `grad` and `ytmp` are scratch.
+#[allow(clippy::too_many_arguments)]
+fn volume_gradient(
+    model: &Model,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    tris: &[[u32; 3]],
+    grad: &mut [Vector3<f64>],
+    ytmp: &mut [f64],
+    out: &mut [f64],
+) {
+    out.fill(0.0);
+    kinematics::positions_and_velocities(model, data, l, y);
+    grad.iter_mut().for_each(|g| *g = Vector3::zeros());
+    for t in tris {
+        let [a, b, c] = t.map(|i| i as usize);
+        let (pa, pb, pc): (Point3<f64>, Point3<f64>, Point3<f64>) =
+            (data.pos[a], data.pos[b], data.pos[c]);
+        grad[a] += pb.coords.cross(&pc.coords) / 6.0;
+        grad[b] += pc.coords.cross(&pa.coords) / 6.0;
+        grad[c] += pa.coords.cross(&pb.coords) / 6.0;
+    }
+    for (j, &a) in model.vertex_anchor.iter().enumerate() {
+        let g = grad[a as usize];
+        out[l.vertex_x + 3 * j..l.vertex_x + 3 * j + 3].copy_from_slice(g.as_slice());
+    }
+    // bodies: central differences of the volume over their pose coordinates
+    ytmp.copy_from_slice(y);
+    let body_cols = (l.theta..l.theta + RIBS).chain(l.sternum_x..l.sternum_x + 7);
+    for i in body_cols {
+        let d = 1e-6 * y[i].abs().max(1.0);
+        ytmp[i] = y[i] + d;
+        kinematics::positions_and_velocities(model, data, l, ytmp);
+        let vp = volume(&data.pos, tris);
+        ytmp[i] = y[i] - d;
+        kinematics::positions_and_velocities(model, data, l, ytmp);
+        let vm = volume(&data.pos, tris);
+        ytmp[i] = y[i];
+        out[i] = (vp - vm) / (2.0 * d);
+    }
+}
