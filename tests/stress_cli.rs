@@ -80,6 +80,8 @@ fn bench_work_precision_writes_every_combination_and_a_plot() {
         "0.25",
         "--repeats",
         "1",
+        "--cap",
+        "10",
         "--lod",
         "0",
         "--out",
