@@ -14,8 +14,9 @@ The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface
    (drive.ribs.amplitude, drive.diaphragm.amplitude, drive.ribs.phase, drive.diaphragm.phase);
    cost = mean marker-to-grid distance over frames and tracked points (eq. 3.1) after one
    rigid pose correction fitted over all frames (Kabsch), as in the native fit;
-5. one FMU instance is reused: `fmi2Reset` before each run, drive parameters as start values,
-   one period of settling, then the recording window at the recording's frame times.
+5. one FMU instance is reused: `fmi2Reset` before each run (the FMU keeps its built model and
+   restores its fresh state), drive parameters as start values, one period of settling, then
+   the recording window at the recording's frame times, one fmi2GetReal per frame.
 
 Writes result.json with the FMI parameter names, `cost_m`, `initial_cost_m`,
 `skin_fit_error_m`, `evaluations`, `wall_s`, `delta_phase` and the fitted lung-volume CSV.
@@ -174,19 +175,33 @@ class FmuModel:
         self.fresh = True
 
     def _set(self, values: dict):
+        """Sets values grouped by type: one fmi2Set* call per type."""
+        groups = {}
         for name, value in values.items():
-            kind = self.kind[name]
+            groups.setdefault(self.kind[name], []).append((self.vr[name], value))
+        for kind, pairs in groups.items():
+            vrs = [vr for vr, _ in pairs]
             if kind == "Real":
-                self.fmu.setReal([self.vr[name]], [float(value)])
+                self.fmu.setReal(vrs, [float(v) for _, v in pairs])
             elif kind in ("Integer", "Enumeration"):
-                self.fmu.setInteger([self.vr[name]], [int(value)])
+                self.fmu.setInteger(vrs, [int(v) for _, v in pairs])
             elif kind == "Boolean":
-                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+                self.fmu.setBoolean(vrs, [bool(v) for _, v in pairs])
             else:
-                self.fmu.setString([self.vr[name]], [str(value)])
+                self.fmu.setString(vrs, [str(v) for _, v in pairs])
 
     def run(self, drive: dict, times: np.ndarray, volumes: bool = False):
-        """Markers [len(times), P, 3] (and lung volumes) at model times `times`."""
+        """Markers [len(times), P, 3] (and lung volumes) at model times `times`.
+
+        `fmi2Reset` keeps the built model aside and the next initialisation restores its fresh
+        state, so a run costs the integration alone. Per frame: one fmi2DoStep and one
+        fmi2GetReal of every marker coordinate straight into the output array (ctypes, a
+        precomputed value-reference array), no Python-level conversion.
+        """
+        import ctypes
+
+        from fmpy.fmi2 import fmi2True
+
         if not self.fresh:
             self.fmu.reset()
         self.fresh = False
@@ -197,16 +212,21 @@ class FmuModel:
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
-        out = np.empty((len(times), self.rows * self.cols, 3))
+        n = self.rows * self.cols
+        out = np.empty((len(times), n, 3))
         vol = np.empty(len(times))
+        vrs = (ctypes.c_uint32 * (3 * n))(*self.marker_vrs)
+        vvr = (ctypes.c_uint32 * 1)(self.volume_vr)
+        dbl = ctypes.POINTER(ctypes.c_double)
+        comp, do_step, get_real = self.fmu.component, self.fmu.fmi2DoStep, self.fmu.fmi2GetReal
         t = 0.0
         for k, target in enumerate(times):
             if target > t:
-                self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
+                do_step(comp, t, target - t, fmi2True)
                 t = target
-            out[k] = np.array(self.fmu.getReal(self.marker_vrs)).reshape(-1, 3)
+            get_real(comp, vrs, 3 * n, out[k].ctypes.data_as(dbl))
             if volumes:
-                vol[k] = self.fmu.getReal([self.volume_vr])[0]
+                get_real(comp, vvr, 1, vol[k:].ctypes.data_as(dbl))
         return out, vol
 
     def close(self):
@@ -392,6 +412,50 @@ def fit(args) -> dict:
     return result
 
 
+def bench(args) -> int:
+    """Native `torso fit` against this script's fit on the same recording and settings,
+    alternating, `args.bench` times each: median wall and CPU time of each and their ratio.
+    The native wall time is the fit's own (`wall_s`, excluding the process start); the CPU
+    time of a native run is its child-process CPU time."""
+    import resource
+    import statistics
+    import subprocess
+    import tempfile
+
+    rows = {"native": [], "fmpy": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(args.bench):
+            out = Path(tmp) / f"native{i}.json"
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cmd = [args.torso, "fit", "--slp", str(args.slp), "--out", str(out), "--sex", args.sex,
+                   "--age", str(args.age), "--stature", str(args.stature), "--mass", str(args.mass),
+                   "--breast-size", str(args.breast_size), "--posture", args.posture, "--lod", str(args.lod),
+                   "--rtol", str(args.rtol), "--max-evals", str(args.max_evals)]
+            run = subprocess.run(cmd, capture_output=True, text=True)
+            if run.returncode != 0:
+                print(run.stderr, file=sys.stderr)
+                return 1
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            r = json.loads(out.read_text())
+            rows["native"].append((r["wall_s"], after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime,
+                                   r["evaluations"], r["cost_m"]))
+            a = argparse.Namespace(**vars(args))
+            a.out = str(Path(tmp) / f"fmpy{i}.json")
+            c0 = time.process_time()
+            r = fit(a)
+            rows["fmpy"].append((r["wall_s"], time.process_time() - c0, r["evaluations"], r["cost_m"]))
+            print(f"run {i + 1}: native {rows['native'][-1][0]:.2f} s wall, {rows['native'][-1][1]:.2f} s CPU, "
+                  f"{rows['native'][-1][2]} evaluations; fmpy {rows['fmpy'][-1][0]:.2f} s wall, "
+                  f"{rows['fmpy'][-1][1]:.2f} s CPU, {rows['fmpy'][-1][2]} evaluations", flush=True)
+    med = {k: [statistics.median(x[j] for x in v) for j in range(4)] for k, v in rows.items()}
+    for k, (w, c, e, cost) in med.items():
+        print(f"{k:>6}: median wall {w:.2f} s, CPU {c:.2f} s, evaluations {e:.0f}, cost {cost * 1e3:.3f} mm, "
+              f"CPU per evaluation {c / e:.3f} s")
+    print(f"fmpy / native: wall {med['fmpy'][0] / med['native'][0]:.2f}x, CPU {med['fmpy'][1] / med['native'][1]:.2f}x, "
+          f"CPU per evaluation {(med['fmpy'][1] / med['fmpy'][2]) / (med['native'][1] / med['native'][2]):.2f}x")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fmu", default="fmu/BreathingTorso.fmu")
@@ -408,7 +472,12 @@ def main(argv=None) -> int:
     p.add_argument("--rtol", type=float, default=1e-6, help="solver.rtol of the FMU")
     p.add_argument("--slp-reference", action="store_true",
                    help="register and fit the skin inside the FMU (slp.reference), as `torso fit --skin-fit`")
+    p.add_argument("--bench", type=int, default=0, metavar="N",
+                   help="time N native fits (`--torso`) and N fmpy fits of the recording, alternating; print medians")
+    p.add_argument("--torso", default="target/release/torso", help="the torso executable for --bench")
     args = p.parse_args(argv)
+    if args.bench > 0:
+        return bench(args)
     try:
         r = fit(args)
     except RecordingError as e:
