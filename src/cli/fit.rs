@@ -2,6 +2,7 @@
 //! simulate the default subject, fit the bundled synthetic recording, print the report).
 
 use super::common::SubjectArgs;
+use crate::fit::fitting::fit_with_skin;
 use crate::fit::report::{summary, write_fit};
 use crate::fit::{FitOptions, Method, Recording, TorsoMarkers, fit_recording};
 use crate::model::Drive;
@@ -108,12 +109,12 @@ pub struct FitArgs {
     /// Seed of the randomised methods.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Register the grid and fit the skin to the first frame inside the model
-    /// (`slp.reference`, thesis 3.2) rather than a rigid registration alone; for subjects
-    /// whose shape differs from the model's. The model fits its rest pose to the frame, so
-    /// any difference between its rest pose and its end-expiratory pose stays in the skin
-    /// as an offset the drive cannot remove (about 2.5 mm with the current drive, whose
-    /// expiratory muscles are active at end-expiration).
+    /// Fit the model's skin to the recording (thesis 3.2, `slp.reference`) rather than a
+    /// rigid registration alone; for subjects whose shape differs from the model's. A first
+    /// fit with rigid registration gives the rest-pose grid the recording implies (each
+    /// frame minus the fitted model's displacement from rest, averaged over frames), written
+    /// beside the result as `<stem>_reference.csv`; the model fits its skin to that grid,
+    /// and a polish from the first optimum follows (both within --max-evals).
     #[arg(long)]
     pub skin_fit: bool,
 }
@@ -172,20 +173,27 @@ pub fn fit_file(
     skin_fit: bool,
 ) -> Result<crate::fit::Fit> {
     let recording = Recording::read(recording_path)?;
-    let mut config = model.config(Drive::default())?;
-    if skin_fit {
-        config.scene.slp_reference = Some(recording_path.to_path_buf());
-    }
+    let config = model.config(Drive::default())?;
     crate::fit::fitting::check_grid(
         recording.grid,
         (config.scene.grid_rows, config.scene.grid_cols),
     )?;
     let subject = config.subject.clone();
-    let mut source = TorsoMarkers::new(config)?;
     let mut bar = Progress::new(options.max_evals);
-    let fit = fit_recording(&mut source, &recording, options, &mut |n, b| {
-        bar.update(n, b)
-    })?;
+    let fit = if skin_fit {
+        let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
+        let reference = out.with_file_name(format!("{stem}_reference.csv"));
+        let fit = fit_with_skin(&config, &recording, &reference, options, &mut |n, b| {
+            bar.update(n, b)
+        })?;
+        println!("rest-pose reference grid: {}", reference.display());
+        fit
+    } else {
+        let mut source = TorsoMarkers::new(config)?;
+        fit_recording(&mut source, &recording, options, &mut |n, b| {
+            bar.update(n, b)
+        })?
+    };
     bar.finish();
     let outputs = write_fit(&fit, out, recording_path, &subject)?;
     println!("{}", summary(&fit));
