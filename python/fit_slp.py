@@ -4,9 +4,11 @@
 The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface:
 
 1. the recording (CSV: `# grid: RxC`, `# units: m|mm`, `time,marker[i].x,...`) is read;
-2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`), or, with
-   `--slp-reference`, the FMU registers its grid and fits its skin to it (`slp.reference`,
-   as `torso fit --skin-fit`) so that its `marker[i].x|y|z` outputs are in the recording's frame;
+2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`); with
+   `--slp-reference` a first fit gives the rest-pose grid the recording implies, written as
+   `<out stem>_reference.csv`, and the FMU registers its grid and fits its skin to it
+   (`slp.reference`, as `torso fit --skin-fit`; its `marker[i].x|y|z` outputs are then in the
+   recording's frame) before a polish;
 3. the breathing frequency comes from the recording's principal displacement (PCA of the
    detrended marker trajectories, Hann-windowed DFT with two-bin interpolation);
 4. a linearised start (two basis runs, rib cage alone and diaphragm alone, time-shifted,
@@ -14,8 +16,9 @@ The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface
    (drive.ribs.amplitude, drive.diaphragm.amplitude, drive.ribs.phase, drive.diaphragm.phase);
    cost = mean marker-to-grid distance over frames and tracked points (eq. 3.1) after one
    rigid pose correction fitted over all frames (Kabsch), as in the native fit;
-5. one FMU instance is reused: `fmi2Reset` before each run, drive parameters as start values,
-   one period of settling, then the recording window at the recording's frame times.
+5. one FMU instance is reused: `fmi2Reset` before each run (the FMU keeps its built model and
+   restores its fresh state), drive parameters as start values, one period of settling, then
+   the recording window at the recording's frame times, one fmi2GetReal per frame.
 
 Writes result.json with the FMI parameter names, `cost_m`, `initial_cost_m`,
 `skin_fit_error_m`, `evaluations`, `wall_s`, `delta_phase` and the fitted lung-volume CSV.
@@ -174,19 +177,33 @@ class FmuModel:
         self.fresh = True
 
     def _set(self, values: dict):
+        """Sets values grouped by type: one fmi2Set* call per type."""
+        groups = {}
         for name, value in values.items():
-            kind = self.kind[name]
+            groups.setdefault(self.kind[name], []).append((self.vr[name], value))
+        for kind, pairs in groups.items():
+            vrs = [vr for vr, _ in pairs]
             if kind == "Real":
-                self.fmu.setReal([self.vr[name]], [float(value)])
+                self.fmu.setReal(vrs, [float(v) for _, v in pairs])
             elif kind in ("Integer", "Enumeration"):
-                self.fmu.setInteger([self.vr[name]], [int(value)])
+                self.fmu.setInteger(vrs, [int(v) for _, v in pairs])
             elif kind == "Boolean":
-                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+                self.fmu.setBoolean(vrs, [bool(v) for _, v in pairs])
             else:
-                self.fmu.setString([self.vr[name]], [str(value)])
+                self.fmu.setString(vrs, [str(v) for _, v in pairs])
 
     def run(self, drive: dict, times: np.ndarray, volumes: bool = False):
-        """Markers [len(times), P, 3] (and lung volumes) at model times `times`."""
+        """Markers [len(times), P, 3] (and lung volumes) at model times `times`.
+
+        `fmi2Reset` keeps the built model aside and the next initialisation restores its fresh
+        state, so a run costs the integration alone. Per frame: one fmi2DoStep and one
+        fmi2GetReal of every marker coordinate straight into the output array (ctypes, a
+        precomputed value-reference array), no Python-level conversion.
+        """
+        import ctypes
+
+        from fmpy.fmi2 import fmi2True
+
         if not self.fresh:
             self.fmu.reset()
         self.fresh = False
@@ -197,16 +214,21 @@ class FmuModel:
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
-        out = np.empty((len(times), self.rows * self.cols, 3))
+        n = self.rows * self.cols
+        out = np.empty((len(times), n, 3))
         vol = np.empty(len(times))
+        vrs = (ctypes.c_uint32 * (3 * n))(*self.marker_vrs)
+        vvr = (ctypes.c_uint32 * 1)(self.volume_vr)
+        dbl = ctypes.POINTER(ctypes.c_double)
+        comp, do_step, get_real = self.fmu.component, self.fmu.fmi2DoStep, self.fmu.fmi2GetReal
         t = 0.0
         for k, target in enumerate(times):
             if target > t:
-                self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
+                do_step(comp, t, target - t, fmi2True)
                 t = target
-            out[k] = np.array(self.fmu.getReal(self.marker_vrs)).reshape(-1, 3)
+            get_real(comp, vrs, 3 * n, out[k].ctypes.data_as(dbl))
             if volumes:
-                vol[k] = self.fmu.getReal([self.volume_vr])[0]
+                get_real(comp, vvr, 1, vol[k:].ctypes.data_as(dbl))
         return out, vol
 
     def close(self):
@@ -281,13 +303,60 @@ def linearised_start(model, rest, rec, tracked, times, f, psi, rate):
     return best[1]
 
 
-def fit(args) -> dict:
+SKIN_POLISH_EVALS = 40
+
+
+def write_reference(path: Path, grid, points: np.ndarray):
+    """A still recording (two identical frames, metres) of `points` [P, 3] (NaN: untracked)."""
+    n = grid[0] * grid[1]
+    head = "time," + ",".join(f"marker[{i + 1}].{a}" for i in range(n) for a in "xyz")
+    cells = ["" if np.isnan(v) else repr(float(v)) for v in points.reshape(-1)]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    row = ",".join(cells)
+    path.write_text(f"# grid: {grid[0]}x{grid[1]}\n# units: m\n{head}\n0.0,{row}\n{1 / 56},{row}\n")
+
+
+def search(model, rec, tracked, times, f, x0, budget, step, history):
+    """Bounded Nelder-Mead (scipy, adaptive) from x0 in the unit box of the bounds (each
+    phase within pi of its start), as the native search: initial simplex of `step` times each
+    range, stop when the simplex spans less than 0.004 of each range and its costs agree
+    within 0.4 um. Returns x."""
     from scipy.optimize import minimize
 
+    lo = np.array([AMPLITUDE_RANGE[0]] * 2 + [x0[2] - math.pi, x0[3] - math.pi])
+    hi = np.array([AMPLITUDE_RANGE[1]] * 2 + [x0[2] + math.pi, x0[3] + math.pi])
+    span = hi - lo
+    model_times = 1.0 / f + times
+
+    def cost(u):
+        x = lo + np.clip(u, 0.0, 1.0) * span
+        pts, _ = model.run(drive_dict(f, x), model_times)
+        value = aligned_cost(pts, rec, tracked)
+        history.append(value)
+        return value
+
+    u0 = np.clip((np.array(x0, dtype=float) - lo) / span, 0.0, 1.0)
+    simplex = [u0]
+    for i in range(4):
+        v = u0.copy()
+        v[i] = v[i] + step if v[i] + step <= 1.0 else v[i] - step
+        simplex.append(v)
+    res = minimize(
+        cost,
+        u0,
+        method="Nelder-Mead",
+        bounds=[(0.0, 1.0)] * 4,
+        options={"maxfev": budget, "initial_simplex": np.array(simplex), "xatol": 4e-3, "fatol": 4e-7,
+                 "adaptive": True},
+    )
+    return lo + np.clip(res.x, 0.0, 1.0) * span
+
+
+def fit(args) -> dict:
     start = time.perf_counter()
-    (rows, cols), times_abs, rec = read_recording(Path(args.slp))
+    (rows, cols), times_abs, raw = read_recording(Path(args.slp))
     times = times_abs - times_abs[0]
-    tracked = ~np.isnan(rec[..., 0])
+    tracked = ~np.isnan(raw[..., 0])
     params = {
         "subject.sex": SEXES[args.sex],
         "subject.age": args.age,
@@ -300,8 +369,10 @@ def fit(args) -> dict:
         "grid.cols": cols,
         "solver.rtol": args.rtol,
     }
-    strings = {"slp.reference": str(Path(args.slp).resolve())} if args.slp_reference else {}
-    model = FmuModel(Path(args.fmu), params, strings)
+    out = Path(args.out)
+    model = FmuModel(Path(args.fmu), params, {})
+    history = []
+    skin = None
     try:
         n_model = model.rows * model.cols
         if n_model != rows * cols:
@@ -309,12 +380,11 @@ def fit(args) -> dict:
         rest, _ = model.run(drive_dict(0.25, [0, 0, 0, 0]), np.array([0.0]))
         rest = rest[0]
         first = tracked[0]
-        if not args.slp_reference:
-            # Rigid registration of the first frame to the rest markers (as `torso fit`);
-            # the cost's pose correction over all frames refines it.
-            rot, t = kabsch(rest[first], rec[0][first])
-            rec = rec @ rot.T + t
-        skin_err = float(np.linalg.norm(rec[0][first] - rest[first], axis=1).mean())
+        # Rigid registration of the first frame to the rest markers (as `torso fit`); the
+        # cost's pose correction over all frames refines it.
+        rot0, t0 = kabsch(rest[first], raw[0][first])
+        rec = raw @ rot0.T + t0
+        registration_err = float(np.linalg.norm(rec[0][first] - rest[first], axis=1).mean())
         rate = (len(times) - 1) / times[-1]
         f, signal, loadings = breathing_frequency(times, rec)
         # Phase of the breath's fundamental: the basis runs' phase (the shift scan covers
@@ -322,47 +392,44 @@ def fit(args) -> dict:
         c = np.stack([np.ones_like(times), np.sin(2 * np.pi * f * times), np.cos(2 * np.pi * f * times)], 1)
         coef = np.linalg.lstsq(c, signal, rcond=None)[0]
         psi = math.atan2(coef[2], coef[1])
-        settle = 1.0 / f
-        model_times = settle + times
-        budget = args.max_evals - 2
+        model_times = 1.0 / f + times
+        budget = args.max_evals - 2 - (SKIN_POLISH_EVALS if args.slp_reference else 0)
         x0 = linearised_start(model, rest, rec, tracked, times, f, psi, rate)
         x0[2], x0[3] = wrap(x0[2]), wrap(x0[3])
-        # Each phase searched within pi of its start (inside the drive's [-2 pi, 2 pi]).
-        lo = [AMPLITUDE_RANGE[0]] * 2 + [x0[2] - math.pi, x0[3] - math.pi]
-        hi = [AMPLITUDE_RANGE[1]] * 2 + [x0[2] + math.pi, x0[3] + math.pi]
-        history = []
-
-        def cost(x):
-            x = np.clip(x, lo, hi)
+        x = search(model, rec, tracked, times, f, x0, budget, 0.03, history)
+        if args.slp_reference:
+            # The rest-pose grid the first fit implies (each frame minus the fitted model's
+            # displacement from rest, averaged over frames; as `torso fit --skin-fit`), in the
+            # recording's frame, becomes the FMU's slp.reference: the FMU fits its skin to
+            # it and outputs markers in the recording's frame; then a polish.
             pts, _ = model.run(drive_dict(f, x), model_times)
-            value = aligned_cost(pts, rec, tracked)
-            history.append(value)
-            return value
-
-        span = np.array(hi) - np.array(lo)
-        simplex = [np.array(x0)]
-        for i in range(4):
-            v = np.array(x0, dtype=float)
-            step = 0.06 * span[i]
-            v[i] = v[i] + step if v[i] + step <= hi[i] else v[i] - step
-            simplex.append(v)
-        res = minimize(
-            cost,
-            x0,
-            method="Nelder-Mead",
-            bounds=list(zip(lo, hi)),
-            # Stopping as the native fit: simplex within 0.004 and costs within 0.4 um.
-            options={"maxfev": budget, "initial_simplex": np.array(simplex), "xatol": 4e-3, "fatol": 4e-7,
-                     "adaptive": True},
-        )
-        x = np.clip(res.x, lo, hi)
+            m, r = pts[tracked], rec[tracked]
+            rot, t = kabsch(m, r)
+            corrected = rec @ rot.T + t
+            implied = np.where(tracked[..., None], corrected - (pts - rest[None]), 0.0)
+            count = tracked.sum(axis=0)
+            ref_model = implied.sum(axis=0) / np.maximum(count, 1)[:, None]
+            # model frame -> recording frame: x_raw = rot0^T (rot^T (x - t) - t0)
+            ref = ((ref_model - t) @ rot - t0) @ rot0
+            ref[count == 0] = np.nan
+            reference = out.with_name(out.stem + "_reference.csv")
+            write_reference(reference, (rows, cols), ref)
+            model.strings = {"slp.reference": str(reference.resolve())}
+            rest_fitted, _ = model.run(drive_dict(0.25, [0, 0, 0, 0]), np.array([0.0]))
+            ok = count > 0
+            skin = {"before": float(np.linalg.norm(ref_model[ok] - rest[ok], axis=1).mean()),
+                    "after": float(np.linalg.norm(rest_fitted[0][ok] - ref[ok], axis=1).mean()),
+                    "skin_fitted": True, "reference": str(reference)}
+            rec = raw  # the FMU's markers are now in the recording's frame
+            budget = args.max_evals - len(history) - 3
+            x = search(model, rec, tracked, times, f, [x[0], x[1], wrap(x[2]), wrap(x[3])], budget, 0.01,
+                       history)
         best = int(np.argmin(history))
         pts, vol = model.run(drive_dict(f, x), model_times, volumes=True)
         final_cost = aligned_cost(pts, rec, tracked)
         evaluations = len(history) + 2
     finally:
         model.close()
-    out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     csv = out.with_name(out.stem + "_lung_volume.csv")
     with csv.open("w") as fh:
@@ -375,11 +442,11 @@ def fit(args) -> dict:
             "cost_m": final_cost,
             "initial_cost_m": history[0],
             "best_history_index": best,
-            # With slp.reference the FMU registers and fits its skin to the first frame: the
-            # remaining mean distance between its rest markers and that frame. Otherwise the
-            # distance after the rigid registration.
-            "skin_fit_error_m": {"before": None if args.slp_reference else skin_err, "after": skin_err,
-                                 "skin_fitted": bool(args.slp_reference)},
+            # Rigid registration: the mean distance between the registered first frame and the
+            # rest markers. With slp.reference: the skin fitting's mean error before and after
+            # against the rest-pose reference grid.
+            "skin_fit_error_m": skin or {"before": registration_err, "after": registration_err,
+                                         "skin_fitted": False},
             "evaluations": evaluations,
             "wall_s": time.perf_counter() - start,
             "delta_phase": wrap(x[3] - x[2]),
@@ -390,6 +457,50 @@ def fit(args) -> dict:
     )
     out.write_text(json.dumps(result, indent=2) + "\n")
     return result
+
+
+def bench(args) -> int:
+    """Native `torso fit` against this script's fit on the same recording and settings,
+    alternating, `args.bench` times each: median wall and CPU time of each and their ratio.
+    The native wall time is the fit's own (`wall_s`, excluding the process start); the CPU
+    time of a native run is its child-process CPU time."""
+    import resource
+    import statistics
+    import subprocess
+    import tempfile
+
+    rows = {"native": [], "fmpy": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(args.bench):
+            out = Path(tmp) / f"native{i}.json"
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cmd = [args.torso, "fit", "--slp", str(args.slp), "--out", str(out), "--sex", args.sex,
+                   "--age", str(args.age), "--stature", str(args.stature), "--mass", str(args.mass),
+                   "--breast-size", str(args.breast_size), "--posture", args.posture, "--lod", str(args.lod),
+                   "--rtol", str(args.rtol), "--max-evals", str(args.max_evals)]
+            run = subprocess.run(cmd, capture_output=True, text=True)
+            if run.returncode != 0:
+                print(run.stderr, file=sys.stderr)
+                return 1
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            r = json.loads(out.read_text())
+            rows["native"].append((r["wall_s"], after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime,
+                                   r["evaluations"], r["cost_m"]))
+            a = argparse.Namespace(**vars(args))
+            a.out = str(Path(tmp) / f"fmpy{i}.json")
+            c0 = time.process_time()
+            r = fit(a)
+            rows["fmpy"].append((r["wall_s"], time.process_time() - c0, r["evaluations"], r["cost_m"]))
+            print(f"run {i + 1}: native {rows['native'][-1][0]:.2f} s wall, {rows['native'][-1][1]:.2f} s CPU, "
+                  f"{rows['native'][-1][2]} evaluations; fmpy {rows['fmpy'][-1][0]:.2f} s wall, "
+                  f"{rows['fmpy'][-1][1]:.2f} s CPU, {rows['fmpy'][-1][2]} evaluations", flush=True)
+    med = {k: [statistics.median(x[j] for x in v) for j in range(4)] for k, v in rows.items()}
+    for k, (w, c, e, cost) in med.items():
+        print(f"{k:>6}: median wall {w:.2f} s, CPU {c:.2f} s, evaluations {e:.0f}, cost {cost * 1e3:.3f} mm, "
+              f"CPU per evaluation {c / e:.3f} s")
+    print(f"fmpy / native: wall {med['fmpy'][0] / med['native'][0]:.2f}x, CPU {med['fmpy'][1] / med['native'][1]:.2f}x, "
+          f"CPU per evaluation {(med['fmpy'][1] / med['fmpy'][2]) / (med['native'][1] / med['native'][2]):.2f}x")
+    return 0
 
 
 def main(argv=None) -> int:
@@ -407,8 +518,14 @@ def main(argv=None) -> int:
     p.add_argument("--max-evals", type=int, default=120)
     p.add_argument("--rtol", type=float, default=1e-6, help="solver.rtol of the FMU")
     p.add_argument("--slp-reference", action="store_true",
-                   help="register and fit the skin inside the FMU (slp.reference), as `torso fit --skin-fit`")
+                   help="fit the FMU's skin to the rest-pose grid a first fit implies (slp.reference), "
+                        "then polish, as `torso fit --skin-fit`")
+    p.add_argument("--bench", type=int, default=0, metavar="N",
+                   help="time N native fits (`--torso`) and N fmpy fits of the recording, alternating; print medians")
+    p.add_argument("--torso", default="target/release/torso", help="the torso executable for --bench")
     args = p.parse_args(argv)
+    if args.bench > 0:
+        return bench(args)
     try:
         r = fit(args)
     except RecordingError as e:

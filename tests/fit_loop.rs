@@ -489,3 +489,54 @@ fn identity_camera_keeps_the_model_frame() {
     let d = mean_distance(&[rest], &[first.iter().map(|p| Some(*p)).collect()]);
     assert!(d < 2e-3, "first frame near rest: {d}");
 }
+
+/// The rest-pose grid a fit implies is the model's rest grid in the camera frame, far
+/// closer than the recording's first frame (end-expiration, where the lagged activations are
+/// not zero) and than its per-frame noise.
+#[test]
+fn rest_reference_recovers_the_rest_grid_in_the_camera_frame() {
+    use breathing_torso::fit::fitting::rest_reference;
+    let d = drive(0.25, 0.3, 0.35, 0.3);
+    let mut model = grid_model();
+    let s = synthesize(
+        &mut model,
+        &SynthOptions {
+            drive: d,
+            seed: 23,
+            ..SynthOptions::default()
+        },
+    )
+    .unwrap();
+    let mut model = grid_model();
+    let fit = fit_recording(
+        &mut model,
+        &s.recording,
+        &FitOptions::default(),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let rest: Vec<Point3<f64>> = model.rest();
+    let reference = rest_reference(&fit, &rest).unwrap();
+    let truth: Vec<Point3<f64>> = rest.iter().map(|p| s.camera.apply(p)).collect();
+    let mean = |a: &[Option<Point3<f64>>]| {
+        a.iter()
+            .zip(&truth)
+            .map(|(q, p)| (q.unwrap() - p).norm())
+            .sum::<f64>()
+            / truth.len() as f64
+    };
+    let first = mean(&s.recording.frames[0]);
+    let implied = mean(&reference);
+    eprintln!(
+        "rest grid: first frame {:.3} mm away, implied reference {:.3} mm (noise floor {:.3} mm)",
+        first * 1e3,
+        implied * 1e3,
+        s.noise_floor_m * 1e3
+    );
+    assert!(
+        first > s.noise_floor_m,
+        "the first frame is not the rest pose"
+    );
+    assert!(implied < 0.15 * s.noise_floor_m, "{implied}");
+    assert!(rest_reference(&fit, &rest[1..]).is_err());
+}

@@ -169,3 +169,52 @@ fn six_recording_sweep() {
         accept(subject, posture, forced, 18.0, 100 + k as u64);
     }
 }
+
+/// Skin fitting at the pose the recording implies (`torso fit --skin-fit`): the model fits
+/// its rest skin to the rest-pose grid a first fit implies, then polishes; the cost stays
+/// at the noise floor (fitting the skin to the first frame as if it were the rest pose left
+/// an offset of about 2.5 mm the drive cannot remove), within the evaluation budget.
+#[test]
+fn skin_fit_at_the_implied_rest_pose_keeps_the_noise_floor() {
+    if !markers_available() {
+        return;
+    }
+    let mut source = TorsoMarkers::new(config(Subject::default())).unwrap();
+    let s = synthesize(
+        &mut source,
+        &SynthOptions {
+            drive: drive(false),
+            duration: 8.0,
+            seed: 33,
+            ..SynthOptions::default()
+        },
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("bt_skin_fit_{}", std::process::id()));
+    let reference = dir.join("reference.csv");
+    let fit = breathing_torso::fit::fitting::fit_with_skin(
+        &config(Subject::default()),
+        &s.recording,
+        &reference,
+        &FitOptions::default(),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let (before, after) = fit.skin_fit.expect("the model fitted its skin");
+    eprintln!(
+        "skin fit {:.3} -> {:.3} mm; cost {:.4} mm (floor {:.4}), {} evaluations",
+        before * 1e3,
+        after * 1e3,
+        fit.cost_m * 1e3,
+        s.noise_floor_m * 1e3,
+        fit.evaluations
+    );
+    assert!(reference.is_file());
+    assert!(fit.cost_m <= 1.15 * s.noise_floor_m);
+    assert!(fit.evaluations <= 120);
+    let t = s.truth;
+    let rel = |a: f64, b: f64| (a - b).abs() / b;
+    assert!(rel(fit.drive.ribs.amplitude, t.ribs.amplitude) < 0.10);
+    assert!(rel(fit.drive.diaphragm.amplitude, t.diaphragm.amplitude) < 0.10);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -2,6 +2,7 @@
 //! simulate the default subject, fit the bundled synthetic recording, print the report).
 
 use super::common::SubjectArgs;
+use crate::fit::fitting::fit_with_skin;
 use crate::fit::report::{summary, write_fit};
 use crate::fit::{FitOptions, Method, Recording, TorsoMarkers, fit_recording};
 use crate::model::Drive;
@@ -108,12 +109,12 @@ pub struct FitArgs {
     /// Seed of the randomised methods.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Register the grid and fit the skin to the first frame inside the model
-    /// (`slp.reference`, thesis 3.2) rather than a rigid registration alone; for subjects
-    /// whose shape differs from the model's. The model fits its rest pose to the frame, so
-    /// any difference between its rest pose and its end-expiratory pose stays in the skin
-    /// as an offset the drive cannot remove (about 2.5 mm with the current drive, whose
-    /// expiratory muscles are active at end-expiration).
+    /// Fit the model's skin to the recording (thesis 3.2, `slp.reference`) rather than a
+    /// rigid registration alone; for subjects whose shape differs from the model's. A first
+    /// fit with rigid registration gives the rest-pose grid the recording implies (each
+    /// frame minus the fitted model's displacement from rest, averaged over frames), written
+    /// beside the result as `<stem>_reference.csv`; the model fits its skin to that grid,
+    /// and a polish from the first optimum follows (both within --max-evals).
     #[arg(long)]
     pub skin_fit: bool,
 }
@@ -172,20 +173,27 @@ pub fn fit_file(
     skin_fit: bool,
 ) -> Result<crate::fit::Fit> {
     let recording = Recording::read(recording_path)?;
-    let mut config = model.config(Drive::default())?;
-    if skin_fit {
-        config.scene.slp_reference = Some(recording_path.to_path_buf());
-    }
+    let config = model.config(Drive::default())?;
     crate::fit::fitting::check_grid(
         recording.grid,
         (config.scene.grid_rows, config.scene.grid_cols),
     )?;
     let subject = config.subject.clone();
-    let mut source = TorsoMarkers::new(config)?;
     let mut bar = Progress::new(options.max_evals);
-    let fit = fit_recording(&mut source, &recording, options, &mut |n, b| {
-        bar.update(n, b)
-    })?;
+    let fit = if skin_fit {
+        let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
+        let reference = out.with_file_name(format!("{stem}_reference.csv"));
+        let fit = fit_with_skin(&config, &recording, &reference, options, &mut |n, b| {
+            bar.update(n, b)
+        })?;
+        println!("rest-pose reference grid: {}", reference.display());
+        fit
+    } else {
+        let mut source = TorsoMarkers::new(config)?;
+        fit_recording(&mut source, &recording, options, &mut |n, b| {
+            bar.update(n, b)
+        })?
+    };
     bar.finish();
     let outputs = write_fit(&fit, out, recording_path, &subject)?;
     println!("{}", summary(&fit));
@@ -316,5 +324,152 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         );
     }
     println!("demo done in {:.1} s", start.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// Options of `torso fit-sweep`.
+#[derive(Args, Debug)]
+pub struct SweepArgs {
+    /// Output directory: the recordings with their truth, sweep.json and sweep.md.
+    #[arg(long, default_value = "out/fit_sweep")]
+    pub out: PathBuf,
+    /// Recording length [s].
+    #[arg(long, default_value_t = 18.0)]
+    pub duration: f64,
+    /// Level of detail 0, 1 or 2.
+    #[arg(long, default_value_t = 0)]
+    pub lod: u32,
+    /// Relative tolerance of the solver.
+    #[arg(long, default_value_t = 1e-4)]
+    pub rtol: f64,
+    /// Search method: nelder-mead, multistart or cmaes.
+    #[arg(long, default_value = "nelder-mead")]
+    pub method: String,
+    /// Largest number of cost evaluations per fit.
+    #[arg(long, default_value_t = 120)]
+    pub max_evals: usize,
+    /// Recordings fitted at once.
+    #[arg(long, default_value_t = 1)]
+    pub jobs: usize,
+    /// Run only the cases whose label contains this text (e.g. `woman`, `supine forced`).
+    #[arg(long)]
+    pub only: Option<String>,
+}
+
+/// Runs `torso fit-sweep`.
+pub fn sweep(args: &SweepArgs) -> Result<()> {
+    use crate::fit::sweep::{SweepOptions, case_config, default_cases, run_sweep, table};
+    let options = SweepOptions {
+        duration: args.duration,
+        level_of_detail: args.lod,
+        rtol: args.rtol,
+        fit: FitOptions {
+            method: Method::from_name(&args.method)?,
+            max_evals: args.max_evals,
+            ..FitOptions::default()
+        },
+        jobs: args.jobs,
+    };
+    crate::fit::SynthOptions {
+        duration: args.duration,
+        ..Default::default()
+    }
+    .validate()?;
+    let cases: Vec<_> = default_cases()
+        .into_iter()
+        .filter(|c| {
+            args.only
+                .as_ref()
+                .is_none_or(|o| c.label.contains(o.as_str()))
+        })
+        .collect();
+    if cases.is_empty() {
+        return Err(Error::invalid(
+            "--only",
+            args.only.clone().unwrap_or_default(),
+            "text found in a case label such as `man standing quiet`",
+        ));
+    }
+    for c in &cases {
+        case_config(c, &options)?;
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    let start = std::time::Instant::now();
+    let rows = run_sweep(&cases, &options, &|r| {
+        eprintln!(
+            "{}: {} evaluations, {:.1} s, cost {:.3} mm (floor {:.3})",
+            r.case.label,
+            r.evaluations,
+            r.wall_s,
+            r.cost_m * 1e3,
+            r.synthetic.noise_floor_m * 1e3
+        )
+    })?;
+    let mut json_rows = Vec::new();
+    for (i, r) in rows.iter().enumerate() {
+        let stem = format!("rec{}_{}", i + 1, r.case.label.replace(' ', "_"));
+        let rec = args.out.join(format!("{stem}.csv"));
+        r.synthetic.recording.write(&rec)?;
+        let synth = crate::fit::SynthOptions {
+            drive: crate::fit::sweep::case_drive(r.case.forced),
+            duration: args.duration,
+            seed: r.case.seed,
+            ..Default::default()
+        };
+        let truth = crate::fit::report::truth_json(&r.synthetic, &r.case.subject, args.lod, &synth);
+        let tpath = args.out.join(format!("{stem}.truth.json"));
+        let text = serde_json::to_string_pretty(&truth)
+            .map_err(|e| Error::State(format!("truth JSON: {e}")))?;
+        std::fs::write(&tpath, text + "\n").map_err(|e| Error::io(&tpath, e))?;
+        json_rows.push(serde_json::json!({
+            "case": r.case.label,
+            "recording": rec.display().to_string(),
+            "truth": truth,
+            "fitted": crate::fit::report::drive_fmi(&r.fitted),
+            "delta_phase": r.delta_phase,
+            "errors": {
+                "ribs_amplitude_rel": r.ribs_error(),
+                "diaphragm_amplitude_rel": r.diaphragm_error(),
+                "delta_phase_rad": r.phase_error(),
+                "frequency_rel": r.frequency_error(),
+                "cost_over_noise_floor": r.cost_ratio(),
+            },
+            "cost_m": r.cost_m,
+            "noise_floor_m": r.synthetic.noise_floor_m,
+            "evaluations": r.evaluations,
+            "converged": r.converged,
+            "wall_s": r.wall_s,
+            "failures": r.failures(),
+        }));
+    }
+    let text = table(&rows);
+    let header = format!(
+        "torso fit-sweep --duration {} --lod {} --rtol {} --method {} --max-evals {} --jobs {}\n\n",
+        args.duration, args.lod, args.rtol, args.method, args.max_evals, args.jobs
+    );
+    let md = args.out.join("sweep.md");
+    std::fs::write(&md, header + &text).map_err(|e| Error::io(&md, e))?;
+    let js = args.out.join("sweep.json");
+    let body = serde_json::to_string_pretty(&serde_json::json!({
+        "duration_s": args.duration,
+        "level_of_detail": args.lod,
+        "rtol": args.rtol,
+        "method": args.method,
+        "max_evals": args.max_evals,
+        "jobs": args.jobs,
+        "cases": json_rows,
+    }))
+    .map_err(|e| Error::State(format!("sweep JSON: {e}")))?;
+    std::fs::write(&js, body + "\n").map_err(|e| Error::io(&js, e))?;
+    println!("{text}");
+    let failed = rows.iter().filter(|r| !r.failures().is_empty()).count();
+    println!(
+        "{} of {} recordings meet every acceptance item; {:.1} s; wrote {} and {}",
+        rows.len() - failed,
+        rows.len(),
+        start.elapsed().as_secs_f64(),
+        md.display(),
+        js.display()
+    );
     Ok(())
 }

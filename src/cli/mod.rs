@@ -40,6 +40,8 @@ pub enum Command {
     Synth(synth::SynthArgs),
     /// Fit the model to an SLP recording (registration, frequency, amplitudes and phases).
     Fit(fit::FitArgs),
+    /// Synthesise the six acceptance recordings, fit each, print truth against fit.
+    FitSweep(fit::SweepArgs),
     /// Package the FMU, simulate the default subject and fit the bundled recording.
     Demo(fit::DemoArgs),
     /// Write the rest geometry (skin, ribs, sternum, abdomen, marker grid) as OBJ files.
@@ -74,6 +76,7 @@ pub fn main() -> i32 {
         Command::SynthSpirometry(a) => validate::run_synth(&a),
         Command::Synth(a) => synth::main(&a),
         Command::Fit(a) => fit::main(&a),
+        Command::FitSweep(a) => fit::sweep(&a),
         Command::Demo(a) => fit::demo(&a),
         Command::ExportObj(a) => skin::export_obj(&a),
         Command::RenderSkin(a) => skin::render_skin(&a),

@@ -84,6 +84,10 @@ pub struct FitOptions {
     pub starts: usize,
     /// Seed of the randomised methods.
     pub seed: u64,
+    /// Start the search here, (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm) with phases at
+    /// the recording's first frame, with a small simplex (a polish of an earlier fit);
+    /// overrides `linearised_start` and `start_amplitudes`.
+    pub start: Option<[f64; 4]>,
 }
 
 impl Default for FitOptions {
@@ -96,6 +100,7 @@ impl Default for FitOptions {
             abdominals: Wave::default(),
             starts: 4,
             seed: 1,
+            start: None,
         }
     }
 }
@@ -464,7 +469,10 @@ pub fn fit_recording(
         },
         abdominals: options.abdominals,
     };
-    let x0 = if options.linearised_start {
+    let linearised = options.linearised_start && options.start.is_none();
+    let x0 = if let Some(x) = options.start {
+        [x[0].clamp(alo, ahi), x[1].clamp(alo, ahi), x[2], x[3]]
+    } else if linearised {
         linearised_start(
             model,
             &rest,
@@ -491,15 +499,17 @@ pub fn fit_recording(
         (x0[2] - PI, x0[2] + PI),
         (x0[3] - PI, x0[3] + PI),
     ])?;
-    let start_runs = if options.linearised_start {
-        START_RUNS
-    } else {
-        0
-    };
+    let start_runs = if linearised { START_RUNS } else { 0 };
     let budget = options.max_evals - start_runs;
     let nm = NelderMeadOptions {
         max_evals: budget,
-        initial_step: if options.linearised_start { 0.03 } else { 0.15 },
+        initial_step: if options.start.is_some() {
+            0.01
+        } else if linearised {
+            0.03
+        } else {
+            0.15
+        },
         // Stop when the simplex spans less than 0.4 % of each range (amplitude 0.004,
         // phase 0.025 rad) and its costs agree within 0.05 % (0.4 um at a 0.8 mm cost).
         x_tol: 4e-3,
@@ -528,7 +538,11 @@ pub fn fit_recording(
             &x0,
             &bounds,
             budget,
-            if options.linearised_start { 0.1 } else { 0.25 },
+            if linearised || options.start.is_some() {
+                0.1
+            } else {
+                0.25
+            },
             options.seed,
             progress,
         )?,
@@ -568,4 +582,120 @@ pub fn fit_recording(
         method: options.method,
         grid: recording.grid,
     })
+}
+
+/// The rest-pose grid a fit implies, in the recording's frame: for each point, the mean
+/// over the frames where it is tracked of the registered recorded point minus the fitted
+/// model's displacement from rest at that frame. The skin is fitted to the rest
+/// (activation-free) pose (thesis 3.2), and no frame of a recording is at rest, not even
+/// end-expiration, where the expiratory muscles (internal intercostals, in antiphase with
+/// the rib-cage wave) are active; averaging over every frame also divides the recording's
+/// noise by the square root of the number of frames. `rest` is the model's rest markers in
+/// the model frame of `fit` (the model the fit ran on).
+pub fn rest_reference(fit: &Fit, rest: &[Point3<f64>]) -> Result<Vec<Option<Point3<f64>>>> {
+    if rest.len() != fit.grid.0 * fit.grid.1 {
+        return Err(Error::invalid(
+            "rest markers",
+            rest.len(),
+            format!("{} points", fit.grid.0 * fit.grid.1),
+        ));
+    }
+    let mut sum = vec![nalgebra::Vector3::zeros(); rest.len()];
+    let mut count = vec![0usize; rest.len()];
+    for (recorded, model) in fit.recorded.iter().zip(&fit.fitted.markers) {
+        for (p, (q, m)) in recorded.iter().zip(model).enumerate() {
+            if let Some(q) = q {
+                sum[p] += q.coords - (m - rest[p]);
+                count[p] += 1;
+            }
+        }
+    }
+    Ok(sum
+        .iter()
+        .zip(&count)
+        .map(|(s, &n)| (n > 0).then(|| fit.to_model.apply_inverse(&Point3::from(s / n as f64))))
+        .collect())
+}
+
+/// Evaluations kept for the polish of [`fit_with_skin`].
+pub const SKIN_POLISH_EVALS: usize = 40;
+
+/// A fit with the model's skin fitted to the recording (thesis 3.2) at the pose the
+/// recording implies:
+/// 1. a fit on `config` with rigid registration (`scene.slp_reference` unset);
+/// 2. the rest-pose grid that fit implies ([`rest_reference`]) is written to `reference` (a
+///    still recording in the recording's frame) and becomes `scene.slp_reference`: the
+///    model registers its grid to it and fits its rest skin to it;
+/// 3. a Nelder-Mead polish on that model from the first fit's optimum.
+///
+/// The evaluations of both searches count against `options.max_evals` (the first gets all
+/// but [`SKIN_POLISH_EVALS`]); the result is the polish's, with the first fit's starting
+/// cost, the total evaluations and the total wall time.
+pub fn fit_with_skin(
+    config: &crate::Config,
+    recording: &Recording,
+    reference: &std::path::Path,
+    options: &FitOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Fit> {
+    let start = Instant::now();
+    if options.max_evals < SKIN_POLISH_EVALS + 10 {
+        return Err(Error::invalid(
+            "--max-evals",
+            options.max_evals,
+            format!(
+                "at least {} with skin fitting (a first fit and a polish)",
+                SKIN_POLISH_EVALS + 10
+            ),
+        ));
+    }
+    let mut rigid = config.clone();
+    rigid.scene.slp_reference = None;
+    let mut source = super::TorsoMarkers::new(rigid)?;
+    let first = fit_recording(
+        &mut source,
+        recording,
+        &FitOptions {
+            max_evals: options.max_evals - SKIN_POLISH_EVALS,
+            ..options.clone()
+        },
+        progress,
+    )?;
+    let rest = source.rest_markers()?;
+    let frame = rest_reference(&first, &rest)?;
+    // Two identical frames: a still recording of the rest pose (the format needs two).
+    let t0 = recording.times.first().copied().unwrap_or(0.0);
+    Recording {
+        grid: recording.grid,
+        times: vec![t0, t0 + 1.0 / recording.rate().max(1.0)],
+        frames: vec![frame.clone(), frame],
+        units: super::Units::Metres,
+    }
+    .write(reference)?;
+    let mut fitted = config.clone();
+    fitted.scene.slp_reference = Some(reference.to_path_buf());
+    let mut source = super::TorsoMarkers::new(fitted)?;
+    let d = &first.drive;
+    let done = first.evaluations;
+    let mut second = fit_recording(
+        &mut source,
+        recording,
+        &FitOptions {
+            method: Method::NelderMead,
+            max_evals: options.max_evals - done,
+            start: Some([
+                d.ribs.amplitude,
+                d.diaphragm.amplitude,
+                d.ribs.phase,
+                d.diaphragm.phase,
+            ]),
+            ..options.clone()
+        },
+        &mut |n, best| progress(done + n, best),
+    )?;
+    second.evaluations += done;
+    second.initial_cost_m = first.initial_cost_m;
+    second.method = options.method;
+    second.wall_s = start.elapsed().as_secs_f64();
+    Ok(second)
 }

@@ -10,6 +10,7 @@
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
 //! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
+//! | [`sweep`] | the acceptance sweep: six synthetic recordings fitted back, errors against truth |
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
 pub mod fitting;
@@ -18,6 +19,7 @@ pub mod principal;
 pub mod recording;
 pub mod report;
 pub mod source;
+pub mod sweep;
 pub mod synth;
 
 pub use fitting::{Fit, FitOptions, Method, fit_recording};

@@ -206,6 +206,12 @@ pub struct Instance {
     rtol_explicit: bool,
     inputs: [f64; 8],
     torso: Option<Torso>,
+    /// Snapshot of `torso` taken right after it was built (its fresh state).
+    fresh: Option<Snapshot>,
+    /// The model of the instance before the last `fmi2Reset`, with its fresh snapshot: the
+    /// next initialisation restores it instead of rebuilding when the fixed configuration
+    /// is unchanged (a fit resets and re-initialises the instance for every evaluation).
+    spare: Option<(Torso, Snapshot)>,
     start_time: f64,
     stop_time: Option<f64>,
     tolerance: Option<f64>,
@@ -312,6 +318,13 @@ impl FmuState {
     }
 }
 
+/// Whether two configurations build the same model: equal but for the (tunable) drive.
+fn same_fixed_config(a: &Config, b: &Config) -> bool {
+    let mut a = a.clone();
+    a.drive = b.drive;
+    a == *b
+}
+
 fn type_name(t: ScalarType) -> &'static str {
     match t {
         ScalarType::Real => "Real",
@@ -351,6 +364,8 @@ impl Instance {
             stiffness_logged: false,
             inputs: [0.0; 8],
             torso: None,
+            fresh: None,
+            spare: None,
             start_time: 0.0,
             stop_time: None,
             tolerance: None,
@@ -526,15 +541,23 @@ impl Instance {
     }
 
     /// `fmi2Reset`: back to the freshly instantiated state (start values, time, model, solver
-    /// memory and statistics); the name, resources and logging settings stay.
+    /// memory and statistics); the name, resources and logging settings stay. The built model
+    /// is kept aside with the snapshot of its fresh state, so that an initialisation with the
+    /// same fixed parameters restores that snapshot rather than rebuilding the model and its
+    /// skin weights (see [`Instance::exit_initialization_mode`]).
     pub fn reset(&mut self) -> fmi2Status {
         let fmu_states = std::mem::take(&mut self.fmu_states);
-        let fresh = Instance::new(&self.name, self.resources.take(), self.sink.take(), false);
+        let spare = match (self.torso.take(), self.fresh.take()) {
+            (Some(torso), Some(fresh)) => Some((torso, fresh)),
+            _ => self.spare.take(),
+        };
+        let instance = Instance::new(&self.name, self.resources.take(), self.sink.take(), false);
         let categories = self.categories;
         *self = Instance {
             categories,
             fmu_states,
-            ..fresh
+            spare,
+            ..instance
         };
         self.log(fmi2OK, Category::Events, "reset");
         fmi2OK
@@ -564,13 +587,30 @@ impl Instance {
         Ok(candidate.display().to_string())
     }
 
-    /// Builds the model from the configuration if it is not built yet.
+    /// Builds the model from the configuration if it is not built yet; a model kept by
+    /// `fmi2Reset` whose fixed configuration (everything but the drive) is the current one is
+    /// restored to its fresh state instead, which gives the same state as a rebuild.
     fn ensure_torso(&mut self) -> Result<&mut Torso> {
         if self.torso.is_none() {
-            let mut torso = Torso::new(self.config.clone())?;
+            let reused = match self.spare.take() {
+                Some((mut torso, fresh)) if same_fixed_config(torso.config(), &self.config) => {
+                    torso.restore(&fresh).ok().map(|_| (torso, fresh))
+                }
+                _ => None,
+            };
+            let (mut torso, fresh) = match reused {
+                Some(pair) => pair,
+                None => {
+                    let torso = Torso::new(self.config.clone())?;
+                    let fresh = torso.snapshot();
+                    (torso, fresh)
+                }
+            };
+            torso.set_drive(self.config.drive)?;
             for g in MuscleGroup::ALL {
                 torso.set_activation(g, self.inputs[g.index()])?;
             }
+            self.fresh = Some(fresh);
             self.torso = Some(torso);
         }
         self.torso
@@ -1010,6 +1050,7 @@ impl Instance {
     /// Restores a saved state. The model is rebuilt only when the fixed configuration differs.
     pub fn set_fmu_state(&mut self, state: &FmuState) -> fmi2Status {
         let s = &state.saved;
+        let mut rebuilt_fresh = None;
         let torso = match &state.snapshot {
             None => None,
             Some(snapshot) => {
@@ -1024,7 +1065,10 @@ impl Instance {
                     (_, current) => {
                         self.torso = current;
                         match Torso::new(s.config.clone()) {
-                            Ok(t) => t,
+                            Ok(t) => {
+                                rebuilt_fresh = Some(t.snapshot());
+                                t
+                            }
                             Err(e) => return self.error(&format!("fmi2SetFMUstate: {e}")),
                         }
                     }
@@ -1040,6 +1084,10 @@ impl Instance {
             }
         };
         self.torso = torso;
+        if rebuilt_fresh.is_some() {
+            // The fresh snapshot kept for fmi2Reset must be the rebuilt model's.
+            self.fresh = rebuilt_fresh;
+        }
         self.phase = s.phase;
         self.config = s.config.clone();
         self.rtol_explicit = s.rtol_explicit;
