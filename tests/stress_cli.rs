@@ -127,6 +127,16 @@ fn bench_rejects_bad_arguments() {
         err.contains("--scenario") && err.contains("quiet or forced"),
         "{err}"
     );
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "work-precision", "--scene", "soft-everything"])
+        .output()
+        .expect("torso runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--scene") && err.contains("stiff-cartilage"),
+        "{err}"
+    );
 }
 
 #[test]

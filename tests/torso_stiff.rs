@@ -202,3 +202,38 @@ fn snapshot_restore_continues() {
     assert!((va - vb).abs() < 1e-5, "{va} vs {vb}");
     assert!(b.solver_stats().jacobian_evaluations > 0);
 }
+
+/// Model constants can be overridden from the configuration (stiff-scene studies): a stiffer
+/// cartilage changes the compiled model, and a constant out of range is refused by name.
+#[test]
+fn params_override_is_compiled_and_validated() {
+    let base = Config {
+        scene: breathing_torso::model::Scene {
+            level_of_detail: 0,
+            ..Default::default()
+        },
+        ..Config::default()
+    };
+    let mut params = Params::for_posture(base.subject.posture);
+    params.cartilage_stiffness *= 10.0;
+    let stiff = Config {
+        params: Some(params.clone()),
+        ..base.clone()
+    };
+    let a = Torso::new(base).expect("default constants");
+    let b = Torso::new(stiff).expect("stiffer cartilage");
+    assert_ne!(a.compiled().fingerprint, b.compiled().fingerprint);
+    assert_eq!(
+        b.compiled().model.params.cartilage_stiffness,
+        10.0 * a.compiled().model.params.cartilage_stiffness
+    );
+    params.bulk_modulus = -1.0;
+    let bad = Config {
+        params: Some(params),
+        ..Config::default()
+    };
+    let err = Torso::new(bad)
+        .err()
+        .expect("negative bulk modulus refused");
+    assert!(err.to_string().contains("params.bulk_modulus"), "{err}");
+}

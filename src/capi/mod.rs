@@ -342,6 +342,8 @@ unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         gain_left: c.gain_left,
         gain_right: c.gain_right,
         subject_mesh_dir,
+        // the C ABI builds the default constants; overrides are a library-level study tool
+        params: None,
     };
     Ok(config)
 }

@@ -519,7 +519,9 @@ impl Model {
         }
     }
 
-    /// A fingerprint of the compiled model (FNV-1a over its defining numbers).
+    /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
+    /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes and
+    /// gravity), so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: f64| {
@@ -536,6 +538,11 @@ impl Model {
         for k in &self.elements.stiffness {
             eat(*k);
         }
+        for k in self.springs.stiffness.iter().chain(&self.rib_stiffness) {
+            eat(*k);
+        }
+        eat(self.params.bulk_modulus);
+        eat(self.params.lung_elastance);
         eat(self.abdomen_rest_volume);
         eat(self.thorax_rest_volume);
         eat(self.gravity.x);

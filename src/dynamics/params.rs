@@ -79,6 +79,50 @@ impl Params {
         }
     }
 
+    /// Checks that every constant is finite and in its physical range; the error names the
+    /// constant.
+    pub fn validate(&self) -> crate::Result<()> {
+        let positive = [
+            ("params.damping_ratio", self.damping_ratio),
+            ("params.bulk_modulus", self.bulk_modulus),
+            ("params.lung_elastance", self.lung_elastance),
+            ("params.cartilage_stiffness", self.cartilage_stiffness),
+            ("params.rib_joint_stiffness", self.rib_joint_stiffness),
+            ("params.membrane_stiffness", self.membrane_stiffness),
+            (
+                "params.dome_membrane_stiffness",
+                self.dome_membrane_stiffness,
+            ),
+            ("params.tendon_stiffness", self.tendon_stiffness),
+            ("params.dome_support", self.dome_support),
+            (
+                "params.abdominal_wall_compliance",
+                self.abdominal_wall_compliance,
+            ),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(crate::Error::invalid(name, v, "finite and > 0"));
+            }
+        }
+        for (name, v) in [
+            ("params.beta_max", self.beta_max),
+            ("params.beta_max_diaphragm", self.beta_max_diaphragm),
+        ] {
+            if !(v > 0.0 && v < 1.0) {
+                return Err(crate::Error::invalid(name, v, "(0, 1)"));
+            }
+        }
+        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+            return Err(crate::Error::invalid(
+                "params.gravity",
+                self.gravity,
+                ">= 0",
+            ));
+        }
+        Ok(())
+    }
+
     /// Unit vector of gravity in the model frame (x anterior, y cranial, z right).
     pub fn gravity_direction(posture: Posture) -> [f64; 3] {
         match posture {

@@ -79,6 +79,11 @@ pub struct Config {
     /// geometry.
     #[serde(default)]
     pub subject_mesh_dir: Option<PathBuf>,
+    /// Constants of the dynamics overriding the posture's defaults
+    /// ([`crate::dynamics::Params::for_posture`]), for studies of stiff scenes (stiffer
+    /// cartilage, a higher bulk modulus) and of sensitivity; `None`: the defaults.
+    #[serde(default)]
+    pub params: Option<crate::dynamics::Params>,
 }
 
 impl Default for Config {
@@ -92,6 +97,7 @@ impl Default for Config {
             gain_left: 1.0,
             gain_right: 1.0,
             subject_mesh_dir: None,
+            params: None,
         }
     }
 }
@@ -124,6 +130,9 @@ impl Config {
         check("gain.right", self.gain_right, (0.0, 2.0))?;
         if let Some(dir) = &self.subject_mesh_dir {
             crate::anatomy::prepared::check_dir(dir)?;
+        }
+        if let Some(p) = &self.params {
+            p.validate()?;
         }
         Ok(())
     }

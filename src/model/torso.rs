@@ -50,7 +50,11 @@ impl Compiled {
             config.scene.level_of_detail,
             config.subject_mesh_dir.as_deref(),
         )?;
-        let model = Model::compile(&anatomy, Params::for_posture(config.subject.posture));
+        let params = config
+            .params
+            .clone()
+            .unwrap_or_else(|| Params::for_posture(config.subject.posture));
+        let model = Model::compile(&anatomy, params);
         let compartments = Compartments::new(&model);
         let fingerprint = model.fingerprint();
         Ok(Compiled {
