@@ -222,7 +222,7 @@ impl<'a> RayCaster<'a> {
     fn nearest_crossing(&self, o: &Point3<f64>, d: &Vector3<f64>, expected: f64) -> Option<f64> {
         let test = |t: u32, best: &mut Option<f64>| {
             let [a, b, c] = self.mesh.corners(t as usize);
-            if let Some(s) = ray_hits_closed_triangle(o, d, &a, &b, &c)
+            if let Some(s) = crate::mesh::geom::ray_triangle_closed(o, d, &a, &b, &c, 1e-9)
                 && s > 0.0
                 && best.is_none_or(|b| (s - expected).abs() < (b - expected).abs())
             {
@@ -243,34 +243,6 @@ impl<'a> RayCaster<'a> {
         }
         best
     }
-}
-
-/// Parameter t of the crossing of the line `o + t d` with the closed triangle (a, b, c)
-/// (Moller & Trumbore 1997, edges and corners included with a relative tolerance of 1e-9,
-/// so that a ray through a vertex of the surface is not lost between its triangles).
-fn ray_hits_closed_triangle(
-    o: &Point3<f64>,
-    d: &Vector3<f64>,
-    a: &Point3<f64>,
-    b: &Point3<f64>,
-    c: &Point3<f64>,
-) -> Option<f64> {
-    const EPS: f64 = 1e-9;
-    let (e1, e2) = (b - a, c - a);
-    let h = d.cross(&e2);
-    let det = e1.dot(&h);
-    if det.abs() < 1e-300 {
-        return None;
-    }
-    let f = 1.0 / det;
-    let s = o - a;
-    let u = f * s.dot(&h);
-    let q = s.cross(&e1);
-    let v = f * d.dot(&q);
-    if u < -EPS || v < -EPS || u + v > 1.0 + EPS {
-        return None;
-    }
-    Some(f * e2.dot(&q))
 }
 
 /// Moves every point of `points` along the ray from `centre(p)` through it to the surface.

@@ -54,6 +54,28 @@ pub fn closest_point_on_triangle(p: &P, a: &P, b: &P, c: &P) -> P {
     a + ab * v + ac * w
 }
 
+/// Parameter `t` where the line `o + t d` crosses the closed triangle `(a, b, c)` (Moller &
+/// Trumbore 1997), edges and corners included with barycentric tolerance `eps`, so that a ray
+/// through a vertex of a surface is not lost between its triangles; None when it misses or
+/// runs parallel to the plane. [`ray_triangle`] is the half-open variant for parity counts.
+pub fn ray_triangle_closed(o: &P, d: &Vector3<f64>, a: &P, b: &P, c: &P, eps: f64) -> Option<f64> {
+    let (e1, e2) = (b - a, c - a);
+    let h = d.cross(&e2);
+    let det = e1.dot(&h);
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    let f = 1.0 / det;
+    let s = o - a;
+    let u = f * s.dot(&h);
+    let q = s.cross(&e1);
+    let v = f * d.dot(&q);
+    if u < -eps || v < -eps || u + v > 1.0 + eps {
+        return None;
+    }
+    Some(f * e2.dot(&q))
+}
+
 /// Parameter `t` where the line `o + t d` crosses triangle `(a, b, c)` (Moller & Trumbore
 /// 1997), None when it misses or runs parallel to the plane. Edges count as hits on one side
 /// only (half-open barycentric test) so that a ray through a shared edge is counted once.
