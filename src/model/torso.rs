@@ -13,6 +13,9 @@ use crate::{Error, Result};
 use std::sync::Arc;
 
 mod markers;
+mod sampled;
+
+pub use sampled::Sample;
 
 /// Statistics of one [`Torso::advance_to`] call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
