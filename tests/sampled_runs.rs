@@ -259,3 +259,33 @@ fn schedules_switch_drives_at_their_times() {
     }
     assert!(worst < 1e-5, "lung volumes differ by {worst} L");
 }
+
+/// The fit's default tolerance (rtol 1e-4): the periodic run's markers agree with an rtol
+/// 1e-9 run within 0.1 um, and its lung volume within 1 uL.
+#[test]
+fn the_fit_tolerance_keeps_markers_within_a_tenth_of_a_micrometre() {
+    let d = drive(0.25, 0.2, 0.25);
+    let times = frames(4.0, 1009);
+    let run = |rtol: f64, atol: f64| {
+        let mut c = config();
+        c.solver.rtol = rtol;
+        c.solver.atol = atol;
+        let mut m = TorsoMarkers::new(c).unwrap();
+        let mut a = Trajectory::default();
+        m.run(&[(0.0, d)], &times, true, &mut a).unwrap();
+        assert!(m.last_run().periodic);
+        a
+    };
+    let reference = run(1e-9, 1e-11);
+    let fit = run(1e-4, 1e-8);
+    let dm = max_distance(&fit.markers, &reference.markers);
+    let dl = fit
+        .lung_volume
+        .iter()
+        .zip(&reference.lung_volume)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    println!("rtol 1e-4 vs 1e-9: markers {dm:.2e} m, lung {dl:.2e} L");
+    assert!(dm < 1e-7, "markers differ by {dm} m");
+    assert!(dl < 1e-6, "lung volumes differ by {dl} L");
+}
