@@ -300,11 +300,13 @@ def aligned_cost(model_pts: np.ndarray, rec: np.ndarray, tracked: np.ndarray) ->
 
 
 def linearised_start(model, rest, rec, tracked, times, f, psi, rate):
-    """Two basis runs and the best time-shifted non-negative least-squares combination."""
+    """Two basis runs (three breaths each, the third read as periodic) and the best
+    time-shifted non-negative least-squares combination."""
     period = 1.0 / f
     h = 1.0 / rate
-    n = int(math.ceil((times[-1] + period) / h)) + 2
-    grid = period + h * np.arange(n)
+    # one breath of each basis response after two of settling, read as periodic (as native)
+    n = int(math.ceil(period / h)) + 2
+    grid = 2.0 * period + h * np.arange(n)
     bases = []
     for fam in range(2):
         x = [BASIS_AMPLITUDE if fam == 0 else 0.0, BASIS_AMPLITUDE if fam == 1 else 0.0, psi, psi]
@@ -318,7 +320,7 @@ def linearised_start(model, rest, rec, tracked, times, f, psi, rate):
     r = np.nan_to_num(r)
 
     def sample(b, s):
-        tt = times[idx] + s * period / SHIFTS
+        tt = np.mod(times[idx] + s * period / SHIFTS, period)
         x = np.clip(tt / h, 0, n - 1)
         j = np.minimum(np.floor(x).astype(int), n - 2)
         w = (x - j)[:, None, None]

@@ -263,7 +263,8 @@ const SHIFTS: usize = 24;
 /// A starting point from a linearised model (2 model runs): the displacement from rest is
 /// taken as c_r D_r(t + s_r) + c_d D_d(t + s_d), with D_r and D_d the responses to the
 /// rib-cage and the diaphragm drive alone at amplitude 0.3 and phase `psi`, time-shifted by
-/// s in [0, 1/f) (a phase change of 2 pi f s in the periodic regime). For each pair of
+/// s in [0, 1/f) (a phase change of 2 pi f s in the periodic regime). Each basis response is
+/// simulated for three breaths and read in its third, as periodic. For each pair of
 /// shifts the non-negative least-squares (c_r, c_d) are solved; the best pair gives
 /// A = 0.3 c and phi = psi + 2 pi f s. Returns (x0, model runs used).
 #[allow(clippy::too_many_arguments)]
@@ -279,9 +280,11 @@ fn linearised_start(
 ) -> Result<[f64; 4]> {
     let period = 1.0 / f;
     let h = 1.0 / rate.max(1.0);
-    let span = times.last().copied().unwrap_or(0.0) + period;
-    let n = (span / h).ceil() as usize + 2;
-    let grid: Vec<f64> = (0..n).map(|j| period + j as f64 * h).collect();
+    // One breath of each basis response, after two breaths of settling: frame time t
+    // (model time `period + t` in the fit) is read at its phase, model time
+    // 2 period + (t mod period).
+    let n = (period / h).ceil() as usize + 2;
+    let grid: Vec<f64> = (0..n).map(|j| 2.0 * period + j as f64 * h).collect();
     let mut basis = Vec::with_capacity(2);
     for family in 0..2 {
         let wave = |on: bool| Wave {
@@ -302,7 +305,7 @@ fn linearised_start(
     let stride = (times.len() / 300).max(1);
     let frames: Vec<usize> = (0..times.len()).step_by(stride).collect();
     let disp = |b: &[Vec<Point3<f64>>], t: f64, p: usize| {
-        let x = (t / h).clamp(0.0, (n - 1) as f64);
+        let x = (t.rem_euclid(period) / h).clamp(0.0, (n - 1) as f64);
         let j = (x.floor() as usize).min(n - 2);
         let w = x - j as f64;
         (b[j][p].coords * (1.0 - w) + b[j + 1][p].coords * w) - rest[p].coords
