@@ -215,11 +215,17 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
     assert!(r.period_mismatch_m > 1e-7);
     assert!(max_distance(&a.markers, &b.markers) < 1e-6);
 
-    // two breaths of frames: plain
-    let short = frames(4.0, 400);
+    // frames ending within the second breath: plain
+    let short = frames(4.0, 200);
     m.run(&[(0.0, drive(0.25, 0.2, 0.25))], &short, false, &mut a)
         .unwrap();
     assert!(!m.last_run().periodic && m.last_run().period_mismatch_m.is_nan());
+    assert!((m.last_run().simulated_s - short[199]).abs() < 1e-12);
+    // frames into the third breath: the second one serves them
+    let short = frames(4.0, 400);
+    m.run(&[(0.0, drive(0.25, 0.2, 0.25))], &short, false, &mut a)
+        .unwrap();
+    assert!(m.last_run().periodic && (m.last_run().simulated_s - 8.0).abs() < 1e-9);
 }
 
 /// A drive schedule (breath-to-breath variability) is simulated over every frame, each

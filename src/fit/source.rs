@@ -153,10 +153,10 @@ impl TorsoMarkers {
     /// counts as periodic when its end matches its start (markers within
     /// [`PERIODIC_MARKER_TOLERANCE_M`], lung volume within [`PERIODIC_VOLUME_TOLERANCE_L`],
     /// about the solver's own error). The frames are also read as they come, so that if no
-    /// breath is periodic before the last two, the run simply goes on over every frame (the
-    /// frames are then those of a plain run from rest, transient included). Returns false,
-    /// having done nothing, when the drive has no period or the frames end within three
-    /// breaths.
+    /// breath ending before the last frame is periodic, the run simply goes on over every
+    /// frame (the frames are then those of a plain run from rest, transient included).
+    /// Returns false, having done nothing, when the drive has no period or the frames end
+    /// within two breaths.
     pub fn run_periodic(
         &mut self,
         drive: Drive,
@@ -168,7 +168,7 @@ impl TorsoMarkers {
         let (Some(&first), Some(&last)) = (times.first(), times.last()) else {
             return Ok(false);
         };
-        if !(f > 0.0 && f.is_finite()) || first < 0.0 || last <= 3.0 / f {
+        if !(f > 0.0 && f.is_finite()) || first < 0.0 || last <= 2.0 / f {
             return Ok(false);
         }
         /// What a sample is for.
@@ -197,7 +197,7 @@ impl TorsoMarkers {
         let mut got = Trajectory::default();
         loop {
             let end = begin + period;
-            if last <= end + period {
+            if last <= end {
                 break;
             }
             let direct = times.partition_point(|t| *t <= end);
