@@ -9,9 +9,9 @@
 //!   with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx.
 //! - Pleural pressure: P_pl = -E_L (V_th - V_th0) on the thoracic surface (lung recoil).
 
-use super::model::{Model, PASSIVE, volume};
+use super::model::{Model, PASSIVE};
 use super::{Activations, Data};
-use nalgebra::Vector3;
+use nalgebra::{Point3, Vector3};
 
 /// Computes `data.force` for every anchor.
 pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
@@ -26,15 +26,17 @@ pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
 /// pressures are left as they were.
 pub fn accumulate_frozen(model: &Model, data: &mut Data, act: &Activations, pressures: [f64; 2]) {
     local_forces(model, data, act);
-    apply_pressure(&model.abdomen_triangles, pressures[0], data);
-    apply_pressure(&model.thorax_triangles, pressures[1], data);
+    let tris = &model.abdomen_triangles;
+    face_vectors(&data.pos, tris, &mut data.face[..tris.len()]);
+    apply_pressure(tris, &model.abdomen_moving, pressures[0], data);
+    let tris = &model.thorax_triangles;
+    face_vectors(&data.pos, tris, &mut data.face[..tris.len()]);
+    apply_pressure(tris, &model.thorax_moving, pressures[1], data);
 }
 
 /// Element and vector-spring forces (everything but the pressures).
 fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
-    for f in data.force.iter_mut() {
-        *f = Vector3::zeros();
-    }
+    data.force.fill(Vector3::zeros());
     elements(model, data, act);
     vector_springs(model, data);
 }
@@ -45,44 +47,49 @@ fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
 /// along -n_{m-1}.
 fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let el = &model.elements;
-    for e in 0..el.len() {
-        let path = el.path_of(e);
-        let group = el.group[e];
-        let (rest, muscle) = if group == PASSIVE {
-            (el.rest_length[e], false)
-        } else {
-            let a_g = act.level[group as usize][el.side[e] as usize];
-            (el.rest_length[e] * (1.0 - a_g * el.gain[e]), true)
-        };
-        if path.len() == 2 {
-            let (a, b) = (path[0] as usize, path[1] as usize);
-            let d = data.pos[b] - data.pos[a];
+    let level = act.table();
+    let n = el.len();
+    let (start, path) = (&el.start[..n + 1], &el.path[..]);
+    let (rest_length, stiffness, damping) =
+        (&el.rest_length[..n], &el.stiffness[..n], &el.damping[..n]);
+    let (slot, gain) = (&el.slot[..n], &el.gain[..n]);
+    let (pos, vel, force) = (&data.pos, &data.vel, &mut data.force);
+    for e in 0..n {
+        let (first, end) = (start[e] as usize, start[e + 1] as usize);
+        let s = slot[e];
+        // a membrane element's slot reads 0 and its gain is 0: its rest length is l0 exactly
+        let rest = rest_length[e] * (1.0 - level[s as usize] * gain[e]);
+        let muscle = s != PASSIVE;
+        if end - first == 2 {
+            let (a, b) = (path[first] as usize, path[first + 1] as usize);
+            let d = pos[b] - pos[a];
             let len = d.norm();
             if len < 1e-12 {
                 continue;
             }
             let n = d / len;
-            let rate = (data.vel[b] - data.vel[a]).dot(&n);
-            let mut f = el.stiffness[e] * (len - rest) + el.damping[e] * rate;
+            let rate = (vel[b] - vel[a]).dot(&n);
+            let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
             if muscle && f < 0.0 {
                 f = 0.0;
             }
             let fv = n * f;
-            data.force[a] += fv;
-            data.force[b] -= fv;
+            force[a] += fv;
+            force[b] -= fv;
             continue;
         }
+        let path = &path[first..end];
         let (mut len, mut rate) = (0.0, 0.0);
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
-            let d = data.pos[b] - data.pos[a];
+            let d = pos[b] - pos[a];
             let l = d.norm();
             len += l;
             if l > 1e-12 {
-                rate += (data.vel[b] - data.vel[a]).dot(&d) / l;
+                rate += (vel[b] - vel[a]).dot(&d) / l;
             }
         }
-        let mut f = el.stiffness[e] * (len - rest) + el.damping[e] * rate;
+        let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
         if muscle && f < 0.0 {
             f = 0.0;
         }
@@ -91,12 +98,12 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
         }
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
-            let d = data.pos[b] - data.pos[a];
+            let d = pos[b] - pos[a];
             let l = d.norm();
             if l > 1e-12 {
                 let fv = d * (f / l);
-                data.force[a] += fv;
-                data.force[b] -= fv;
+                force[a] += fv;
+                force[b] -= fv;
             }
         }
     }
@@ -105,46 +112,81 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
 /// Cartilage joints and wall foundation.
 fn vector_springs(model: &Model, data: &mut Data) {
     let s = &model.springs;
-    for i in 0..s.a.len() {
-        let (a, b) = (s.a[i] as usize, s.b[i] as usize);
-        let mut f = (data.pos[b] - data.pos[a]) * s.stiffness[i]
-            + (data.vel[b] - data.vel[a]) * s.damping[i];
-        if s.horizontal[i] {
+    let n = s.a.len();
+    let (ia, ib, horizontal) = (&s.a[..n], &s.b[..n], &s.horizontal[..n]);
+    let (stiffness, damping) = (&s.stiffness[..n], &s.damping[..n]);
+    let (pos, vel, force) = (&data.pos, &data.vel, &mut data.force);
+    for i in 0..n {
+        let (a, b) = (ia[i] as usize, ib[i] as usize);
+        let mut f = (pos[b] - pos[a]) * stiffness[i] + (vel[b] - vel[a]) * damping[i];
+        if horizontal[i] {
             f.y = 0.0;
         }
-        data.force[a] += f;
-        data.force[b] -= f;
+        force[a] += f;
+        force[b] -= f;
     }
 }
 
-/// Pushes `pressure` on a closed surface: each corner receives P/6 (b - a) x (c - a).
-fn apply_pressure(tris: &[[u32; 3]], pressure: f64, data: &mut Data) {
+/// Signed volume enclosed by `tris` (the same sum, in the same order, as
+/// [`volume`](super::volume)), storing each triangle's doubled area vector (b - a) x (c - a) in
+/// `face` for [`apply_pressure`]: the corners are gathered once for both.
+fn volume_and_faces(pos: &[Point3<f64>], tris: &[[u32; 3]], face: &mut [Vector3<f64>]) -> f64 {
+    let mut sum = -0.0;
+    for (t, f) in tris.iter().zip(face.iter_mut()) {
+        let (a, b, c) = (
+            &pos[t[0] as usize].coords,
+            &pos[t[1] as usize].coords,
+            &pos[t[2] as usize].coords,
+        );
+        sum += a.dot(&b.cross(c));
+        *f = (b - a).cross(&(c - a));
+    }
+    sum / 6.0
+}
+
+/// Each triangle's doubled area vector (b - a) x (c - a) into `face`.
+fn face_vectors(pos: &[Point3<f64>], tris: &[[u32; 3]], face: &mut [Vector3<f64>]) {
+    for (t, f) in tris.iter().zip(face.iter_mut()) {
+        let (a, b, c) = (pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]);
+        *f = (b - a).cross(&(c - a));
+    }
+}
+
+/// Pushes `pressure` on a closed surface whose face vectors are in `data.face`: each corner
+/// receives P/6 (b - a) x (c - a). Triangles that do not move are skipped.
+fn apply_pressure(tris: &[[u32; 3]], moving: &[bool], pressure: f64, data: &mut Data) {
     if pressure == 0.0 {
         return;
     }
-    for t in tris {
-        let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
-        let f = (data.pos[b] - data.pos[a]).cross(&(data.pos[c] - data.pos[a])) * (pressure / 6.0);
-        data.force[a] += f;
-        data.force[b] += f;
-        data.force[c] += f;
+    let scale = pressure / 6.0;
+    let force = &mut data.force;
+    for ((t, face), &moving) in tris.iter().zip(&data.face).zip(moving) {
+        if !moving {
+            continue;
+        }
+        let f = face * scale;
+        force[t[0] as usize] += f;
+        force[t[1] as usize] += f;
+        force[t[2] as usize] += f;
     }
 }
 
 /// Abdominal pressure from the current cavity volume (eq. 2.5-2.6).
 fn abdominal_pressure(model: &Model, data: &mut Data) {
-    let v = volume(&data.pos, &model.abdomen_triangles);
+    let tris = &model.abdomen_triangles;
+    let v = volume_and_faces(&data.pos, tris, &mut data.face[..tris.len()]);
     let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0);
     data.abdomen_volume = v;
     data.abdomen_pressure = p;
-    apply_pressure(&model.abdomen_triangles, p, data);
+    apply_pressure(tris, &model.abdomen_moving, p, data);
 }
 
 /// Pleural pressure from the thoracic volume: the lungs' elastic recoil.
 fn pleural_pressure(model: &Model, data: &mut Data) {
-    let v = volume(&data.pos, &model.thorax_triangles);
+    let tris = &model.thorax_triangles;
+    let v = volume_and_faces(&data.pos, tris, &mut data.face[..tris.len()]);
     let p = -model.params.lung_elastance * (v - model.thorax_rest_volume);
     data.thorax_volume = v;
     data.pleural_pressure = p;
-    apply_pressure(&model.thorax_triangles, p, data);
+    apply_pressure(tris, &model.thorax_moving, p, data);
 }

@@ -52,6 +52,17 @@ impl Activations {
         Activations { level }
     }
 
+    /// The levels as a table indexed by an element's [`Elements::slot`] (3 group + side);
+    /// every other entry, [`PASSIVE`]'s included, is 0. It has 256 entries so that indexing
+    /// it with a `u8` needs no bounds check.
+    pub fn table(&self) -> [f64; 256] {
+        let mut table = [0.0; 256];
+        for (g, sides) in self.level.iter().enumerate() {
+            table[3 * g..3 * g + 3].copy_from_slice(sides);
+        }
+        table
+    }
+
     /// Whether every group is inactive.
     pub fn is_zero(&self) -> bool {
         self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
@@ -75,6 +86,9 @@ pub struct Data {
     pub vel: Vec<Vector3<f64>>,
     /// Forces on anchors.
     pub force: Vec<Vector3<f64>>,
+    /// Doubled area vector (b - a) x (c - a) of each triangle of the surface whose pressure
+    /// is being applied (scratch, as long as the larger surface).
+    pub face: Vec<Vector3<f64>>,
     /// Generalised torque per rib.
     pub rib_torque: Vec<f64>,
     /// Net force on the sternum.
@@ -103,6 +117,13 @@ impl Data {
             pos: model.rest.clone(),
             vel: vec![Vector3::zeros(); n],
             force: vec![Vector3::zeros(); n],
+            face: vec![
+                Vector3::zeros();
+                model
+                    .abdomen_triangles
+                    .len()
+                    .max(model.thorax_triangles.len())
+            ],
             rib_torque: vec![0.0; RIBS],
             sternum_force: Vector3::zeros(),
             sternum_torque: Vector3::zeros(),
