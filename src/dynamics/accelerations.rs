@@ -43,7 +43,9 @@ pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [
 
 /// Rib torques and angular accelerations.
 fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
-    let (pos, force) = (&data.pos, &data.force);
+    // one length for both arrays, so that one index check covers them
+    let m = data.pos.len();
+    let (pos, force) = (&data.pos[..], &data.force[..m]);
     for r in 0..RIBS {
         let (h, u) = (model.rib_head[r], model.rib_axis[r]);
         let mut moment = Vector3::zeros();

@@ -9,7 +9,7 @@
 //!   with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx.
 //! - Pleural pressure: P_pl = -E_L (V_th - V_th0) on the thoracic surface (lung recoil).
 
-use super::model::{Model, PASSIVE};
+use super::model::{Model, PASSIVE, VIA};
 use super::{Activations, Data};
 use nalgebra::{Point3, Vector3};
 
@@ -49,19 +49,21 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let el = &model.elements;
     let level = act.table();
     let n = el.len();
-    let (start, path) = (&el.start[..n + 1], &el.path[..]);
+    let (start, path, ends) = (&el.start[..n + 1], &el.path[..], &el.ends[..n]);
     let (rest_length, stiffness, damping) =
         (&el.rest_length[..n], &el.stiffness[..n], &el.damping[..n]);
     let (slot, gain) = (&el.slot[..n], &el.gain[..n]);
-    let (pos, vel, force) = (&data.pos, &data.vel, &mut data.force);
+    // one length for the three arrays, so that one index check covers them
+    let m = data.pos.len();
+    let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
     for e in 0..n {
-        let (first, end) = (start[e] as usize, start[e + 1] as usize);
         let s = slot[e];
         // a membrane element's slot reads 0 and its gain is 0: its rest length is l0 exactly
         let rest = rest_length[e] * (1.0 - level[s as usize] * gain[e]);
         let muscle = s != PASSIVE;
-        if end - first == 2 {
-            let (a, b) = (path[first] as usize, path[first + 1] as usize);
+        let [a, b] = ends[e];
+        if a != VIA {
+            let (a, b) = (a as usize, b as usize);
             let d = pos[b] - pos[a];
             let len = d.norm();
             if len < 1e-12 {
@@ -78,7 +80,7 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             force[b] -= fv;
             continue;
         }
-        let path = &path[first..end];
+        let path = &path[start[e] as usize..start[e + 1] as usize];
         let (mut len, mut rate) = (0.0, 0.0);
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
@@ -115,7 +117,8 @@ fn vector_springs(model: &Model, data: &mut Data) {
     let n = s.a.len();
     let (ia, ib, horizontal) = (&s.a[..n], &s.b[..n], &s.horizontal[..n]);
     let (stiffness, damping) = (&s.stiffness[..n], &s.damping[..n]);
-    let (pos, vel, force) = (&data.pos, &data.vel, &mut data.force);
+    let m = data.pos.len();
+    let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
     for i in 0..n {
         let (a, b) = (ia[i] as usize, ib[i] as usize);
         let mut f = (pos[b] - pos[a]) * stiffness[i] + (vel[b] - vel[a]) * damping[i];

@@ -33,7 +33,9 @@ pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &
     data.sternum_w = Vector3::new(y[l.sternum_w], y[l.sternum_w + 1], y[l.sternum_w + 2]);
     let sternum_v = Vector3::new(y[l.sternum_v], y[l.sternum_v + 1], y[l.sternum_v + 2]);
 
-    let (pos, vel) = (&mut data.pos, &mut data.vel);
+    // one length for both arrays, so that one index check covers them
+    let m = data.pos.len();
+    let (pos, vel) = (&mut data.pos[..], &mut data.vel[..m]);
     let rates = &y[l.theta_dot..l.theta_dot + RIBS];
     for ((((anchors, arms), rot), (h, u)), &rate) in model
         .rib_anchors

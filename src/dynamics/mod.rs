@@ -23,7 +23,7 @@ mod model;
 mod params;
 pub mod state;
 
-pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VectorSprings, volume};
+pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VIA, VectorSprings, volume};
 pub use params::Params;
 pub use state::{Layout, rest_state};
 

@@ -35,7 +35,13 @@ pub struct Elements {
     /// Index of the element's activation in [`Activations::table`](super::Activations::table):
     /// 3 group + side for a muscle, [`PASSIVE`] (whose entry is 0) for the membrane.
     pub slot: Vec<u8>,
+    /// Anchors of a two-point element (most of them), or [`VIA`] twice for a path with via
+    /// points: the force loop reads them without going through `start` and `path`.
+    pub ends: Vec<[u32; 2]>,
 }
+
+/// The `ends` of an element whose path has via points.
+pub const VIA: u32 = u32::MAX;
 
 impl Default for Elements {
     fn default() -> Self {
@@ -49,6 +55,7 @@ impl Default for Elements {
             side: Vec::new(),
             gain: Vec::new(),
             slot: Vec::new(),
+            ends: Vec::new(),
         }
     }
 }
@@ -76,6 +83,10 @@ impl Elements {
         self.group.push(group);
         self.side.push(side);
         self.gain.push(gain);
+        self.ends.push(match path {
+            [a, b] => [*a, *b],
+            _ => [VIA, VIA],
+        });
         self.slot.push(if group == PASSIVE {
             PASSIVE
         } else {

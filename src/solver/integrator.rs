@@ -586,13 +586,22 @@ impl Integrator {
             ..
         } = &mut self.work;
         stage_sum(e5, tab.e, &self.fsal_k, k, n);
-        let scale = |i: usize| (atol + rtol * y[i].abs().max(ynew[i].abs())).max(f64::MIN_POSITIVE);
-        let sum: f64 = (0..n).map(|i| (e5[i] / scale(i)).powi(2)).sum();
+        let (y, ynew) = (&y[..n], &ynew[..n]);
+        let scale = |a: f64, b: f64| (atol + rtol * a.abs().max(b.abs())).max(f64::MIN_POSITIVE);
+        let weighted = |e: &[f64]| -> f64 {
+            e[..n]
+                .iter()
+                .zip(y)
+                .zip(ynew)
+                .map(|((&e, &a), &b)| (e / scale(a, b)).powi(2))
+                .sum()
+        };
+        let sum = weighted(e5);
         match tab.e_low {
             None => h * (sum / n as f64).sqrt(),
             Some(el) => {
                 stage_sum(e3, el, &self.fsal_k, k, n);
-                let sum_low: f64 = (0..n).map(|i| (e3[i] / scale(i)).powi(2)).sum();
+                let sum_low = weighted(e3);
                 if sum == 0.0 && sum_low == 0.0 {
                     return 0.0;
                 }
