@@ -26,12 +26,16 @@ pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
 /// pressures are left as they were.
 pub fn accumulate_frozen(model: &Model, data: &mut Data, act: &Activations, pressures: [f64; 2]) {
     local_forces(model, data, act);
+    let (na, nt) = (model.abdomen_triangles.len(), model.thorax_triangles.len());
+    let (abdomen, thorax) = data.face.split_at_mut(na);
+    face_vectors(&data.pos, &model.abdomen_triangles, abdomen);
+    face_vectors(&data.pos, &model.thorax_triangles, &mut thorax[..nt]);
+    let Data { face, force, .. } = data;
+    let (abdomen, thorax) = face.split_at(na);
     let tris = &model.abdomen_triangles;
-    face_vectors(&data.pos, tris, &mut data.face[..tris.len()]);
-    apply_pressure(tris, &model.abdomen_moving, pressures[0], data);
+    apply_pressure(tris, &model.abdomen_moving, abdomen, pressures[0], force);
     let tris = &model.thorax_triangles;
-    face_vectors(&data.pos, tris, &mut data.face[..tris.len()]);
-    apply_pressure(tris, &model.thorax_moving, pressures[1], data);
+    apply_pressure(tris, &model.thorax_moving, thorax, pressures[1], force);
 }
 
 /// Element and vector-spring forces (everything but the pressures).
@@ -131,20 +135,27 @@ fn vector_springs(model: &Model, data: &mut Data) {
 }
 
 /// Signed volume enclosed by `tris` (the same sum, in the same order, as
-/// [`volume`](super::volume)), storing each triangle's doubled area vector (b - a) x (c - a) in
-/// `face` for [`apply_pressure`]: the corners are gathered once for both.
-fn volume_and_faces(pos: &[Point3<f64>], tris: &[[u32; 3]], face: &mut [Vector3<f64>]) -> f64 {
-    let mut sum = -0.0;
-    for (t, f) in tris.iter().zip(face.iter_mut()) {
+/// [`volume`](super::volume)), storing each triangle's volume term a . (b x c) in `term` and its
+/// doubled area vector (b - a) x (c - a) in `face` for [`apply_pressure`]: the corners are
+/// gathered once for both. Returns the sum of the terms, started at `sum`.
+fn volume_and_faces(
+    pos: &[Point3<f64>],
+    tris: &[[u32; 3]],
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    mut sum: f64,
+) -> f64 {
+    for ((t, f), v) in tris.iter().zip(face.iter_mut()).zip(term.iter_mut()) {
         let (a, b, c) = (
             &pos[t[0] as usize].coords,
             &pos[t[1] as usize].coords,
             &pos[t[2] as usize].coords,
         );
-        sum += a.dot(&b.cross(c));
+        *v = a.dot(&b.cross(c));
+        sum += *v;
         *f = (b - a).cross(&(c - a));
     }
-    sum / 6.0
+    sum
 }
 
 /// Each triangle's doubled area vector (b - a) x (c - a) into `face`.
@@ -155,15 +166,20 @@ fn face_vectors(pos: &[Point3<f64>], tris: &[[u32; 3]], face: &mut [Vector3<f64>
     }
 }
 
-/// Pushes `pressure` on a closed surface whose face vectors are in `data.face`: each corner
+/// Pushes `pressure` on a closed surface whose face vectors are `face`: each corner
 /// receives P/6 (b - a) x (c - a). Triangles that do not move are skipped.
-fn apply_pressure(tris: &[[u32; 3]], moving: &[bool], pressure: f64, data: &mut Data) {
+fn apply_pressure(
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &[Vector3<f64>],
+    pressure: f64,
+    force: &mut [Vector3<f64>],
+) {
     if pressure == 0.0 {
         return;
     }
     let scale = pressure / 6.0;
-    let force = &mut data.force;
-    for ((t, face), &moving) in tris.iter().zip(&data.face).zip(moving) {
+    for ((t, face), &moving) in tris.iter().zip(face).zip(moving) {
         if !moving {
             continue;
         }
@@ -177,19 +193,55 @@ fn apply_pressure(tris: &[[u32; 3]], moving: &[bool], pressure: f64, data: &mut 
 /// Abdominal pressure from the current cavity volume (eq. 2.5-2.6).
 fn abdominal_pressure(model: &Model, data: &mut Data) {
     let tris = &model.abdomen_triangles;
-    let v = volume_and_faces(&data.pos, tris, &mut data.face[..tris.len()]);
+    let n = tris.len();
+    let Data {
+        pos,
+        face,
+        term,
+        force,
+        ..
+    } = data;
+    let (face, term) = (&mut face[..n], &mut term[..n]);
+    let v = volume_and_faces(pos, tris, face, term, -0.0) / 6.0;
     let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0);
+    apply_pressure(tris, &model.abdomen_moving, face, p, force);
     data.abdomen_volume = v;
     data.abdomen_pressure = p;
-    apply_pressure(tris, &model.abdomen_moving, p, data);
 }
 
-/// Pleural pressure from the thoracic volume: the lungs' elastic recoil.
+/// Pleural pressure from the thoracic volume: the lungs' elastic recoil. The dome's
+/// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
+/// volume terms negated (exactly what recomputing them would give).
 fn pleural_pressure(model: &Model, data: &mut Data) {
     let tris = &model.thorax_triangles;
-    let v = volume_and_faces(&data.pos, tris, &mut data.face[..tris.len()]);
+    let (na, nt) = (model.abdomen_triangles.len(), tris.len());
+    let Data {
+        pos,
+        face,
+        term,
+        force,
+        ..
+    } = data;
+    let (abdomen_face, thorax_face) = face.split_at_mut(na);
+    let (abdomen_term, thorax_term) = term.split_at_mut(na);
+    let (thorax_face, thorax_term) = (&mut thorax_face[..nt], &mut thorax_term[..nt]);
+    let source = &model.thorax_dome_source;
+    let sum = if source.is_empty() {
+        volume_and_faces(pos, tris, thorax_face, thorax_term, -0.0)
+    } else {
+        let lining = model.lining_count;
+        let (lining_face, dome_face) = thorax_face.split_at_mut(lining);
+        let mut sum = volume_and_faces(pos, &tris[..lining], lining_face, thorax_term, -0.0);
+        for (&i, f) in source.iter().zip(dome_face.iter_mut()) {
+            let i = i as usize;
+            sum += -abdomen_term[i];
+            *f = -abdomen_face[i];
+        }
+        sum
+    };
+    let v = sum / 6.0;
     let p = -model.params.lung_elastance * (v - model.thorax_rest_volume);
+    apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
     data.pleural_pressure = p;
-    apply_pressure(tris, &model.thorax_moving, p, data);
 }

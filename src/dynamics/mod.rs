@@ -86,9 +86,12 @@ pub struct Data {
     pub vel: Vec<Vector3<f64>>,
     /// Forces on anchors.
     pub force: Vec<Vector3<f64>>,
-    /// Doubled area vector (b - a) x (c - a) of each triangle of the surface whose pressure
-    /// is being applied (scratch, as long as the larger surface).
+    /// Doubled area vector (b - a) x (c - a) of each abdominal triangle, then of each
+    /// thoracic triangle (scratch of the pressure forces).
     pub face: Vec<Vector3<f64>>,
+    /// Volume term a . (b x c) of each abdominal triangle, then of each thoracic one
+    /// (scratch: the thoracic dome reuses the abdominal ones).
+    pub term: Vec<f64>,
     /// Generalised torque per rib.
     pub rib_torque: Vec<f64>,
     /// Net force on the sternum.
@@ -119,11 +122,9 @@ impl Data {
             force: vec![Vector3::zeros(); n],
             face: vec![
                 Vector3::zeros();
-                model
-                    .abdomen_triangles
-                    .len()
-                    .max(model.thorax_triangles.len())
+                model.abdomen_triangles.len() + model.thorax_triangles.len()
             ],
+            term: vec![0.0; model.abdomen_triangles.len() + model.thorax_triangles.len()],
             rib_torque: vec![0.0; RIBS],
             sternum_force: Vector3::zeros(),
             sternum_torque: Vector3::zeros(),

@@ -194,6 +194,11 @@ pub struct Model {
     pub thorax_triangles: Vec<[u32; 3]>,
     /// Number of lining triangles at the start of `thorax_triangles`.
     pub lining_count: usize,
+    /// For each thoracic triangle after the lining, the abdominal triangle [a, b, c] of
+    /// which it is the reversal [a, c, b] (the dome seen from the thorax); its face vector and
+    /// volume term are then exactly the negated abdominal ones and are not recomputed. Empty
+    /// when the thoracic surface is not laid out that way.
+    pub thorax_dome_source: Vec<u32>,
     /// Rest volume of the abdomen [m^3].
     pub abdomen_rest_volume: f64,
     /// Rest volume of the thorax [m^3].
@@ -496,6 +501,23 @@ impl Model {
                 .collect()
         };
         let abdomen_moving = moving(&abdomen_triangles);
+        let lining_count = anatomy.lining_triangles.len();
+        let thorax_dome_source: Vec<u32> = (0..abdomen_triangles.len() as u32)
+            .filter(|&i| ab.dome.get(i as usize).copied().unwrap_or(false))
+            .collect();
+        let mirrored = lining_count + thorax_dome_source.len() == thorax_triangles.len()
+            && thorax_dome_source
+                .iter()
+                .zip(&thorax_triangles[lining_count.min(thorax_triangles.len())..])
+                .all(|(&i, t)| {
+                    let [a, b, c] = abdomen_triangles[i as usize];
+                    *t == [a, c, b]
+                });
+        let thorax_dome_source = if mirrored {
+            thorax_dome_source
+        } else {
+            Vec::new()
+        };
         let thorax_moving = moving(&thorax_triangles);
         let mut model = Model {
             carrier,
@@ -530,7 +552,8 @@ impl Model {
             abdomen_dome: ab.dome.clone(),
             abdomen_moving,
             thorax_moving,
-            lining_count: anatomy.lining_triangles.len(),
+            lining_count,
+            thorax_dome_source,
             thorax_triangles,
             abdomen_rest_volume,
             thorax_rest_volume,
