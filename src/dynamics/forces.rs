@@ -245,3 +245,87 @@ fn pleural_pressure(model: &Model, data: &mut Data) {
     data.thorax_volume = v;
     data.pleural_pressure = p;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Activations, Data, Layout, Model, Params, rest_state, rhs, volume};
+    use super::local_forces;
+    use crate::anatomy::{Anatomy, Subject};
+    use nalgebra::Vector3;
+
+    /// A state away from rest: ribs turned, sternum moved, every free vertex displaced
+    /// by a different amount, with velocities.
+    fn deformed(model: &Model) -> Vec<f64> {
+        let l = Layout::new(model);
+        let mut y = rest_state(model);
+        for r in 0..super::super::RIBS {
+            y[l.theta + r] = 0.02 * ((r as f64) * 0.7).sin();
+            y[l.theta_dot + r] = 0.1 * ((r as f64) * 1.3).cos();
+        }
+        y[l.sternum_x + 1] += 0.003;
+        y[l.sternum_v] = 0.01;
+        for i in 0..3 * l.vertices {
+            y[l.vertex_x + i] += 0.004 * ((i as f64) * 0.37).sin();
+            y[l.vertex_v + i] = 0.02 * ((i as f64) * 0.11).cos();
+        }
+        y
+    }
+
+    /// The pressure pass (fused volume and face vectors, thoracic dome reused from the
+    /// abdomen, triangles fixed to the ground skipped) gives exactly the volumes of
+    /// `dynamics::volume` and the forces of the plain per-triangle formula on every anchor
+    /// that moves.
+    #[test]
+    fn pressure_pass_matches_the_plain_formulas() {
+        for lod in [0, 1] {
+            let anatomy = Anatomy::build(&Subject::default(), lod).unwrap();
+            let model = Model::compile(&anatomy, Params::for_posture(anatomy.subject.posture));
+            assert!(
+                !model.thorax_dome_source.is_empty(),
+                "the thoracic dome is laid out as the reversed abdominal dome"
+            );
+            let y = deformed(&model);
+            let mut dy = vec![0.0; y.len()];
+            let mut data = Data::new(&model);
+            let act = Activations::new(&[0.3; 8], 1.0, 0.8);
+            rhs(&model, &mut data, &act, &y, &mut dy);
+            let va = volume(&data.pos, &model.abdomen_triangles);
+            let vt = volume(&data.pos, &model.thorax_triangles);
+            assert_eq!(data.abdomen_volume.to_bits(), va.to_bits());
+            assert_eq!(data.thorax_volume.to_bits(), vt.to_bits());
+            assert!(data.abdomen_pressure != 0.0 && data.pleural_pressure != 0.0);
+
+            // forces without the pressures, then the pressures added triangle by triangle
+            let mut plain = data.clone();
+            local_forces(&model, &mut plain, &act);
+            for (tris, p) in [
+                (&model.abdomen_triangles, data.abdomen_pressure),
+                (&model.thorax_triangles, data.pleural_pressure),
+            ] {
+                for t in tris.iter() {
+                    let [a, b, c] = t.map(|i| plain.pos[i as usize]);
+                    let f: Vector3<f64> = (b - a).cross(&(c - a)) * (p / 6.0);
+                    for &i in t {
+                        plain.force[i as usize] += f;
+                    }
+                }
+            }
+            let mut moving = 0;
+            for (i, carrier) in model.carrier.iter().enumerate() {
+                if *carrier == super::super::Carrier::Ground {
+                    continue;
+                }
+                moving += 1;
+                let (fast, reference) = (data.force[i], plain.force[i]);
+                for k in 0..3 {
+                    assert_eq!(
+                        fast[k].to_bits(),
+                        reference[k].to_bits(),
+                        "lod {lod}, anchor {i}, axis {k}: {fast:?} vs {reference:?}"
+                    );
+                }
+            }
+            assert!(moving > 100);
+        }
+    }
+}
