@@ -45,6 +45,8 @@ pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &
         .zip(model.rib_head.iter().zip(&model.rib_axis))
         .zip(rates)
     {
+        // by value: the stores to pos and vel cannot then be taken to alias them
+        let (rot, h, u) = (*rot, *h, *u);
         for (&a, arm0) in anchors.iter().zip(arms) {
             let a = a as usize;
             let arm = rot * arm0;
