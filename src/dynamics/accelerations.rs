@@ -43,12 +43,15 @@ pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [
 
 /// Rib torques and angular accelerations.
 fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+    // one length for both arrays, so that one index check covers them
+    let m = data.pos.len();
+    let (pos, force) = (&data.pos[..], &data.force[..m]);
     for r in 0..RIBS {
         let (h, u) = (model.rib_head[r], model.rib_axis[r]);
         let mut moment = Vector3::zeros();
         for &a in &model.rib_anchors[r] {
             let a = a as usize;
-            moment += (data.pos[a] - h).cross(&data.force[a]);
+            moment += (pos[a] - h).cross(&force[a]);
         }
         let com_arm = data.rib_rotation[r] * (model.rib_com[r] - h);
         moment += com_arm.cross(&(model.gravity * model.rib_mass[r]));
@@ -87,13 +90,24 @@ fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
 
 /// Free vertex accelerations.
 fn vertices(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
-    for (j, &a) in model.vertex_anchor.iter().enumerate() {
-        let m = model.vertex_mass[j];
-        let pv = l.vertex_v + 3 * j;
-        let v = Vector3::new(y[pv], y[pv + 1], y[pv + 2]);
-        let f = data.force[a as usize] + model.gravity * m + model.vertex_preload[j]
-            - v * model.vertex_damping[j];
-        let acc = f / m;
-        dy[pv..pv + 3].copy_from_slice(acc.as_slice());
+    let n = l.vertices;
+    let (mass, damping, preload) = (
+        &model.vertex_mass[..n],
+        &model.vertex_damping[..n],
+        &model.vertex_preload[..n],
+    );
+    let vs = y[l.vertex_v..l.vertex_v + 3 * n].chunks_exact(3);
+    let accs = dy[l.vertex_v..l.vertex_v + 3 * n].chunks_exact_mut(3);
+    for (j, ((&a, v), acc)) in model.vertex_anchor[..n]
+        .iter()
+        .zip(vs)
+        .zip(accs)
+        .enumerate()
+    {
+        let m = mass[j];
+        let v = Vector3::new(v[0], v[1], v[2]);
+        let f = data.force[a as usize] + model.gravity * m + preload[j] - v * damping[j];
+        let f = f / m;
+        acc.copy_from_slice(f.as_slice());
     }
 }

@@ -9,9 +9,9 @@
 //!   with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx.
 //! - Pleural pressure: P_pl = -E_L (V_th - V_th0) on the thoracic surface (lung recoil).
 
-use super::model::{Model, PASSIVE, volume};
+use super::model::{Model, PASSIVE, VIA};
 use super::{Activations, Data};
-use nalgebra::Vector3;
+use nalgebra::{Point3, Vector3};
 
 /// Computes `data.force` for every anchor.
 pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
@@ -26,15 +26,21 @@ pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
 /// pressures are left as they were.
 pub fn accumulate_frozen(model: &Model, data: &mut Data, act: &Activations, pressures: [f64; 2]) {
     local_forces(model, data, act);
-    apply_pressure(&model.abdomen_triangles, pressures[0], data);
-    apply_pressure(&model.thorax_triangles, pressures[1], data);
+    let (na, nt) = (model.abdomen_triangles.len(), model.thorax_triangles.len());
+    let (abdomen, thorax) = data.face.split_at_mut(na);
+    face_vectors(&data.pos, &model.abdomen_triangles, abdomen);
+    face_vectors(&data.pos, &model.thorax_triangles, &mut thorax[..nt]);
+    let Data { face, force, .. } = data;
+    let (abdomen, thorax) = face.split_at(na);
+    let tris = &model.abdomen_triangles;
+    apply_pressure(tris, &model.abdomen_moving, abdomen, pressures[0], force);
+    let tris = &model.thorax_triangles;
+    apply_pressure(tris, &model.thorax_moving, thorax, pressures[1], force);
 }
 
 /// Element and vector-spring forces (everything but the pressures).
 fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
-    for f in data.force.iter_mut() {
-        *f = Vector3::zeros();
-    }
+    data.force.fill(Vector3::zeros());
     elements(model, data, act);
     vector_springs(model, data);
 }
@@ -45,44 +51,51 @@ fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
 /// along -n_{m-1}.
 fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let el = &model.elements;
-    for e in 0..el.len() {
-        let path = el.path_of(e);
-        let group = el.group[e];
-        let (rest, muscle) = if group == PASSIVE {
-            (el.rest_length[e], false)
-        } else {
-            let a_g = act.level[group as usize][el.side[e] as usize];
-            (el.rest_length[e] * (1.0 - a_g * el.gain[e]), true)
-        };
-        if path.len() == 2 {
-            let (a, b) = (path[0] as usize, path[1] as usize);
-            let d = data.pos[b] - data.pos[a];
+    let level = act.table();
+    let n = el.len();
+    let (start, path, ends) = (&el.start[..n + 1], &el.path[..], &el.ends[..n]);
+    let (rest_length, stiffness, damping) =
+        (&el.rest_length[..n], &el.stiffness[..n], &el.damping[..n]);
+    let (slot, gain) = (&el.slot[..n], &el.gain[..n]);
+    // one length for the three arrays, so that one index check covers them
+    let m = data.pos.len();
+    let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
+    for e in 0..n {
+        let s = slot[e];
+        // a membrane element's slot reads 0 and its gain is 0: its rest length is l0 exactly
+        let rest = rest_length[e] * (1.0 - level[s as usize] * gain[e]);
+        let muscle = s != PASSIVE;
+        let [a, b] = ends[e];
+        if a != VIA {
+            let (a, b) = (a as usize, b as usize);
+            let d = pos[b] - pos[a];
             let len = d.norm();
             if len < 1e-12 {
                 continue;
             }
             let n = d / len;
-            let rate = (data.vel[b] - data.vel[a]).dot(&n);
-            let mut f = el.stiffness[e] * (len - rest) + el.damping[e] * rate;
+            let rate = (vel[b] - vel[a]).dot(&n);
+            let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
             if muscle && f < 0.0 {
                 f = 0.0;
             }
             let fv = n * f;
-            data.force[a] += fv;
-            data.force[b] -= fv;
+            force[a] += fv;
+            force[b] -= fv;
             continue;
         }
+        let path = &path[start[e] as usize..start[e + 1] as usize];
         let (mut len, mut rate) = (0.0, 0.0);
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
-            let d = data.pos[b] - data.pos[a];
+            let d = pos[b] - pos[a];
             let l = d.norm();
             len += l;
             if l > 1e-12 {
-                rate += (data.vel[b] - data.vel[a]).dot(&d) / l;
+                rate += (vel[b] - vel[a]).dot(&d) / l;
             }
         }
-        let mut f = el.stiffness[e] * (len - rest) + el.damping[e] * rate;
+        let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
         if muscle && f < 0.0 {
             f = 0.0;
         }
@@ -91,12 +104,12 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
         }
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
-            let d = data.pos[b] - data.pos[a];
+            let d = pos[b] - pos[a];
             let l = d.norm();
             if l > 1e-12 {
                 let fv = d * (f / l);
-                data.force[a] += fv;
-                data.force[b] -= fv;
+                force[a] += fv;
+                force[b] -= fv;
             }
         }
     }
@@ -105,46 +118,214 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
 /// Cartilage joints and wall foundation.
 fn vector_springs(model: &Model, data: &mut Data) {
     let s = &model.springs;
-    for i in 0..s.a.len() {
-        let (a, b) = (s.a[i] as usize, s.b[i] as usize);
-        let mut f = (data.pos[b] - data.pos[a]) * s.stiffness[i]
-            + (data.vel[b] - data.vel[a]) * s.damping[i];
-        if s.horizontal[i] {
+    let n = s.a.len();
+    let (ia, ib, horizontal) = (&s.a[..n], &s.b[..n], &s.horizontal[..n]);
+    let (stiffness, damping) = (&s.stiffness[..n], &s.damping[..n]);
+    let m = data.pos.len();
+    let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
+    for i in 0..n {
+        let (a, b) = (ia[i] as usize, ib[i] as usize);
+        let mut f = (pos[b] - pos[a]) * stiffness[i] + (vel[b] - vel[a]) * damping[i];
+        if horizontal[i] {
             f.y = 0.0;
         }
-        data.force[a] += f;
-        data.force[b] -= f;
+        force[a] += f;
+        force[b] -= f;
     }
 }
 
-/// Pushes `pressure` on a closed surface: each corner receives P/6 (b - a) x (c - a).
-fn apply_pressure(tris: &[[u32; 3]], pressure: f64, data: &mut Data) {
+/// Signed volume enclosed by `tris` (the same sum, in the same order, as
+/// [`volume`](super::volume)), storing each triangle's volume term a . (b x c) in `term` and its
+/// doubled area vector (b - a) x (c - a) in `face` for [`apply_pressure`]: the corners are
+/// gathered once for both. Returns the sum of the terms, started at `sum`.
+fn volume_and_faces(
+    pos: &[Point3<f64>],
+    tris: &[[u32; 3]],
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    mut sum: f64,
+) -> f64 {
+    for ((t, f), v) in tris.iter().zip(face.iter_mut()).zip(term.iter_mut()) {
+        let (a, b, c) = (
+            &pos[t[0] as usize].coords,
+            &pos[t[1] as usize].coords,
+            &pos[t[2] as usize].coords,
+        );
+        *v = a.dot(&b.cross(c));
+        sum += *v;
+        *f = (b - a).cross(&(c - a));
+    }
+    sum
+}
+
+/// Each triangle's doubled area vector (b - a) x (c - a) into `face`.
+fn face_vectors(pos: &[Point3<f64>], tris: &[[u32; 3]], face: &mut [Vector3<f64>]) {
+    for (t, f) in tris.iter().zip(face.iter_mut()) {
+        let (a, b, c) = (pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]);
+        *f = (b - a).cross(&(c - a));
+    }
+}
+
+/// Pushes `pressure` on a closed surface whose face vectors are `face`: each corner
+/// receives P/6 (b - a) x (c - a). Triangles that do not move are skipped.
+fn apply_pressure(
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &[Vector3<f64>],
+    pressure: f64,
+    force: &mut [Vector3<f64>],
+) {
     if pressure == 0.0 {
         return;
     }
-    for t in tris {
-        let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
-        let f = (data.pos[b] - data.pos[a]).cross(&(data.pos[c] - data.pos[a])) * (pressure / 6.0);
-        data.force[a] += f;
-        data.force[b] += f;
-        data.force[c] += f;
+    let scale = pressure / 6.0;
+    for ((t, face), &moving) in tris.iter().zip(face).zip(moving) {
+        if !moving {
+            continue;
+        }
+        let f = face * scale;
+        force[t[0] as usize] += f;
+        force[t[1] as usize] += f;
+        force[t[2] as usize] += f;
     }
 }
 
 /// Abdominal pressure from the current cavity volume (eq. 2.5-2.6).
 fn abdominal_pressure(model: &Model, data: &mut Data) {
-    let v = volume(&data.pos, &model.abdomen_triangles);
+    let tris = &model.abdomen_triangles;
+    let n = tris.len();
+    let Data {
+        pos,
+        face,
+        term,
+        force,
+        ..
+    } = data;
+    let (face, term) = (&mut face[..n], &mut term[..n]);
+    let v = volume_and_faces(pos, tris, face, term, -0.0) / 6.0;
     let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0);
+    apply_pressure(tris, &model.abdomen_moving, face, p, force);
     data.abdomen_volume = v;
     data.abdomen_pressure = p;
-    apply_pressure(&model.abdomen_triangles, p, data);
 }
 
-/// Pleural pressure from the thoracic volume: the lungs' elastic recoil.
+/// Pleural pressure from the thoracic volume: the lungs' elastic recoil. The dome's
+/// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
+/// volume terms negated (exactly what recomputing them would give).
 fn pleural_pressure(model: &Model, data: &mut Data) {
-    let v = volume(&data.pos, &model.thorax_triangles);
+    let tris = &model.thorax_triangles;
+    let (na, nt) = (model.abdomen_triangles.len(), tris.len());
+    let Data {
+        pos,
+        face,
+        term,
+        force,
+        ..
+    } = data;
+    let (abdomen_face, thorax_face) = face.split_at_mut(na);
+    let (abdomen_term, thorax_term) = term.split_at_mut(na);
+    let (thorax_face, thorax_term) = (&mut thorax_face[..nt], &mut thorax_term[..nt]);
+    let source = &model.thorax_dome_source;
+    let sum = if source.is_empty() {
+        volume_and_faces(pos, tris, thorax_face, thorax_term, -0.0)
+    } else {
+        let lining = model.lining_count;
+        let (lining_face, dome_face) = thorax_face.split_at_mut(lining);
+        let mut sum = volume_and_faces(pos, &tris[..lining], lining_face, thorax_term, -0.0);
+        for (&i, f) in source.iter().zip(dome_face.iter_mut()) {
+            let i = i as usize;
+            sum += -abdomen_term[i];
+            *f = -abdomen_face[i];
+        }
+        sum
+    };
+    let v = sum / 6.0;
     let p = -model.params.lung_elastance * (v - model.thorax_rest_volume);
+    apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
     data.pleural_pressure = p;
-    apply_pressure(&model.thorax_triangles, p, data);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Activations, Data, Layout, Model, Params, rest_state, rhs, volume};
+    use super::local_forces;
+    use crate::anatomy::{Anatomy, Subject};
+    use nalgebra::Vector3;
+
+    /// A state away from rest: ribs turned, sternum moved, every free vertex displaced
+    /// by a different amount, with velocities.
+    fn deformed(model: &Model) -> Vec<f64> {
+        let l = Layout::new(model);
+        let mut y = rest_state(model);
+        for r in 0..super::super::RIBS {
+            y[l.theta + r] = 0.02 * ((r as f64) * 0.7).sin();
+            y[l.theta_dot + r] = 0.1 * ((r as f64) * 1.3).cos();
+        }
+        y[l.sternum_x + 1] += 0.003;
+        y[l.sternum_v] = 0.01;
+        for i in 0..3 * l.vertices {
+            y[l.vertex_x + i] += 0.004 * ((i as f64) * 0.37).sin();
+            y[l.vertex_v + i] = 0.02 * ((i as f64) * 0.11).cos();
+        }
+        y
+    }
+
+    /// The pressure pass (fused volume and face vectors, thoracic dome reused from the
+    /// abdomen, triangles fixed to the ground skipped) gives exactly the volumes of
+    /// `dynamics::volume` and the forces of the plain per-triangle formula on every anchor
+    /// that moves.
+    #[test]
+    fn pressure_pass_matches_the_plain_formulas() {
+        for lod in [0, 1] {
+            let anatomy = Anatomy::build(&Subject::default(), lod).unwrap();
+            let model = Model::compile(&anatomy, Params::for_posture(anatomy.subject.posture));
+            assert!(
+                !model.thorax_dome_source.is_empty(),
+                "the thoracic dome is laid out as the reversed abdominal dome"
+            );
+            let y = deformed(&model);
+            let mut dy = vec![0.0; y.len()];
+            let mut data = Data::new(&model);
+            let act = Activations::new(&[0.3; 8], 1.0, 0.8);
+            rhs(&model, &mut data, &act, &y, &mut dy);
+            let va = volume(&data.pos, &model.abdomen_triangles);
+            let vt = volume(&data.pos, &model.thorax_triangles);
+            assert_eq!(data.abdomen_volume.to_bits(), va.to_bits());
+            assert_eq!(data.thorax_volume.to_bits(), vt.to_bits());
+            assert!(data.abdomen_pressure != 0.0 && data.pleural_pressure != 0.0);
+
+            // forces without the pressures, then the pressures added triangle by triangle
+            let mut plain = data.clone();
+            local_forces(&model, &mut plain, &act);
+            for (tris, p) in [
+                (&model.abdomen_triangles, data.abdomen_pressure),
+                (&model.thorax_triangles, data.pleural_pressure),
+            ] {
+                for t in tris.iter() {
+                    let [a, b, c] = t.map(|i| plain.pos[i as usize]);
+                    let f: Vector3<f64> = (b - a).cross(&(c - a)) * (p / 6.0);
+                    for &i in t {
+                        plain.force[i as usize] += f;
+                    }
+                }
+            }
+            let mut moving = 0;
+            for (i, carrier) in model.carrier.iter().enumerate() {
+                if *carrier == super::super::Carrier::Ground {
+                    continue;
+                }
+                moving += 1;
+                let (fast, reference) = (data.force[i], plain.force[i]);
+                for k in 0..3 {
+                    assert_eq!(
+                        fast[k].to_bits(),
+                        reference[k].to_bits(),
+                        "lod {lod}, anchor {i}, axis {k}: {fast:?} vs {reference:?}"
+                    );
+                }
+            }
+            assert!(moving > 100);
+        }
+    }
 }

@@ -2,12 +2,13 @@
 //!
 //! A rib turns by theta about its unit hinge axis u through its head h (Rodrigues):
 //! p = h + R(u, theta)(p0 - h), v = theta' u x (p - h). The sternum is a free rigid body:
-//! p = x + R(q)(p0 - x0), v = x' + w x (p - x). Free vertices are read directly.
+//! p = x + R(q)(p0 - x0), v = x' + w x (p - x). Free vertices are read directly. The rest
+//! arms p0 - h and p0 - x0 are precomputed in the [`Model`].
 
 use super::Data;
 use super::model::{Model, RIBS};
 use super::state::Layout;
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Point3, Quaternion, UnitQuaternion, Vector3};
 
 /// Rotation matrix about unit axis `u` by `angle` (Rodrigues' formula).
 pub fn axis_rotation(u: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
@@ -28,32 +29,45 @@ pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &
         y[l.sternum_q + 3],
     );
     data.sternum_rotation = UnitQuaternion::from_quaternion(q);
-    data.sternum_x = nalgebra::Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]);
+    data.sternum_x = Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]);
     data.sternum_w = Vector3::new(y[l.sternum_w], y[l.sternum_w + 1], y[l.sternum_w + 2]);
     let sternum_v = Vector3::new(y[l.sternum_v], y[l.sternum_v + 1], y[l.sternum_v + 2]);
 
-    for r in 0..RIBS {
-        let (h, rot, u) = (model.rib_head[r], data.rib_rotation[r], model.rib_axis[r]);
-        let rate = y[l.theta_dot + r];
-        for &a in &model.rib_anchors[r] {
+    // one length for both arrays, so that one index check covers them
+    let m = data.pos.len();
+    let (pos, vel) = (&mut data.pos[..], &mut data.vel[..m]);
+    let rates = &y[l.theta_dot..l.theta_dot + RIBS];
+    for ((((anchors, arms), rot), (h, u)), &rate) in model
+        .rib_anchors
+        .iter()
+        .zip(&model.rib_arm)
+        .zip(&data.rib_rotation)
+        .zip(model.rib_head.iter().zip(&model.rib_axis))
+        .zip(rates)
+    {
+        // by value: the stores to pos and vel cannot then be taken to alias them
+        let (rot, h, u) = (*rot, *h, *u);
+        for (&a, arm0) in anchors.iter().zip(arms) {
             let a = a as usize;
-            let arm = rot * (model.rest[a] - h);
-            data.pos[a] = h + arm;
-            data.vel[a] = u.cross(&arm) * rate;
+            let arm = rot * arm0;
+            pos[a] = h + arm;
+            vel[a] = u.cross(&arm) * rate;
         }
     }
     let rot = data.sternum_rotation.to_rotation_matrix();
-    for &a in &model.sternum_anchors {
+    for (&a, arm0) in model.sternum_anchors.iter().zip(&model.sternum_arm) {
         let a = a as usize;
-        let arm = rot * (model.rest[a] - model.sternum_com);
-        data.pos[a] = data.sternum_x + arm;
-        data.vel[a] = sternum_v + data.sternum_w.cross(&arm);
+        let arm = rot * arm0;
+        pos[a] = data.sternum_x + arm;
+        vel[a] = sternum_v + data.sternum_w.cross(&arm);
     }
-    for (j, &a) in model.vertex_anchor.iter().enumerate() {
+    let n3 = 3 * l.vertices;
+    let xs = y[l.vertex_x..l.vertex_x + n3].chunks_exact(3);
+    let vs = y[l.vertex_v..l.vertex_v + n3].chunks_exact(3);
+    for ((&a, x), v) in model.vertex_anchor.iter().zip(xs).zip(vs) {
         let a = a as usize;
-        let (px, pv) = (l.vertex_x + 3 * j, l.vertex_v + 3 * j);
-        data.pos[a] = nalgebra::Point3::new(y[px], y[px + 1], y[px + 2]);
-        data.vel[a] = Vector3::new(y[pv], y[pv + 1], y[pv + 2]);
+        pos[a] = Point3::new(x[0], x[1], x[2]);
+        vel[a] = Vector3::new(v[0], v[1], v[2]);
     }
     debug_assert!(model.carrier.len() == data.pos.len());
 }

@@ -23,7 +23,7 @@ mod model;
 mod params;
 pub mod state;
 
-pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VectorSprings, volume};
+pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VIA, VectorSprings, volume};
 pub use params::Params;
 pub use state::{Layout, rest_state};
 
@@ -52,6 +52,17 @@ impl Activations {
         Activations { level }
     }
 
+    /// The levels as a table indexed by an element's [`Elements::slot`] (3 group + side);
+    /// every other entry, [`PASSIVE`]'s included, is 0. It has 256 entries so that indexing
+    /// it with a `u8` needs no bounds check.
+    pub fn table(&self) -> [f64; 256] {
+        let mut table = [0.0; 256];
+        for (g, sides) in self.level.iter().enumerate() {
+            table[3 * g..3 * g + 3].copy_from_slice(sides);
+        }
+        table
+    }
+
     /// Whether every group is inactive.
     pub fn is_zero(&self) -> bool {
         self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
@@ -75,6 +86,12 @@ pub struct Data {
     pub vel: Vec<Vector3<f64>>,
     /// Forces on anchors.
     pub force: Vec<Vector3<f64>>,
+    /// Doubled area vector (b - a) x (c - a) of each abdominal triangle, then of each
+    /// thoracic triangle (scratch of the pressure forces).
+    pub face: Vec<Vector3<f64>>,
+    /// Volume term a . (b x c) of each abdominal triangle, then of each thoracic one
+    /// (scratch: the thoracic dome reuses the abdominal ones).
+    pub term: Vec<f64>,
     /// Generalised torque per rib.
     pub rib_torque: Vec<f64>,
     /// Net force on the sternum.
@@ -103,6 +120,11 @@ impl Data {
             pos: model.rest.clone(),
             vel: vec![Vector3::zeros(); n],
             force: vec![Vector3::zeros(); n],
+            face: vec![
+                Vector3::zeros();
+                model.abdomen_triangles.len() + model.thorax_triangles.len()
+            ],
+            term: vec![0.0; model.abdomen_triangles.len() + model.thorax_triangles.len()],
             rib_torque: vec![0.0; RIBS],
             sternum_force: Vector3::zeros(),
             sternum_torque: Vector3::zeros(),

@@ -32,7 +32,16 @@ pub struct Elements {
     pub side: Vec<u8>,
     /// Contraction per unit activation, beta_max g (g: the regional gain).
     pub gain: Vec<f64>,
+    /// Index of the element's activation in [`Activations::table`](super::Activations::table):
+    /// 3 group + side for a muscle, [`PASSIVE`] (whose entry is 0) for the membrane.
+    pub slot: Vec<u8>,
+    /// Anchors of a two-point element (most of them), or [`VIA`] twice for a path with via
+    /// points: the force loop reads them without going through `start` and `path`.
+    pub ends: Vec<[u32; 2]>,
 }
+
+/// The `ends` of an element whose path has via points.
+pub const VIA: u32 = u32::MAX;
 
 impl Default for Elements {
     fn default() -> Self {
@@ -45,6 +54,8 @@ impl Default for Elements {
             group: Vec::new(),
             side: Vec::new(),
             gain: Vec::new(),
+            slot: Vec::new(),
+            ends: Vec::new(),
         }
     }
 }
@@ -72,6 +83,15 @@ impl Elements {
         self.group.push(group);
         self.side.push(side);
         self.gain.push(gain);
+        self.ends.push(match path {
+            [a, b] => [*a, *b],
+            _ => [VIA, VIA],
+        });
+        self.slot.push(if group == PASSIVE {
+            PASSIVE
+        } else {
+            3 * group + side
+        });
     }
 }
 
@@ -120,6 +140,11 @@ pub struct Model {
     pub sternum_anchors: Vec<u32>,
     /// Anchor of each free vertex.
     pub vertex_anchor: Vec<u32>,
+    /// Rest arm p0 - h of each anchor of `rib_anchors[r]` about its rib's hinge point,
+    /// precomputed for the kinematics.
+    pub rib_arm: Vec<Vec<Vector3<f64>>>,
+    /// Rest arm p0 - x0 of each anchor of `sternum_anchors` about the sternum's centre of mass.
+    pub sternum_arm: Vec<Vector3<f64>>,
     /// Rib hinge points.
     pub rib_head: Vec<Point3<f64>>,
     /// Rib hinge axes (unit).
@@ -160,10 +185,20 @@ pub struct Model {
     pub abdomen_triangles: Vec<[u32; 3]>,
     /// Whether each abdominal triangle belongs to the dome.
     pub abdomen_dome: Vec<bool>,
+    /// Whether each abdominal triangle has a corner that moves: the pressure forces on a
+    /// triangle fixed to the ground act on nothing and are not applied (its volume counts).
+    pub abdomen_moving: Vec<bool>,
+    /// Whether each thoracic triangle has a corner that moves.
+    pub thorax_moving: Vec<bool>,
     /// Closed thoracic surface (anchor indices): lining then reversed dome.
     pub thorax_triangles: Vec<[u32; 3]>,
     /// Number of lining triangles at the start of `thorax_triangles`.
     pub lining_count: usize,
+    /// For each thoracic triangle after the lining, the abdominal triangle [a, b, c] of
+    /// which it is the reversal [a, c, b] (the dome seen from the thorax); its face vector and
+    /// volume term are then exactly the negated abdominal ones and are not recomputed. Empty
+    /// when the thoracic surface is not laid out that way.
+    pub thorax_dome_source: Vec<u32>,
     /// Rest volume of the abdomen [m^3].
     pub abdomen_rest_volume: f64,
     /// Rest volume of the thorax [m^3].
@@ -451,12 +486,47 @@ impl Model {
         sternum_anchors.push(sternum_probe);
 
         let ribs = &anatomy.ribs;
+        let rib_arm = rib_anchors
+            .iter()
+            .zip(ribs)
+            .map(|(list, rib)| list.iter().map(|&a| rest[a as usize] - rib.head).collect())
+            .collect();
+        let sternum_arm = sternum_anchors
+            .iter()
+            .map(|&a| rest[a as usize] - sternum_com)
+            .collect();
+        let moving = |tris: &[[u32; 3]]| -> Vec<bool> {
+            tris.iter()
+                .map(|t| t.iter().any(|&a| carrier[a as usize] != Carrier::Ground))
+                .collect()
+        };
+        let abdomen_moving = moving(&abdomen_triangles);
+        let lining_count = anatomy.lining_triangles.len();
+        let thorax_dome_source: Vec<u32> = (0..abdomen_triangles.len() as u32)
+            .filter(|&i| ab.dome.get(i as usize).copied().unwrap_or(false))
+            .collect();
+        let mirrored = lining_count + thorax_dome_source.len() == thorax_triangles.len()
+            && thorax_dome_source
+                .iter()
+                .zip(&thorax_triangles[lining_count.min(thorax_triangles.len())..])
+                .all(|(&i, t)| {
+                    let [a, b, c] = abdomen_triangles[i as usize];
+                    *t == [a, c, b]
+                });
+        let thorax_dome_source = if mirrored {
+            thorax_dome_source
+        } else {
+            Vec::new()
+        };
+        let thorax_moving = moving(&thorax_triangles);
         let mut model = Model {
             carrier,
             rest,
             rib_anchors,
             sternum_anchors,
             vertex_anchor,
+            rib_arm,
+            sternum_arm,
             rib_head: ribs.iter().map(|r| r.head).collect(),
             rib_axis: ribs.iter().map(|r| r.axis.into_inner()).collect(),
             rib_mass: ribs.iter().map(|r| r.mass()).collect(),
@@ -480,7 +550,10 @@ impl Model {
             springs,
             abdomen_triangles,
             abdomen_dome: ab.dome.clone(),
-            lining_count: anatomy.lining_triangles.len(),
+            abdomen_moving,
+            thorax_moving,
+            lining_count,
+            thorax_dome_source,
             thorax_triangles,
             abdomen_rest_volume,
             thorax_rest_volume,

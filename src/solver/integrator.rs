@@ -559,7 +559,7 @@ impl Integrator {
         }
         self.stats.rhs_evaluations += (s - 1) as u64;
         let k_last = &k[(s - 2) * n..(s - 1) * n];
-        if ynew.iter().chain(k_last).any(|v| !v.is_finite()) {
+        if !(all_finite(ynew) && all_finite(k_last)) {
             return Attempt::NonFinite;
         }
         let err = self.error_norm(y, h);
@@ -586,13 +586,22 @@ impl Integrator {
             ..
         } = &mut self.work;
         stage_sum(e5, tab.e, &self.fsal_k, k, n);
-        let scale = |i: usize| (atol + rtol * y[i].abs().max(ynew[i].abs())).max(f64::MIN_POSITIVE);
-        let sum: f64 = (0..n).map(|i| (e5[i] / scale(i)).powi(2)).sum();
+        let (y, ynew) = (&y[..n], &ynew[..n]);
+        let scale = |a: f64, b: f64| (atol + rtol * a.abs().max(b.abs())).max(f64::MIN_POSITIVE);
+        let weighted = |e: &[f64]| -> f64 {
+            e[..n]
+                .iter()
+                .zip(y)
+                .zip(ynew)
+                .map(|((&e, &a), &b)| (e / scale(a, b)).powi(2))
+                .sum()
+        };
+        let sum = weighted(e5);
         match tab.e_low {
             None => h * (sum / n as f64).sqrt(),
             Some(el) => {
                 stage_sum(e3, el, &self.fsal_k, k, n);
-                let sum_low: f64 = (0..n).map(|i| (e3[i] / scale(i)).powi(2)).sum();
+                let sum_low = weighted(e3);
                 if sum == 0.0 && sum_low == 0.0 {
                     return 0.0;
                 }
@@ -733,58 +742,136 @@ impl Integrator {
     }
 }
 
-/// Length of the blocks in which stage sums are formed: the partial sums stay in L1 cache
-/// and registers while each stage is streamed once.
-const BLOCK: usize = 128;
+/// Most nonzero weights a stage sum can have on the fused path (DOP853's dense-output rows
+/// span its 12 stages and 3 extra stages); longer sums take the general loop.
+const MAX_TERMS: usize = 16;
 
 /// dst = y + h Σ_j a_j k_j, with k_0 = `k0` and k_j (j ≥ 1) at `k[(j-1)n..jn]`.
 /// The increments are summed first and added to y last, as in Hairer's codes, so that
 /// round-off does not accumulate in large components of y.
 fn combine(dst: &mut [f64], y: &[f64], h: f64, a: &[f64], k0: &[f64], k: &[f64], n: usize) {
-    blocked_sum(dst, a, k0, k, n, |i, acc| y[i] + h * acc);
+    weighted_sum(dst, y, a, k0, k, n, |yi, acc| yi + h * acc);
 }
 
 /// dst = Σ_j w_j k_j over the stages (zero weights skipped).
 fn stage_sum(dst: &mut [f64], w: &[f64], k0: &[f64], k: &[f64], n: usize) {
-    blocked_sum(dst, w, k0, k, n, |_, acc| acc);
+    weighted_sum(dst, k0, w, k0, k, n, |_, acc| acc);
 }
 
-/// dst_i = finish(i, Σ_j w_j k_j,i), formed block by block so that dst is written once.
-fn blocked_sum(
+/// dst_i = finish(y_i, Σ_j w_j k_j,i) over the stages with nonzero weights, in stage order
+/// (acc = 0, then acc += w_j k_j,i). The stages with nonzero weights are picked once; one
+/// loop over the state then reads each of them and writes dst once ([`fused_sum`]).
+fn weighted_sum(
     dst: &mut [f64],
+    y: &[f64],
     w: &[f64],
     k0: &[f64],
     k: &[f64],
     n: usize,
-    finish: impl Fn(usize, f64) -> f64,
+    finish: impl Fn(f64, f64) -> f64,
 ) {
-    let mut acc = [0.0; BLOCK];
-    let mut start = 0;
-    while start < n {
-        let len = BLOCK.min(n - start);
-        let acc = &mut acc[..len];
-        acc.fill(0.0);
-        for (j, &wj) in w.iter().enumerate() {
-            if wj == 0.0 {
-                continue;
-            }
-            let off = if j == 0 { 0 } else { (j - 1) * n };
-            let src = if j == 0 {
-                &k0[start..start + len]
-            } else {
-                &k[off + start..off + start + len]
-            };
-            for (a, &kv) in acc.iter_mut().zip(src) {
-                *a += wj * kv;
-            }
+    let mut ws = [0.0; MAX_TERMS];
+    let mut ks: [&[f64]; MAX_TERMS] = [&[]; MAX_TERMS];
+    let mut m = 0;
+    for (j, &wj) in w.iter().enumerate() {
+        if wj == 0.0 {
+            continue;
         }
-        for (i, (d, &a)) in dst[start..start + len]
-            .iter_mut()
-            .zip(acc.iter())
-            .enumerate()
-        {
-            *d = finish(start + i, a);
+        if m == MAX_TERMS {
+            return general_sum(dst, y, w, k0, k, n, finish);
         }
-        start += len;
+        ws[m] = wj;
+        ks[m] = if j == 0 {
+            &k0[..n]
+        } else {
+            &k[(j - 1) * n..j * n]
+        };
+        m += 1;
     }
+    let (dst, y) = (&mut dst[..n], &y[..n]);
+    macro_rules! fused {
+        ($($m:literal)*) => {
+            match m {
+                $($m => fused_sum::<$m>(
+                    dst,
+                    y,
+                    &ws[..$m].try_into().expect("length checked"),
+                    &ks[..$m].try_into().expect("length checked"),
+                    finish,
+                ),)*
+                _ => general_sum(dst, y, w, k0, k, n, finish),
+            }
+        };
+    }
+    fused!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+}
+
+/// The fused loop of [`weighted_sum`] for exactly `M` stages: the sum over the stages is
+/// unrolled, and the loop over the state has no bounds checks (every slice has length n).
+#[inline(always)]
+fn fused_sum<const M: usize>(
+    dst: &mut [f64],
+    y: &[f64],
+    w: &[f64; M],
+    ks: &[&[f64]; M],
+    finish: impl Fn(f64, f64) -> f64,
+) {
+    let n = dst.len();
+    let y = &y[..n];
+    let ks: [&[f64]; M] = ks.map(|s| &s[..n]);
+    for i in 0..n {
+        let mut acc = 0.0;
+        for j in 0..M {
+            acc += w[j] * ks[j][i];
+        }
+        dst[i] = finish(y[i], acc);
+    }
+}
+
+/// [`weighted_sum`] for any number of stages, one stage at a time.
+fn general_sum(
+    dst: &mut [f64],
+    y: &[f64],
+    w: &[f64],
+    k0: &[f64],
+    k: &[f64],
+    n: usize,
+    finish: impl Fn(f64, f64) -> f64,
+) {
+    let dst = &mut dst[..n];
+    dst.fill(0.0);
+    for (j, &wj) in w.iter().enumerate() {
+        if wj == 0.0 {
+            continue;
+        }
+        let src = if j == 0 {
+            &k0[..n]
+        } else {
+            &k[(j - 1) * n..j * n]
+        };
+        for (d, &kv) in dst.iter_mut().zip(src) {
+            *d += wj * kv;
+        }
+    }
+    for (d, &yi) in dst.iter_mut().zip(&y[..n]) {
+        *d = finish(yi, *d);
+    }
+}
+
+/// Whether every entry is finite: 0 v is ±0 for a finite entry and NaN for an infinite or
+/// NaN one, and a sum with a NaN term is NaN (a branch-free, vectorisable form of
+/// `iter().all(is_finite)`; four partial sums so that the additions do not wait on each other).
+fn all_finite(v: &[f64]) -> bool {
+    let mut acc = [0.0; 4];
+    let chunks = v.chunks_exact(4);
+    let mut rest = 0.0;
+    for &x in chunks.remainder() {
+        rest += x * 0.0;
+    }
+    for c in chunks {
+        for j in 0..4 {
+            acc[j] += c[j] * 0.0;
+        }
+    }
+    acc[0] + acc[1] + acc[2] + acc[3] + rest == 0.0
 }
