@@ -48,6 +48,12 @@ fn signed(frames: &[Frame], period: f64) -> [f64; 3] {
 }
 
 fn main() -> breathing_torso::Result<()> {
+    if let Some(i) = std::env::args().position(|a| a == "--probe") {
+        let args: Vec<String> = std::env::args().collect();
+        let rib: f64 = args.get(i + 1).and_then(|v| v.parse().ok()).unwrap_or(1.0);
+        let wall: f64 = args.get(i + 2).and_then(|v| v.parse().ok()).unwrap_or(1.0);
+        return probe(rib, wall);
+    }
     if std::env::args().any(|a| a == "--lengths") {
         return lengths();
     }
@@ -94,7 +100,7 @@ type Edit = fn(&mut Params);
 /// Quiet breathing with one posture-dependent constant swapped at a time, and the diaphragm's
 /// total fibre rest length by posture.
 fn variants() -> breathing_torso::Result<()> {
-    let cases: [(&str, Posture, Edit); 6] = [
+    let cases: [(&str, Posture, Edit); 7] = [
         ("standing", Posture::Standing, |_| {}),
         ("standing, supine wall compliance", Posture::Standing, |p| {
             p.abdominal_wall_compliance =
@@ -110,6 +116,9 @@ fn variants() -> breathing_torso::Result<()> {
             Posture::Supine,
             |p| p.beta_max_diaphragm = Params::for_posture(Posture::Standing).beta_max_diaphragm,
         ),
+        ("supine, upright rib joints", Posture::Supine, |p| {
+            p.rib_joint_stiffness = Params::for_posture(Posture::Standing).rib_joint_stiffness
+        }),
         ("supine, no gravity", Posture::Supine, |p| p.gravity = 0.0),
     ];
     for posture in [Posture::Standing, Posture::Supine] {
@@ -137,17 +146,24 @@ fn variants() -> breathing_torso::Result<()> {
         let mut params = Params::for_posture(posture);
         edit(&mut params);
         config.params = Some(params);
-        config.drive = Drive::quiet();
+        config.drive = if std::env::args().any(|a| a == "--forced") {
+            Drive::forced()
+        } else {
+            Drive::quiet()
+        };
+        let period = 1.0 / config.drive.frequency;
         let mut torso = Torso::new(config)?;
-        let period = 4.0;
+        let clock = std::time::Instant::now();
         let frames = run(&mut torso, 3.0 * period, 28.0)?;
         let s = summarise(&frames, period);
         println!(
-            "{name:40} VT {:.3} L, rib share {:.1} %, dome {:.2} cm, pressure swing {:.0} Pa",
+            "{name:40} VT {:.3} L, rib share {:.1} %, dome {:.2} cm, pressure swing {:.0} Pa ({:.1} s, {} steps)",
             s.tidal_volume,
             100.0 * s.rib_cage_share,
             100.0 * s.dome_excursion,
-            s.pressure_swing
+            s.pressure_swing,
+            clock.elapsed().as_secs_f64(),
+            torso.read(Quantity::SolverSteps)?
         );
     }
     Ok(())
@@ -193,6 +209,32 @@ fn lengths() -> breathing_torso::Result<()> {
                 total(Posture::Supine)? / up
             );
         }
+    }
+    Ok(())
+}
+
+/// Forced supine breathing with the rib-joint stiffness and the wall compliance scaled,
+/// printing progress.
+fn probe(rib: f64, wall: f64) -> breathing_torso::Result<()> {
+    let mut config = Config::default();
+    config.subject.posture = Posture::Supine;
+    let mut p = Params::for_posture(Posture::Supine);
+    p.rib_joint_stiffness *= rib;
+    p.abdominal_wall_compliance *= wall;
+    config.params = Some(p);
+    config.drive = Drive::forced();
+    let mut torso = Torso::new(config)?;
+    let clock = std::time::Instant::now();
+    for i in 1..=30 {
+        torso.advance_to(0.5 * i as f64)?;
+        println!(
+            "t {:.1} s: lung {:.3} L, dome {:.1} mm, steps {}, wall {:.1} s",
+            torso.time(),
+            torso.read(Quantity::LungVolume)?,
+            1e3 * torso.read(Quantity::DiaphragmDisplacement)?,
+            torso.read(Quantity::SolverSteps)?,
+            clock.elapsed().as_secs_f64()
+        );
     }
     Ok(())
 }
