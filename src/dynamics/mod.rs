@@ -24,7 +24,9 @@ mod params;
 pub mod state;
 
 pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VIA, VectorSprings, volume};
-pub use params::Params;
+pub use params::{
+    DIAPHRAGM_CONTRACTION_UPRIGHT, Params, diaphragm_contraction, diaphragm_length_ratio,
+};
 pub use state::{Layout, rest_state};
 
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};

@@ -5,14 +5,75 @@
 use crate::anatomy::Posture;
 use serde::{Deserialize, Serialize};
 
+/// Largest contraction of the diaphragm's fibres from their standing rest length: they can
+/// shorten by 30-40 % (seed thesis 2.3, after Hamid et al.).
+pub const DIAPHRAGM_CONTRACTION_UPRIGHT: f64 = 0.4;
+
+/// Total rest length of the diaphragm's muscle fibres at end-expiration in `posture`, relative
+/// to standing, in the generated anatomy. Lying supine, the abdominal contents are no longer
+/// pulled caudally by gravity and push the relaxed dome cranially (a higher dome, a lower FRC:
+/// `anatomy::abdomen`'s apex rise), so the fibres start longer, with a larger zone of
+/// apposition; sitting, the dome sits slightly higher than standing. Measured on the generated
+/// anatomy by `cargo run --release --example posture_breathing -- --lengths`: supine
+/// x1.138-1.160, sitting x1.022-1.026 over three subjects (1.63-1.95 m) and the three levels of
+/// detail; the values here are the default subject's at level of detail 1 (a test checks them
+/// against the geometry).
+pub fn diaphragm_length_ratio(posture: Posture) -> f64 {
+    match posture {
+        Posture::Standing => 1.0,
+        Posture::Sitting => 1.024,
+        Posture::Supine => 1.145,
+    }
+}
+
+/// Largest contraction of the diaphragm in `posture` as a fraction of that posture's rest
+/// length. The fully contracted diaphragm is flattened against the abdominal contents at TLC
+/// whatever the posture, so its fibres reach the same shortest length, (1 - beta_up) l_up;
+/// starting from a longer rest length l = rho l_up (rho: [`diaphragm_length_ratio`]) they can
+/// shorten by the fraction beta = 1 - (1 - beta_up) / rho. This is how the supine diaphragm's
+/// better length-tension position (longer fibres at FRC) gives a stronger descent for the same
+/// activation, which makes supine quiet breathing abdominal (Sharp 1975, via the seed thesis;
+/// optoelectronic plethysmography supine, Aliverti et al. 2001: abdomen 63 +- 11 % of tidal
+/// volume).
+pub fn diaphragm_contraction(posture: Posture) -> f64 {
+    match posture {
+        Posture::Standing => DIAPHRAGM_CONTRACTION_UPRIGHT,
+        _ => 1.0 - (1.0 - DIAPHRAGM_CONTRACTION_UPRIGHT) / diaphragm_length_ratio(posture),
+    }
+}
+
+/// Compliances of the rib cage and of the diaphragm-abdomen compartment, seated then supine
+/// [L/cmH2O], in 52 relaxed healthy adults (Estenne, Yernault & De Troyer 1985, J Appl
+/// Physiol 59:1842, from the relaxation lines of magnetometer pairs): rib cage 0.141 +- 0.043
+/// seated, 0.088 +- 0.038 supine; diaphragm-abdomen 0.025 +- 0.012 seated, 0.070 +- 0.025
+/// supine; the whole chest wall's compliance did not change. Lying down thus stiffens the rib
+/// cage (x1.60), which the model applies to the rib joints' stiffness, and softens the abdomen
+/// (x2.8; see [`SUPINE_WALL_COMPLIANCE`]).
+pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.070]];
+
+/// Abdominal wall compliance sitting relative to standing: a small factor of the model, not a
+/// measured ratio (the seed thesis 2.3 only orders the postures: supine is more compliant than
+/// seated); sitting is the reference posture of [`SEATED_SUPINE_COMPLIANCES`].
+pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
+
+/// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
+/// seated-to-supine ratio of the diaphragm-abdomen compliance is x2.8
+/// ([`SEATED_SUPINE_COMPLIANCES`]), but that soft a generated wall is folded in by forced
+/// expiratory abdominal contraction and the integration stalls (forced supine breathing at
+/// x3.08 stops advancing near t = 3 s: `cargo run --release --example posture_breathing --
+/// --probe 1 1.711`), so the model keeps the smaller increase.
+pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
+
 /// Constants of the dynamics. `Params::for_posture` gives the defaults.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Params {
     /// Largest contraction of a muscle element's rest length at full activation and unit
     /// gain: r = 1 - beta_max a g >= 0.7 (thesis 2.4 after Klute et al.: r in [0.7, 1.2]).
     pub beta_max: f64,
-    /// The same for the diaphragm, which can shorten by 30-40 % (seed thesis 2.3, after Hamid
-    /// et al.): r >= 0.6.
+    /// The same for the diaphragm, which can shorten by 30-40 % from its upright rest length
+    /// (seed thesis 2.3, after Hamid et al.): r >= 0.6 standing. In the other postures the
+    /// fibres start longer and reach the same shortest length (see
+    /// [`diaphragm_length_ratio`]), so their fraction is larger.
     pub beta_max_diaphragm: f64,
     /// Damping ratio of every spring-damper element against the masses it joins (thesis 2.4:
     /// critically damped).
@@ -54,22 +115,28 @@ impl Params {
         }
     }
 
-    /// Defaults for a posture: supine increases the abdominal compliance (thesis 2.3: "a change
-    /// from the seated to the supine position increases the abdominal compliance").
+    /// Defaults for a posture. Supine increases the abdominal compliance (thesis 2.3: "a change
+    /// from the seated to the supine position increases the abdominal compliance") and
+    /// decreases the rib cage's (Estenne et al. 1985: [`SEATED_SUPINE_COMPLIANCES`]); the
+    /// diaphragm, whose fibres are longer at the lower supine FRC, has a larger range of
+    /// shortening ([`Params::beta_max_diaphragm`], [`diaphragm_length_ratio`]).
     pub fn for_posture(posture: Posture) -> Params {
-        let compliance_factor = match posture {
-            Posture::Standing => 1.0,
-            Posture::Sitting => 1.1,
-            Posture::Supine => 1.8,
+        let [rib_cage, _] = SEATED_SUPINE_COMPLIANCES;
+        // Abdominal wall compliance relative to standing; rib-joint stiffness relative to
+        // upright (sitting and standing alike for the rib cage).
+        let (compliance_factor, rib_stiffness_factor) = match posture {
+            Posture::Standing => (1.0, 1.0),
+            Posture::Sitting => (SITTING_WALL_COMPLIANCE, 1.0),
+            Posture::Supine => (SUPINE_WALL_COMPLIANCE, rib_cage[0] / rib_cage[1]),
         };
         Params {
             beta_max: 0.3,
-            beta_max_diaphragm: 0.4,
+            beta_max_diaphragm: diaphragm_contraction(posture),
             damping_ratio: 1.0,
             bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
             cartilage_stiffness: 1.0e4,
-            rib_joint_stiffness: 2.0,
+            rib_joint_stiffness: 2.0 * rib_stiffness_factor,
             membrane_stiffness: 400.0,
             dome_membrane_stiffness: 40.0,
             dome_support: 2.0e5,
