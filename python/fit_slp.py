@@ -495,6 +495,7 @@ def fit(args) -> dict:
             "skin_fit_error_m": skin or {"before": registration_err, "after": registration_err,
                                          "skin_fitted": False},
             "evaluations": evaluations,
+            "evaluations_ahead_unused": 0,
             "wall_s": time.perf_counter() - start,
             "delta_phase": wrap(x[3] - x[2]),
             "lung_volume_csv": str(csv),

@@ -218,3 +218,46 @@ fn skin_fit_at_the_implied_rest_pose_keeps_the_noise_floor() {
     assert!(rel(fit.drive.diaphragm.amplitude, t.diaphragm.amplitude) < 0.10);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Two threads (a second torso on the same compiled model evaluating ahead) give the fit of
+/// one thread, bit for bit, with the same evaluation count.
+#[test]
+fn two_threads_fit_as_one() {
+    if !markers_available() {
+        return;
+    }
+    let mut source = TorsoMarkers::new(config(Subject::default())).unwrap();
+    let s = synthesize(
+        &mut source,
+        &SynthOptions {
+            drive: drive(false),
+            duration: 8.0,
+            seed: 21,
+            ..SynthOptions::default()
+        },
+    )
+    .unwrap();
+    let fit = |threads: usize| {
+        let mut source = TorsoMarkers::new(config(Subject::default())).unwrap();
+        fit_recording(
+            &mut source,
+            &s.recording,
+            &FitOptions {
+                threads,
+                ..FitOptions::default()
+            },
+            &mut |_, _| {},
+        )
+        .unwrap()
+    };
+    let (one, two) = (fit(1), fit(2));
+    eprintln!(
+        "one thread {:.2} s, two {:.2} s; {} evaluations, {} evaluated ahead and unused",
+        one.wall_s, two.wall_s, two.evaluations, two.unused_ahead
+    );
+    assert_eq!(one.drive, two.drive);
+    assert_eq!(one.cost_m, two.cost_m);
+    assert_eq!(one.evaluations, two.evaluations);
+    assert_eq!(one.fitted, two.fitted);
+    assert_eq!(one.unused_ahead, 0);
+}

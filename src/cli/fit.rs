@@ -111,6 +111,11 @@ pub struct FitArgs {
     /// Seed of the randomised methods.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Threads for the Nelder-Mead search: 2 evaluates ahead, on a second instance of the
+    /// model, the point the search is likely to need next (same search and result as 1).
+    /// Default: 2 when the machine has two or more cores.
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Fit the model's skin to the recording (thesis 3.2, `slp.reference`) rather than a
     /// rigid registration alone; for subjects whose shape differs from the model's. A first
     /// fit with rigid registration gives the rest-pose grid the recording implies (each
@@ -214,9 +219,20 @@ pub fn main(args: &FitArgs) -> Result<()> {
         method: Method::from_name(&args.method)?,
         max_evals: args.max_evals,
         seed: args.seed,
+        threads: args.threads.unwrap_or_else(default_threads),
         ..FitOptions::default()
     };
+    if !(1..=2).contains(&options.threads) {
+        return Err(Error::invalid("--threads", options.threads, "1 or 2"));
+    }
     fit_file(&args.slp, &args.model, &args.out, &options, args.skin_fit).map(|_| ())
+}
+
+/// 2 threads for a fit's search when the machine has two or more cores, otherwise 1.
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism()
+        .map(|n| n.get().min(2))
+        .unwrap_or(1)
 }
 
 /// Options of `torso demo`.
@@ -296,7 +312,10 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         &args.recording,
         &model,
         &args.out.join("fit.json"),
-        &FitOptions::default(),
+        &FitOptions {
+            threads: default_threads(),
+            ..FitOptions::default()
+        },
         false,
     )?;
     let truth_path = args.recording.with_extension("truth.json");

@@ -14,7 +14,9 @@
 //! phases at the recording's first frame; the synthetic recordings use the same convention.
 
 use super::Recording;
-use super::optimize::{Bounds, Minimum, NelderMeadOptions, cmaes, multistart, nelder_mead};
+use super::optimize::{
+    Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
+};
 use super::principal::principal_displacement;
 use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::{RigidTransform, register_rigid};
@@ -88,6 +90,11 @@ pub struct FitOptions {
     /// the recording's first frame, with a small simplex (a polish of an earlier fit);
     /// overrides `linearised_start` and `start_amplitudes`.
     pub start: Option<[f64; 4]>,
+    /// Threads for the Nelder-Mead search: with 2, a second instance of the model (sharing
+    /// the compiled model) evaluates ahead the point the search is likely to need next
+    /// ([`super::optimize::nelder_mead_parallel`]); the search and its result are those
+    /// of one thread.
+    pub threads: usize,
 }
 
 impl Default for FitOptions {
@@ -101,6 +108,7 @@ impl Default for FitOptions {
             starts: 4,
             seed: 1,
             start: None,
+            threads: 1,
         }
     }
 }
@@ -119,6 +127,9 @@ pub struct Fit {
     pub evaluations: usize,
     /// Whether the optimiser met its tolerances (false: stopped on the budget).
     pub converged: bool,
+    /// Model runs made ahead on a second thread that the search did not use (not in
+    /// `evaluations`; zero with one thread).
+    pub unused_ahead: usize,
     /// Wall time of the whole fit (registration, frequency, search, final run) [s].
     pub wall_s: f64,
     /// Diaphragm (abdominal) minus rib-cage phase, wrapped to (-pi, pi] (thesis 4.3.2).
@@ -519,14 +530,35 @@ pub fn fit_recording(
         f_rel_tol: 5e-4,
         ..NelderMeadOptions::default()
     };
+    let mut spare_model = if options.threads > 1 && options.method == Method::NelderMead {
+        model.spare()?
+    } else {
+        None
+    };
     let mut traj = Trajectory::default();
     let mut pairs = Pairs::default();
     let mut cost = |x: &[f64]| -> Result<f64> {
         model.run(&[(0.0, drive_of(x))], &model_times, false, &mut traj)?;
         Ok(aligned_cost(&traj.markers, &recorded, &mut pairs)?.0)
     };
+    let (mut spare_traj, mut spare_pairs) = (Trajectory::default(), Pairs::default());
+    let mut spare_cost = spare_model.as_mut().map(|spare| {
+        let (recorded, model_times, drive_of) = (&recorded, &model_times, &drive_of);
+        let (traj, pairs) = (&mut spare_traj, &mut spare_pairs);
+        move |x: &[f64]| -> Result<f64> {
+            spare.run(&[(0.0, drive_of(x))], model_times, false, traj)?;
+            Ok(aligned_cost(&traj.markers, recorded, pairs)?.0)
+        }
+    });
     let m: Minimum = match options.method {
-        Method::NelderMead => nelder_mead(&mut cost, &x0, &bounds, &nm, progress)?,
+        Method::NelderMead => nelder_mead_parallel(
+            &mut cost,
+            spare_cost.as_mut().map(|c| c as &mut Spare),
+            &x0,
+            &bounds,
+            &nm,
+            progress,
+        )?,
         Method::Multistart => multistart(
             &mut cost,
             &x0,
@@ -572,6 +604,7 @@ pub fn fit_recording(
         initial_cost_m: m.f_start,
         evaluations: m.evaluations + start_runs,
         converged: m.converged,
+        unused_ahead: m.unused_ahead,
         wall_s: start.elapsed().as_secs_f64(),
         delta_phase: wrap_angle(m.x[3] - m.x[2]),
         frequency,

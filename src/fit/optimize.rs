@@ -108,6 +108,9 @@ pub struct Minimum {
     pub converged: bool,
     /// Objective of the starting point (first evaluation).
     pub f_start: f64,
+    /// Evaluations made ahead on a spare objective that the search did not use (not in
+    /// `evaluations`; zero without a spare).
+    pub unused_ahead: usize,
 }
 
 /// An objective evaluated through the box: counts evaluations, remembers the best point and
@@ -118,18 +121,67 @@ struct Counted<'a> {
     evaluations: usize,
     best: (Vec<f64>, f64),
     progress: &'a mut dyn FnMut(usize, f64),
+    /// A second instance of the same objective, evaluated on another thread (see
+    /// [`Spare`]).
+    spare: Option<&'a mut Spare<'a>>,
+    /// A point evaluated ahead by the spare objective, with its value.
+    ahead: Option<(Vec<f64>, f64)>,
+    /// Evaluations made ahead that the search did not ask for.
+    wasted: usize,
 }
+
+/// A second instance of an objective, giving bit for bit the same values as the first,
+/// which [`nelder_mead_parallel`] evaluates on another thread, ahead of the search: the
+/// point the search is likely to need next, alongside the one it asks for.
+pub type Spare<'a> = dyn FnMut(&[f64]) -> Result<f64> + Send + 'a;
 
 impl Counted<'_> {
     fn eval_unit(&mut self, u: &[f64]) -> Result<f64> {
         let x = self.bounds.unit_to_box(u);
-        let v = (self.f)(&x)?;
+        let v = match self.ahead.take() {
+            Some((p, v)) if p.as_slice() == u => v,
+            other => {
+                if other.is_some() {
+                    self.wasted += 1;
+                }
+                (self.f)(&x)?
+            }
+        };
+        self.count(x, v)
+    }
+
+    fn count(&mut self, x: Vec<f64>, v: f64) -> Result<f64> {
         let v = if v.is_nan() { f64::INFINITY } else { v };
         self.evaluations += 1;
         if v < self.best.1 {
             self.best = (x, v);
         }
         (self.progress)(self.evaluations, self.best.1);
+        Ok(v)
+    }
+
+    /// Evaluates `u` as [`Counted::eval_unit`]; with a spare objective, also evaluates
+    /// `next` on another thread at the same time and keeps its value for the search's next
+    /// request (counted only if it comes).
+    fn eval_ahead(&mut self, u: &[f64], next: Option<&[f64]>) -> Result<f64> {
+        let (Some(spare), Some(next)) = (self.spare.as_deref_mut(), next) else {
+            return self.eval_unit(u);
+        };
+        if self.ahead.take().is_some() {
+            self.wasted += 1;
+        }
+        let (x, y) = (self.bounds.unit_to_box(u), self.bounds.unit_to_box(next));
+        let f = &mut *self.f;
+        let (v, w) = std::thread::scope(|scope| {
+            let other = scope.spawn(|| spare(&y));
+            let v = f(&x);
+            let w = other
+                .join()
+                .unwrap_or_else(|_| Err(Error::State("the spare objective panicked".into())));
+            (v, w)
+        });
+        let v = self.count(x, v?)?;
+        self.ahead = Some((next.to_vec(), w?));
         Ok(v)
     }
 }
@@ -156,12 +208,34 @@ pub fn nelder_mead(
     options: &NelderMeadOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Minimum> {
+    nelder_mead_parallel(f, None, x0, bounds, options, progress)
+}
+
+/// [`nelder_mead`] with an optional spare instance of the objective evaluated on a second
+/// thread. While the search evaluates a reflection, the spare evaluates the point the step
+/// is likely to need next: the expansion after a step that expanded or reflected, otherwise
+/// the contraction of the kind last used; also the initial simplex and shrinks two points
+/// at a time. The search itself is unchanged: it takes the same points, in the same order,
+/// and its result and evaluation count are those of [`nelder_mead`] when the spare gives the
+/// same values; evaluations made ahead and not used are reported in
+/// [`Minimum::unused_ahead`].
+pub fn nelder_mead_parallel<'a>(
+    f: &'a mut dyn FnMut(&[f64]) -> Result<f64>,
+    spare: Option<&'a mut Spare<'a>>,
+    x0: &[f64],
+    bounds: &'a Bounds,
+    options: &NelderMeadOptions,
+    progress: &'a mut dyn FnMut(usize, f64),
+) -> Result<Minimum> {
     let mut counted = Counted {
         f,
         bounds,
         evaluations: 0,
         best: (x0.to_vec(), f64::INFINITY),
         progress,
+        spare,
+        ahead: None,
+        wasted: 0,
     };
     let m = nm_core(
         &mut counted,
@@ -174,6 +248,7 @@ pub fn nelder_mead(
         evaluations: counted.evaluations,
         converged: m.0,
         f_start: m.1,
+        unused_ahead: counted.wasted + usize::from(counted.ahead.is_some()),
     })
 }
 
@@ -208,27 +283,46 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
     let budget = c.evaluations + o.max_evals.max(n + 1);
     // Initial simplex: steps along each axis, turned inward at a bound.
     let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
-    let f0 = c.eval_unit(u0)?;
+    let step = o.initial_step.clamp(1e-6, 0.5);
+    let vertices: Vec<Vec<f64>> = (0..n)
+        .map(|i| {
+            let mut v = u0.to_vec();
+            v[i] = if v[i] + step <= 1.0 {
+                v[i] + step
+            } else {
+                v[i] - step
+            };
+            v
+        })
+        .collect();
+    // with a spare objective, the vertices are evaluated two at a time
+    let f0 = c.eval_ahead(u0, vertices.first().map(|v| v.as_slice()))?;
     simplex.push((u0.to_vec(), f0));
     for i in 0..n {
-        let mut v = u0.to_vec();
-        let step = o.initial_step.clamp(1e-6, 0.5);
-        v[i] = if v[i] + step <= 1.0 {
-            v[i] + step
-        } else {
-            v[i] - step
-        };
         if c.evaluations >= budget {
             break;
         }
-        let fv = c.eval_unit(&v)?;
-        simplex.push((v, fv));
+        let v = &vertices[i];
+        let fv = if i % 2 == 0 {
+            c.eval_unit(v)?
+        } else {
+            c.eval_ahead(v, vertices.get(i + 1).map(|v| v.as_slice()))?
+        };
+        simplex.push((v.clone(), fv));
     }
     if simplex.len() < n + 1 {
         return Ok((false, f0));
     }
     let order = |s: &mut Vec<(Vec<f64>, f64)>| s.sort_by(|a, b| a.1.total_cmp(&b.1));
     order(&mut simplex);
+    /// The second point a step evaluated, if any: what the spare evaluates ahead next.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Second {
+        Expansion,
+        Outside,
+        Inside,
+    }
+    let mut last = Second::Inside;
     loop {
         let best = &simplex[0];
         let x_spread = simplex[1..]
@@ -248,7 +342,15 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
             .collect();
         let worst = simplex[n].clone();
         let xr = along(&centroid, &worst.0, -alpha);
-        let fr = c.eval_unit(&xr)?;
+        let guess = match last {
+            Second::Expansion => along(&centroid, &xr, beta),
+            Second::Outside => along(&centroid, &xr, gamma),
+            Second::Inside => along(&centroid, &worst.0, gamma),
+        };
+        let fr = c.eval_ahead(
+            &xr,
+            (c.evaluations + 1 < budget).then_some(guess.as_slice()),
+        )?;
         let (f1, fnn) = (simplex[0].1, simplex[n - 1].1);
         let mut shrink = false;
         if fr < f1 {
@@ -256,10 +358,12 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
                 simplex[n] = (xr, fr);
             } else {
                 let xe = along(&centroid, &xr, beta);
+                last = Second::Expansion;
                 let fe = c.eval_unit(&xe)?;
                 simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
             }
         } else if fr < fnn {
+            last = Second::Expansion;
             simplex[n] = (xr, fr);
         } else if c.evaluations >= budget {
             if fr < worst.1 {
@@ -267,6 +371,7 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
             }
         } else if fr < worst.1 {
             let xo = along(&centroid, &xr, gamma);
+            last = Second::Outside;
             let fo = c.eval_unit(&xo)?;
             if fo <= fr {
                 simplex[n] = (xo, fo);
@@ -275,6 +380,7 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
             }
         } else {
             let xi = along(&centroid, &worst.0, gamma);
+            last = Second::Inside;
             let fi = c.eval_unit(&xi)?;
             if fi < worst.1 {
                 simplex[n] = (xi, fi);
@@ -284,13 +390,21 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
         }
         if shrink {
             let x1 = simplex[0].0.clone();
-            for s in simplex.iter_mut().skip(1) {
+            let shrunk: Vec<Vec<f64>> = simplex[1..]
+                .iter()
+                .map(|s| along(&x1, &s.0, delta))
+                .collect();
+            for (k, v) in shrunk.iter().enumerate() {
                 if c.evaluations >= budget {
                     break;
                 }
-                let v = along(&x1, &s.0, delta);
-                let fv = c.eval_unit(&v)?;
-                *s = (v, fv);
+                let fv = if k % 2 == 1 {
+                    c.eval_unit(v)?
+                } else {
+                    let next = shrunk.get(k + 1).filter(|_| c.evaluations + 1 < budget);
+                    c.eval_ahead(v, next.map(|v| v.as_slice()))?
+                };
+                simplex[k + 1] = (v.clone(), fv);
             }
         }
         order(&mut simplex);
@@ -337,6 +451,9 @@ pub fn multistart(
         evaluations: 0,
         best: (x0.to_vec(), f64::INFINITY),
         progress,
+        spare: None,
+        ahead: None,
+        wasted: 0,
     };
     // Each start gets an equal share of three quarters of the budget; the polish the rest.
     let share = (3 * options.max_evals / 4 / starts).max(n + 2);
@@ -371,6 +488,7 @@ pub fn multistart(
         evaluations: counted.evaluations,
         converged,
         f_start,
+        unused_ahead: 0,
     })
 }
 
@@ -414,6 +532,9 @@ pub fn cmaes(
         evaluations: 0,
         best: (x0.to_vec(), f64::INFINITY),
         progress,
+        spare: None,
+        ahead: None,
+        wasted: 0,
     };
     let f_start = counted.eval_unit(mean.as_slice())?;
     let mut converged = false;
@@ -471,6 +592,7 @@ pub fn cmaes(
         evaluations: counted.evaluations,
         converged,
         f_start,
+        unused_ahead: 0,
     })
 }
 
@@ -512,5 +634,66 @@ mod tests {
         )
         .unwrap();
         assert!(m.x[0] < 1e-3 && (m.x[1] - 0.5).abs() < 1e-2, "{m:?}");
+    }
+
+    /// Evaluating ahead on a spare objective leaves the search unchanged: the same points
+    /// asked in the same order, the same minimum and count; the spare's evaluations that
+    /// were used took their turn on the other thread, and the unused ones are counted.
+    #[test]
+    fn evaluating_ahead_keeps_the_search() {
+        let rosen = |x: &[f64]| {
+            (0..x.len() - 1)
+                .map(|i| 100.0 * (x[i + 1] - x[i] * x[i]).powi(2) + (1.0 - x[i]).powi(2))
+                .sum::<f64>()
+        };
+        let b = Bounds::new(&[(-2.0, 2.0); 4]).unwrap();
+        let o = NelderMeadOptions {
+            max_evals: 400,
+            ..NelderMeadOptions::default()
+        };
+        let x0 = [-1.2, 1.0, -0.5, 0.8];
+        let mut seq_points = Vec::new();
+        let mut f = |x: &[f64]| {
+            seq_points.push(x.to_vec());
+            Ok(rosen(x))
+        };
+        let seq = nelder_mead(&mut f, &x0, &b, &o, &mut quiet).unwrap();
+        let mut main_points = Vec::new();
+        let mut f = |x: &[f64]| {
+            main_points.push(x.to_vec());
+            Ok(rosen(x))
+        };
+        let spare_calls = std::sync::atomic::AtomicUsize::new(0);
+        let mut g = |x: &[f64]| {
+            spare_calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Ok(rosen(x))
+        };
+        let mut reported = Vec::new();
+        let par = nelder_mead_parallel(&mut f, Some(&mut g), &x0, &b, &o, &mut |n, best| {
+            reported.push((n, best))
+        })
+        .unwrap();
+        assert_eq!(
+            (&par.x, par.f, par.evaluations),
+            (&seq.x, seq.f, seq.evaluations)
+        );
+        assert_eq!(par.converged, seq.converged);
+        let ahead = spare_calls.load(std::sync::atomic::Ordering::Relaxed);
+        // every point the search asked for came from one of the two objectives, once
+        assert_eq!(
+            main_points.len() + ahead - par.unused_ahead,
+            seq.evaluations
+        );
+        assert!(
+            ahead > seq.evaluations / 4,
+            "{ahead} of {}",
+            seq.evaluations
+        );
+        assert_eq!(reported.len(), seq.evaluations);
+        assert_eq!(reported.last().map(|r| r.1), Some(seq.f));
+        println!(
+            "{} evaluations, {} on the spare ({} unused)",
+            seq.evaluations, ahead, par.unused_ahead
+        );
     }
 }

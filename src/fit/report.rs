@@ -67,6 +67,7 @@ pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Pat
             }),
         },
         "evaluations": fit.evaluations,
+        "evaluations_ahead_unused": fit.unused_ahead,
         "converged": fit.converged,
         "wall_s": fit.wall_s,
         "delta_phase": fit.delta_phase,
@@ -307,7 +308,7 @@ pub fn summary(fit: &Fit) -> String {
          delta phase (diaphragm - ribs) {:+.4} rad\n\
          registration          mean {:.2} mm, rms {:.2} mm, rotation {:.1} deg\n\
          cost                  {:.3} mm (start {:.3} mm)\n\
-         evaluations           {} ({}){}\n\
+         evaluations           {} ({}){}{}\n\
          wall time             {:.2} s",
         d.frequency,
         d.frequency * 60.0,
@@ -324,6 +325,14 @@ pub fn summary(fit: &Fit) -> String {
         fit.evaluations,
         fit.method.name(),
         if fit.converged { ", converged" } else { "" },
+        if fit.unused_ahead > 0 {
+            format!(
+                "; {} more evaluated ahead on a second thread and not used",
+                fit.unused_ahead
+            )
+        } else {
+            String::new()
+        },
         fit.wall_s
     )
 }

@@ -50,6 +50,13 @@ pub trait MarkerSource {
         volumes: bool,
         out: &mut Trajectory,
     ) -> Result<()>;
+
+    /// A second, independent instance of this source giving bit for bit the same runs, for
+    /// a search that evaluates two points at once on two threads; `None` when the source
+    /// cannot make one (the default).
+    fn spare(&self) -> Result<Option<Box<dyn MarkerSource + Send>>> {
+        Ok(None)
+    }
 }
 
 /// A [`MarkerSource`] backed by one [`Torso`].
@@ -288,6 +295,21 @@ impl MarkerSource for TorsoMarkers {
         Ok(model
             .registration()
             .map(|r| (r.fit.mean_before, r.fit.mean_after)))
+    }
+
+    /// Another torso on the same compiled model (the skin and marker model are shared), at
+    /// the same rest state, with the same settings.
+    fn spare(&self) -> Result<Option<Box<dyn MarkerSource + Send>>> {
+        let mut torso =
+            Torso::with_compiled(self.torso.config().clone(), self.torso.compiled().clone())?;
+        torso.restore(&self.rest)?;
+        Ok(Some(Box::new(TorsoMarkers {
+            torso,
+            rest: self.rest.clone(),
+            grid: self.grid,
+            periodic: self.periodic,
+            last_run: RunReport::default(),
+        })))
     }
 
     fn rest_markers(&mut self) -> Result<Vec<Point3<f64>>> {
