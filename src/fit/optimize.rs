@@ -213,9 +213,8 @@ pub fn nelder_mead(
 
 /// [`nelder_mead`] with an optional spare instance of the objective evaluated on a second
 /// thread. While the search evaluates a reflection, the spare evaluates the point the step
-/// is likely to need next: the expansion after a step that expanded or reflected, otherwise
-/// the contraction of the kind last used; also the initial simplex and shrinks two points
-/// at a time. The search itself is unchanged: it takes the same points, in the same order,
+/// is likely to need next: the expansion right after a step that expanded, otherwise the
+/// inside contraction; also the initial simplex and shrinks two points at a time. The search itself is unchanged: it takes the same points, in the same order,
 /// and its result and evaluation count are those of [`nelder_mead`] when the spare gives the
 /// same values; evaluations made ahead and not used are reported in
 /// [`Minimum::unused_ahead`].
@@ -315,11 +314,12 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
     }
     let order = |s: &mut Vec<(Vec<f64>, f64)>| s.sort_by(|a, b| a.1.total_cmp(&b.1));
     order(&mut simplex);
-    /// The second point a step evaluated, if any: what the spare evaluates ahead next.
+    /// What the spare evaluates ahead of a step's reflection: the inside contraction, the
+    /// most frequent second point once the search closes in (about two steps in three of a
+    /// breathing fit), or the expansion right after a step that expanded.
     #[derive(Clone, Copy, PartialEq)]
     enum Second {
         Expansion,
-        Outside,
         Inside,
     }
     let mut last = Second::Inside;
@@ -344,9 +344,9 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
         let xr = along(&centroid, &worst.0, -alpha);
         let guess = match last {
             Second::Expansion => along(&centroid, &xr, beta),
-            Second::Outside => along(&centroid, &xr, gamma),
             Second::Inside => along(&centroid, &worst.0, gamma),
         };
+        last = Second::Inside;
         let fr = c.eval_ahead(
             &xr,
             (c.evaluations + 1 < budget).then_some(guess.as_slice()),
@@ -363,7 +363,6 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
                 simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
             }
         } else if fr < fnn {
-            last = Second::Expansion;
             simplex[n] = (xr, fr);
         } else if c.evaluations >= budget {
             if fr < worst.1 {
@@ -371,7 +370,6 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
             }
         } else if fr < worst.1 {
             let xo = along(&centroid, &xr, gamma);
-            last = Second::Outside;
             let fo = c.eval_unit(&xo)?;
             if fo <= fr {
                 simplex[n] = (xo, fo);
@@ -380,7 +378,6 @@ fn nm_core(c: &mut Counted, u0: &[f64], o: &NelderMeadOptions) -> Result<(bool, 
             }
         } else {
             let xi = along(&centroid, &worst.0, gamma);
-            last = Second::Inside;
             let fi = c.eval_unit(&xi)?;
             if fi < worst.1 {
                 simplex[n] = (xi, fi);
