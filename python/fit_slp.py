@@ -415,6 +415,7 @@ def fit(args) -> dict:
         "grid.rows": rows,
         "grid.cols": cols,
         "solver.rtol": args.rtol,
+        "solver.atol": args.rtol / 100,  # as the native fit (FIT_ATOL_PER_RTOL)
     }
     out = Path(args.out)
     model = FmuModel(Path(args.fmu), params, {})
