@@ -226,6 +226,32 @@ impl Torso {
         Ok(())
     }
 
+    /// What one integration call borrows at once: the model seen as an ODE (with the
+    /// current inputs and drive), the state, the time and the integrator.
+    fn integration_parts(&mut self) -> (System<'_>, &mut [f64], &mut f64, &mut Integrator) {
+        let Torso {
+            compiled,
+            data,
+            y,
+            time,
+            inputs,
+            integrator,
+            config,
+            jacobian,
+            ..
+        } = self;
+        let system = System {
+            model: &compiled.model,
+            data,
+            inputs: *inputs,
+            drive: &config.drive,
+            gain_right: config.gain_right,
+            gain_left: config.gain_left,
+            jacobian: jacobian.as_deref_mut(),
+        };
+        (system, y, time, integrator)
+    }
+
     /// Integrates from the current time to `t`, inputs held constant. On failure the torso
     /// stays at its last good time (see [`Torso::time`]) and the error says why.
     pub fn advance_to(&mut self, t: f64) -> Result<AdvanceStats> {
@@ -238,26 +264,7 @@ impl Torso {
         }
         let before = self.integrator.stats();
         if t > self.time {
-            let Torso {
-                compiled,
-                data,
-                y,
-                time,
-                inputs,
-                integrator,
-                config,
-                jacobian,
-                ..
-            } = self;
-            let mut system = System {
-                model: &compiled.model,
-                data,
-                inputs: *inputs,
-                drive: &config.drive,
-                gain_right: config.gain_right,
-                gain_left: config.gain_left,
-                jacobian: jacobian.as_deref_mut(),
-            };
+            let (mut system, y, time, integrator) = self.integration_parts();
             let result = integrator.integrate(&mut system, time, y, t);
             self.observation = None;
             self.markers.invalidate();

@@ -148,38 +148,14 @@ impl Torso {
         outputs: &[f64],
         states: &mut Vec<f64>,
     ) -> Result<()> {
-        let Torso {
-            compiled,
-            data,
-            y,
-            time,
-            inputs,
-            integrator,
-            config,
-            jacobian,
-            ..
-        } = self;
-        let mut system = super::System {
-            model: &compiled.model,
-            data,
-            inputs: *inputs,
-            drive: &config.drive,
-            gain_right: config.gain_right,
-            gain_left: config.gain_left,
-            jacobian: jacobian.as_deref_mut(),
-        };
-        let start = *time;
+        let (mut system, y, time, integrator) = self.integration_parts();
         let result = integrator.integrate_dense(&mut system, time, y, t_end, outputs, |_, ys| {
             states.extend_from_slice(ys)
         });
         self.observation = None;
         self.markers.invalidate();
         result.map_err(|e| Error::Numerical {
-            time: if self.time.is_finite() {
-                self.time
-            } else {
-                start
-            },
+            time: self.time,
             reason: e.to_string(),
         })
     }
