@@ -4,6 +4,8 @@ replay from FMU states (in memory and serialised), reset, communication step siz
 """
 
 import math
+import os
+import shutil
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -111,17 +113,21 @@ def test_communication_step_sizes_agree_with_one_long_run(step):
 
 
 def test_eight_threads_give_the_sequential_results():
+    from fmpy.fmi2 import FMU2Slave
+
     shared = Host()  # one extracted FMU: every instance runs in the same loaded library
+    # fmpy loads the library with a process-wide chdir into the binaries folder and back, so
+    # the wrappers are made on this thread; only the instances run concurrently.
+    slaves = [FMU2Slave(guid=shared.md.guid, unzipDirectory=shared.dir, modelIdentifier="BreathingTorso",
+                        instanceName=f"torso{i}") for i in range(16)]
 
     def job(i):
-        from fmpy.fmi2 import FMU2Slave
-        f = FMU2Slave(guid=shared.md.guid, unzipDirectory=shared.dir,
-                      modelIdentifier="BreathingTorso", instanceName=f"torso{i}")
+        f = slaves[i]
         f.instantiate(callbacks=shared.callbacks)
         f.setupExperiment(startTime=0.0)
         f.enterInitializationMode()
         f.setReal([shared.vr["drive.ribs.amplitude"], shared.vr["drive.diaphragm.amplitude"]],
-                  [0.05 + 0.05 * i, 0.3])
+                  [0.05 + 0.05 * (i % 8), 0.3])
         f.exitInitializationMode()
         out = []
         for k in range(100):
@@ -131,16 +137,16 @@ def test_eight_threads_give_the_sequential_results():
         f.fmi2FreeInstance(f.component)
         return out
 
+    cwd = os.getcwd()
     try:
         sequential = [job(i) for i in range(8)]
         with ThreadPoolExecutor(max_workers=8) as pool:
-            parallel = list(pool.map(job, range(8)))
+            parallel = list(pool.map(job, range(8, 16)))
         assert parallel == sequential
         assert sequential[0] != sequential[7]
+        assert os.getcwd() == cwd
     finally:
-        shutil_dir = shared.dir
-        import shutil
-        shutil.rmtree(shutil_dir, ignore_errors=True)
+        shutil.rmtree(shared.dir, ignore_errors=True)
 
 
 def test_wrong_current_time_after_steps_fails():
