@@ -12,6 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::control::{Chain, Controller, ERR_OLD_MIN};
 use super::rosenbrock::Rosenbrock;
 use super::tableau::{DOPRI5, Tableau};
 use super::{Method, Ode, Options, SolverError, Stats};
@@ -22,10 +23,6 @@ const SAFETY: f64 = 0.9;
 const FAC_MIN: f64 = 0.2;
 /// Largest step-size ratio h_new / h.
 const FAC_MAX: f64 = 10.0;
-/// Lower bound of the PI memory (Hairer's `facold` floor).
-const ERR_OLD_MIN: f64 = 1e-4;
-/// Step-size ratio after a step failed with non-finite values.
-const FAC_NON_FINITE: f64 = 0.25;
 /// The stiffness flag is raised after this many positive tests ...
 const STIFF_HITS: u32 = 15;
 /// ... without this many consecutive negative ones in between (Hairer's `dopri5`).
@@ -416,39 +413,24 @@ impl Integrator {
         }
         let tab = self.tableau();
         let opts = self.options;
-        let h_chain_start = self.h_next;
-        let mut attempts: u64 = 0;
-        let mut rejections: u32 = 0;
-        let mut last_non_finite = false;
-        let mut h_good = h_chain_start;
+        let ctl = Controller {
+            safety: SAFETY,
+            fac_min: FAC_MIN,
+            fac_max: FAC_MAX,
+            alpha: tab.pi_alpha,
+            beta: tab.pi_beta,
+            hold_ratio: 1.0,
+        };
+        let mut chain = Chain::new(self.h_next);
         while *t < t_end {
-            if attempts >= opts.max_steps {
-                return Err(SolverError::TooManySteps {
-                    t: *t,
-                    steps: attempts,
-                });
-            }
-            let h_nat = self.h_next.min(opts.h_max);
-            let remaining = t_end - *t;
-            let clipped = h_nat * 1.01 >= remaining;
-            let h = if clipped { remaining } else { h_nat };
-            let too_small = (h_nat < opts.h_min || *t + h_nat == *t) && !(clipped && h > 0.0);
-            if too_small {
-                self.h_next = h_good;
-                return Err(if last_non_finite {
-                    SolverError::NonFinite { t: *t }
-                } else {
-                    SolverError::StepTooSmall { t: *t, h: h_nat }
-                });
-            }
-            attempts += 1;
+            let p = chain.plan(&mut self.h_next, *t, t_end, &opts)?;
+            let h = p.h;
             match self.attempt(ode, *t, y, h) {
                 Attempt::Error(err) if err <= 1.0 => {
-                    let t_new = if clipped { t_end } else { *t + h };
+                    let t_new = if p.clipped { t_end } else { *t + h };
                     if next_out < output_times.len() && output_times[next_out] <= t_new {
                         if !self.prepare_dense(ode, *t, y, h) {
-                            self.h_next = h_good;
-                            return Err(SolverError::NonFinite { t: *t });
+                            return Err(chain.fail_non_finite(&mut self.h_next, *t));
                         }
                         while next_out < output_times.len() && output_times[next_out] <= t_new {
                             let tau = output_times[next_out];
@@ -464,53 +446,17 @@ impl Integrator {
                     if opts.stiffness_check {
                         self.stiffness_test(h, tab);
                     }
-                    // PI step-size control (Hairer's dopri5 form of Gustafsson's controller)
-                    let fac11 = err.powf(tab.pi_alpha);
-                    let fac = (fac11 / self.err_old.powf(tab.pi_beta) / SAFETY)
-                        .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                    let mut h_new = h / fac;
-                    if rejections > 0 {
-                        h_new = h_new.min(h);
-                    }
-                    if clipped && h < h_nat {
-                        // a step shortened to land on t_end: remember the natural size and
-                        // leave the controller memory as it was
-                        h_new = h_new.max(h_nat);
-                    } else {
-                        self.err_old = err.max(ERR_OLD_MIN);
-                    }
-                    self.h_next = h_new;
-                    h_good = h_new;
+                    self.h_next = chain.accept(&ctl, err, &mut self.err_old, p);
                     self.stats.steps += 1;
                     self.commit(t, y, t_new);
-                    rejections = 0;
-                    last_non_finite = false;
                 }
                 outcome => {
                     self.stats.rejected += 1;
-                    rejections += 1;
-                    self.h_next = match outcome {
-                        Attempt::Error(err) => {
-                            last_non_finite = false;
-                            let fac11 = err.powf(tab.pi_alpha);
-                            h / (fac11 / SAFETY).min(1.0 / FAC_MIN)
-                        }
-                        Attempt::NonFinite => {
-                            last_non_finite = true;
-                            h * FAC_NON_FINITE
-                        }
+                    let err = match outcome {
+                        Attempt::Error(err) => Some(err),
+                        Attempt::NonFinite => None,
                     };
-                    if rejections > opts.max_rejections {
-                        self.h_next = h_good;
-                        return Err(if last_non_finite {
-                            SolverError::NonFinite { t: *t }
-                        } else {
-                            SolverError::TooManyRejections {
-                                t: *t,
-                                count: rejections,
-                            }
-                        });
-                    }
+                    chain.reject(&ctl, err, h, *t, &mut self.h_next, &opts)?;
                 }
             }
         }

@@ -40,6 +40,7 @@
 //! # Ok::<(), breathing_torso::solver::SolverError>(())
 //! ```
 
+mod control;
 mod integrator;
 mod rosenbrock;
 pub mod sparse;

@@ -19,6 +19,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::control::{Chain, Controller, ERR_OLD_MIN};
 use super::sparse::{Jacobian, Pattern, ShiftedSolver};
 use super::{Ode, Options, SolverError, Stats, StiffOde};
 
@@ -189,7 +190,7 @@ impl Rosenbrock {
             options,
             dim,
             h_next: 0.0,
-            err_old: 1e-4,
+            err_old: ERR_OLD_MIN,
             f0_valid: false,
             f0_t: 0.0,
             f0_y: vec![0.0; dim],
@@ -206,7 +207,7 @@ impl Rosenbrock {
 
     pub(super) fn reset(&mut self) {
         self.h_next = 0.0;
-        self.err_old = 1e-4;
+        self.err_old = ERR_OLD_MIN;
         self.f0_valid = false;
         self.stats = Stats::default();
         self.work.has_jac = false;
@@ -306,43 +307,30 @@ impl Rosenbrock {
             };
         }
         let k = coefficients();
-        let mut attempts: u64 = 0;
-        let mut rejections: u32 = 0;
-        let mut last_bad = false;
-        let mut h_good = self.h_next;
+        let ctl = Controller {
+            safety: SAFETY,
+            fac_min: FAC_MIN,
+            fac_max: FAC_MAX,
+            alpha: PI_ALPHA,
+            beta: PI_BETA,
+            hold_ratio: HOLD_RATIO,
+        };
+        let mut chain = Chain::new(self.h_next);
         while *t < t_end {
-            if attempts >= opts.max_steps {
-                return Err(SolverError::TooManySteps {
-                    t: *t,
-                    steps: attempts,
-                });
-            }
-            let h_nat = self.h_next.min(opts.h_max);
-            let remaining = t_end - *t;
-            let clipped = h_nat * 1.01 >= remaining;
-            let h = if clipped { remaining } else { h_nat };
-            if (h_nat < opts.h_min || *t + h_nat == *t) && !(clipped && h > 0.0) {
-                self.h_next = h_good;
-                return Err(if last_bad {
-                    SolverError::NonFinite { t: *t }
-                } else {
-                    SolverError::StepTooSmall { t: *t, h: h_nat }
-                });
-            }
-            attempts += 1;
+            let p = chain.plan(&mut self.h_next, *t, t_end, &opts)?;
+            let h = p.h;
             if !self.work.has_jac || self.work.jac_age >= JACOBIAN_MAX_AGE {
                 self.evaluate_jacobian(ode, *t, y);
             }
             match self.attempt(ode, &k, *t, y, h) {
                 Attempt::Error(err) if err <= 1.0 => {
-                    let t_new = if clipped { t_end } else { *t + h };
+                    let t_new = if p.clipped { t_end } else { *t + h };
                     // f(t_new, y1): the next step's first stage and the dense output's slope
                     let w = &mut self.work;
                     ode.rhs(t_new, &w.ynew, &mut w.f1);
                     self.stats.rhs_evaluations += 1;
                     if w.f1.iter().any(|v| !v.is_finite()) {
-                        self.h_next = h_good;
-                        return Err(SolverError::NonFinite { t: *t });
+                        return Err(chain.fail_non_finite(&mut self.h_next, *t));
                     }
                     w.yold.copy_from_slice(y);
                     w.fold.copy_from_slice(&self.f0);
@@ -364,22 +352,7 @@ impl Rosenbrock {
                         }
                         next_out += 1;
                     }
-                    let fac = (err.powf(PI_ALPHA) / self.err_old.powf(PI_BETA) / SAFETY)
-                        .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                    let mut h_new = h / fac;
-                    if rejections > 0 {
-                        h_new = h_new.min(h);
-                    }
-                    if h_new > h && h_new < HOLD_RATIO * h {
-                        h_new = h;
-                    }
-                    if clipped && h < h_nat {
-                        h_new = h_new.max(h_nat);
-                    } else {
-                        self.err_old = err.max(1e-4);
-                    }
-                    self.h_next = h_new;
-                    h_good = h_new;
+                    self.h_next = chain.accept(&ctl, err, &mut self.err_old, p);
                     self.stats.steps += 1;
                     y.copy_from_slice(&w.ynew);
                     self.f0.copy_from_slice(&w.f1);
@@ -389,36 +362,17 @@ impl Rosenbrock {
                     *t = t_new;
                     w.jac_fresh = false;
                     w.jac_age += 1;
-                    rejections = 0;
-                    last_bad = false;
                 }
                 outcome => {
                     self.stats.rejected += 1;
-                    rejections += 1;
-                    self.h_next = match outcome {
-                        Attempt::Error(err) => {
-                            last_bad = false;
-                            h / (err.powf(PI_ALPHA) / SAFETY).min(1.0 / FAC_MIN)
-                        }
-                        _ => {
-                            last_bad = true;
-                            h * 0.25
-                        }
+                    let err = match outcome {
+                        Attempt::Error(err) => Some(err),
+                        Attempt::NonFinite | Attempt::Singular => None,
                     };
+                    chain.reject(&ctl, err, h, *t, &mut self.h_next, &opts)?;
                     // a stale Jacobian may be the cause: evaluate it afresh
                     if !self.work.jac_fresh {
                         self.evaluate_jacobian(ode, *t, y);
-                    }
-                    if rejections > opts.max_rejections {
-                        self.h_next = h_good;
-                        return Err(if last_bad {
-                            SolverError::NonFinite { t: *t }
-                        } else {
-                            SolverError::TooManyRejections {
-                                t: *t,
-                                count: rejections,
-                            }
-                        });
                     }
                 }
             }
