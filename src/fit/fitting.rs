@@ -415,6 +415,45 @@ fn linearised_start(
 /// Model runs spent by [`linearised_start`].
 pub const START_RUNS: usize = 2;
 
+/// Evaluations of the fit's cost (thesis eq. 3.1) on one marker source: each runs the
+/// drive of a parameter vector over the recording's times and returns the mean distance of
+/// the aligned markers. The trajectory and the matched pairs are kept from one evaluation
+/// to the next.
+struct CostRun<'a, S: MarkerSource + ?Sized, D> {
+    source: &'a mut S,
+    recorded: &'a [Vec<Option<Point3<f64>>>],
+    times: &'a [f64],
+    drive_of: &'a D,
+    traj: Trajectory,
+    pairs: Pairs,
+}
+
+impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
+    fn new(
+        source: &'a mut S,
+        recorded: &'a [Vec<Option<Point3<f64>>>],
+        times: &'a [f64],
+        drive_of: &'a D,
+    ) -> Self {
+        CostRun {
+            source,
+            recorded,
+            times,
+            drive_of,
+            traj: Trajectory::default(),
+            pairs: Pairs::default(),
+        }
+    }
+
+    /// The cost [m] of the parameters `x` (amplitudes and phases).
+    fn cost(&mut self, x: &[f64]) -> Result<f64> {
+        let drive = (self.drive_of)(x);
+        self.source
+            .run(&[(0.0, drive)], self.times, false, &mut self.traj)?;
+        Ok(aligned_cost(&self.traj.markers, self.recorded, &mut self.pairs)?.0)
+    }
+}
+
 /// Fits `model` to `recording` (see the module doc). `progress(evaluations, best cost)` is
 /// called after each cost evaluation.
 pub fn fit_recording(
@@ -535,21 +574,12 @@ pub fn fit_recording(
     } else {
         None
     };
-    let mut traj = Trajectory::default();
-    let mut pairs = Pairs::default();
-    let mut cost = |x: &[f64]| -> Result<f64> {
-        model.run(&[(0.0, drive_of(x))], &model_times, false, &mut traj)?;
-        Ok(aligned_cost(&traj.markers, &recorded, &mut pairs)?.0)
-    };
-    let (mut spare_traj, mut spare_pairs) = (Trajectory::default(), Pairs::default());
-    let mut spare_cost = spare_model.as_mut().map(|spare| {
-        let (recorded, model_times, drive_of) = (&recorded, &model_times, &drive_of);
-        let (traj, pairs) = (&mut spare_traj, &mut spare_pairs);
-        move |x: &[f64]| -> Result<f64> {
-            spare.run(&[(0.0, drive_of(x))], model_times, false, traj)?;
-            Ok(aligned_cost(&traj.markers, recorded, pairs)?.0)
-        }
-    });
+    let mut main_run = CostRun::new(&mut *model, &recorded, &model_times, &drive_of);
+    let mut cost = |x: &[f64]| main_run.cost(x);
+    let mut spare_run = spare_model
+        .as_deref_mut()
+        .map(|spare| CostRun::new(spare, &recorded, &model_times, &drive_of));
+    let mut spare_cost = spare_run.as_mut().map(|run| move |x: &[f64]| run.cost(x));
     let m: Minimum = match options.method {
         Method::NelderMead => nelder_mead_parallel(
             &mut cost,
