@@ -21,7 +21,7 @@ use super::variables::{
     Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output, table,
 };
 use crate::anatomy::MuscleGroup;
-use crate::model::{Config, Quantity, Snapshot, Torso};
+use crate::model::{Checkpoint, Config, Quantity, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -224,6 +224,9 @@ pub struct Instance {
     rest_volumes: Option<(u64, [f64; 3])>,
     /// Whether the explicit solver's stiffness flag has been logged.
     stiffness_logged: bool,
+    /// The model's state before the current `fmi2DoStep`, to roll back to on a discard
+    /// (buffers reused from step to step).
+    step_start: Checkpoint,
     /// Addresses of the FMU states handed out and not yet freed (managed by the C layer).
     pub(crate) fmu_states: std::collections::HashSet<usize>,
 }
@@ -362,6 +365,7 @@ impl Instance {
             config: Config::default(),
             rtol_explicit: false,
             stiffness_logged: false,
+            step_start: Checkpoint::default(),
             inputs: [0.0; 8],
             torso: None,
             fresh: None,
@@ -906,6 +910,7 @@ impl Instance {
                 return self.error(&format!("fmi2DoStep: {e}"));
             }
         };
+        let mut step_start = std::mem::take(&mut self.step_start);
         let torso = match self.ensure_torso() {
             Ok(t) => t,
             Err(e) => {
@@ -913,15 +918,16 @@ impl Instance {
                 return self.error(&format!("fmi2DoStep: {e}"));
             }
         };
-        let before = torso.snapshot();
+        torso.checkpoint(&mut step_start);
         let advanced = torso
             .advance_to(target - start)
             .and_then(|_| physiology_violation(torso, &rest));
         let stiff = torso.stiffness_detected();
         let restored = match &advanced {
-            Ok(Some(_)) => Some(torso.restore(&before)),
+            Ok(Some(_)) => Some(torso.rollback(&step_start)),
             _ => None,
         };
+        self.step_start = step_start;
         if stiff && !self.stiffness_logged {
             self.stiffness_logged = true;
             self.log(

@@ -24,5 +24,5 @@ pub use config::{Config, Scene, SolverConfig};
 pub(crate) use drive::check;
 pub use drive::{Drive, Wave};
 pub use quantity::Quantity;
-pub use snapshot::Snapshot;
+pub use snapshot::{Checkpoint, Snapshot};
 pub use torso::{AdvanceStats, Sample, Torso};

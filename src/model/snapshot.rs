@@ -1,5 +1,8 @@
-//! Snapshots of a [`super::Torso`]'s data: plain, serialisable, versioned, self-contained.
+//! Snapshots of a [`super::Torso`]'s data: plain, serialisable, versioned, self-contained;
+//! and checkpoints, the same data held natively in reusable buffers for rolling back a
+//! failed step.
 
+use crate::solver::Integrator;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -51,5 +54,32 @@ impl Snapshot {
             )));
         }
         serde_json::from_slice(&bytes[12..]).map_err(|e| bad(&e.to_string()))
+    }
+}
+
+/// What a [`Snapshot`] keeps (time, state vector, inputs, drive, solver memory), held natively
+/// for rolling back a step within one instance ([`super::Torso::checkpoint`],
+/// [`super::Torso::rollback`]). Taking a checkpoint again reuses its buffers: one before every
+/// communication step costs copies of three state-length vectors, with no allocation and no
+/// serialisation. Rolling back continues bit for bit as restoring the equivalent snapshot.
+#[derive(Clone, Debug, Default)]
+pub struct Checkpoint {
+    pub(super) fingerprint: u64,
+    pub(super) time: f64,
+    pub(super) state: Vec<f64>,
+    pub(super) inputs: [f64; 8],
+    pub(super) drive: Option<super::Drive>,
+    pub(super) solver: Option<Integrator>,
+}
+
+impl Checkpoint {
+    /// Simulated time of the checkpoint [s] (0 while empty).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Whether a checkpoint was taken into it.
+    pub fn is_empty(&self) -> bool {
+        self.solver.is_none()
     }
 }

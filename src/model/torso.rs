@@ -1,6 +1,6 @@
 //! [`Torso`]: the model facade.
 
-use super::{Config, Drive, Quantity, Snapshot};
+use super::{Checkpoint, Config, Drive, Quantity, Snapshot};
 use crate::anatomy::{Anatomy, MuscleGroup};
 use crate::dynamics::jacobian::TorsoJacobian;
 use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
@@ -462,6 +462,50 @@ impl Torso {
         self.y.copy_from_slice(&snapshot.state);
         self.inputs = snapshot.inputs;
         self.config.drive = snapshot.drive;
+        self.observation = None;
+        self.markers.invalidate();
+        Ok(())
+    }
+
+    /// Copies the evolving state (time, state vector, inputs, drive, solver memory) into
+    /// `checkpoint`, reusing its buffers: the cheap, in-memory form of [`Torso::snapshot`]
+    /// taken before every communication step so that a failed step can be rolled back.
+    pub fn checkpoint(&self, checkpoint: &mut Checkpoint) {
+        checkpoint.fingerprint = self.compiled.fingerprint;
+        checkpoint.time = self.time;
+        checkpoint.state.clone_from(&self.y);
+        checkpoint.inputs = self.inputs;
+        checkpoint.drive = Some(self.config.drive);
+        match &mut checkpoint.solver {
+            Some(solver) => solver.copy_memory_from(&self.integrator),
+            None => checkpoint.solver = Some(self.integrator.memory()),
+        }
+    }
+
+    /// Goes back to a checkpoint taken from this model: afterwards the model continues bit
+    /// for bit as after restoring the equivalent snapshot. An empty checkpoint or one from
+    /// another model is an error, and nothing changes.
+    pub fn rollback(&mut self, checkpoint: &Checkpoint) -> Result<()> {
+        let (Some(solver), Some(drive)) = (&checkpoint.solver, checkpoint.drive) else {
+            return Err(Error::State("rollback to an empty checkpoint".into()));
+        };
+        if checkpoint.fingerprint != self.compiled.fingerprint
+            || checkpoint.state.len() != self.y.len()
+            || solver.dim() != self.y.len()
+        {
+            return Err(Error::State(
+                "checkpoint belongs to a different model (subject, posture or level of detail)"
+                    .into(),
+            ));
+        }
+        if solver.method() == Method::Rosenbrock && self.jacobian.is_none() {
+            self.jacobian = Some(Box::new(TorsoJacobian::new(&self.compiled.model)));
+        }
+        self.integrator.copy_memory_from(solver);
+        self.time = checkpoint.time;
+        self.y.copy_from_slice(&checkpoint.state);
+        self.inputs = checkpoint.inputs;
+        self.config.drive = drive;
         self.observation = None;
         self.markers.invalidate();
         Ok(())

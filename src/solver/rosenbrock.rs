@@ -200,6 +200,40 @@ impl Rosenbrock {
         }
     }
 
+    /// A copy of the memory a snapshot keeps, without the workspace (Jacobian, factors).
+    pub(super) fn memory(&self) -> Rosenbrock {
+        Rosenbrock {
+            options: self.options,
+            dim: self.dim,
+            h_next: self.h_next,
+            err_old: self.err_old,
+            f0_valid: self.f0_valid,
+            f0_t: self.f0_t,
+            f0_y: self.f0_y.clone(),
+            f0: self.f0.clone(),
+            stats: self.stats,
+            work: Work::default(),
+        }
+    }
+
+    /// Takes over the memory of `src` and drops the Jacobian and its factors, as a restore
+    /// from a snapshot does (the next step evaluates them afresh).
+    pub(super) fn copy_memory_from(&mut self, src: &Rosenbrock) {
+        if self.dim != src.dim {
+            *self = src.memory();
+            return;
+        }
+        self.options = src.options;
+        self.h_next = src.h_next;
+        self.err_old = src.err_old;
+        self.f0_valid = src.f0_valid;
+        self.f0_t = src.f0_t;
+        self.f0_y.clone_from(&src.f0_y);
+        self.f0.clone_from(&src.f0);
+        self.stats = src.stats;
+        self.work = Work::default();
+    }
+
     pub(super) fn invalidate(&mut self) {
         self.f0_valid = false;
         self.work.jac_fresh = false;
