@@ -48,6 +48,122 @@ const DOME_FULLNESS: f64 = 0.7;
 /// Height of the dome/wall boundary on the unit sphere (u_y above it: dome).
 const DOME_CUT: f64 = 0.2;
 
+/// Subdivisions of the icosphere on which the smooth dome's cap volume is measured (10,242
+/// vertices, four times the finest level of detail).
+const REFERENCE_SUBDIVISIONS: u32 = 5;
+
+/// Triangles wholly above [`DOME_CUT`] (the dome) and the vertices on edges between dome and
+/// non-dome triangles (the rim, the diaphragm's insertions).
+fn dome_and_rim(sphere: &TriMesh, dirs: &[Vector3<f64>]) -> (Vec<bool>, HashSet<u32>) {
+    let dome_tri: Vec<bool> = sphere
+        .triangles
+        .iter()
+        .map(|t| t.iter().all(|&v| dirs[v as usize].y > DOME_CUT))
+        .collect();
+    let mut edge_faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (f, t) in sphere.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edge_faces.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let mut rim_set: HashSet<u32> = HashSet::new();
+    for ((a, b), faces) in &edge_faces {
+        if faces.len() == 2 && dome_tri[faces[0]] != dome_tri[faces[1]] {
+            rim_set.insert(*a);
+            rim_set.insert(*b);
+        }
+    }
+    (dome_tri, rim_set)
+}
+
+/// The smooth dome spanning the costal margin (thesis 2.3): a quarter-ellipse profile from
+/// each rim point, vertical at the rim (the zone of apposition) and flat at the apex.
+struct DomeShape<'a> {
+    margin: &'a Margin,
+    axis_x: f64,
+    apex_x: f64,
+    apex_y: f64,
+}
+
+impl DomeShape<'_> {
+    /// Position of the dome point in the direction `u` of the unit sphere (u_y > DOME_CUT).
+    fn point(&self, u: &Vector3<f64>) -> Point3<f64> {
+        let psi = azimuth(u.x, u.z, 0.0);
+        let (rim_p, _) = self.margin.at_azimuth(psi, self.axis_x);
+        let rim_h = Vector3::new(rim_p.x - self.axis_x, 0.0, rim_p.z);
+        let t = ((u.y - DOME_CUT) / (1.0 - DOME_CUT)).clamp(0.0, 1.0);
+        let c = (t * FRAC_PI_2).cos();
+        let apex = Vector3::new(self.apex_x - self.axis_x, 0.0, 0.0);
+        let h = apex + (rim_h - apex) * c;
+        let y = rim_p.y + (self.apex_y - rim_p.y) * (t * FRAC_PI_2).sin().powf(DOME_FULLNESS);
+        Point3::new(self.axis_x + h.x, y, h.z)
+    }
+
+    /// Rim and dome positions on `sphere` (other vertices left at the origin).
+    fn place(&self, dirs: &[Vector3<f64>], rim: &HashSet<u32>, out: &mut Vec<Point3<f64>>) {
+        out.clear();
+        out.extend(dirs.iter().enumerate().map(|(v, u)| {
+            if rim.contains(&(v as u32)) {
+                self.margin
+                    .at_azimuth(azimuth(u.x, u.z, 0.0), self.axis_x)
+                    .0
+            } else if u.y > DOME_CUT {
+                self.point(u)
+            } else {
+                Point3::origin()
+            }
+        }));
+    }
+
+    /// Volume [m^3] between the faceted dome and the rim loop: the cap the dome takes from
+    /// the thoracic cavity. With the origin at the rim's centroid, the fan closing the rim
+    /// adds nothing, so the cap is the dome triangles' signed volume about that point.
+    fn cap_volume(
+        triangles: &[[u32; 3]],
+        dome_tri: &[bool],
+        rim: &HashSet<u32>,
+        p: &[Point3<f64>],
+    ) -> f64 {
+        // in index order, so that every build gives the same bits
+        let mut ring: Vec<u32> = rim.iter().copied().collect();
+        ring.sort_unstable();
+        let c = ring
+            .iter()
+            .map(|&v| p[v as usize].coords)
+            .sum::<Vector3<f64>>()
+            / ring.len() as f64;
+        let six: f64 = triangles
+            .iter()
+            .zip(dome_tri)
+            .filter(|(_, d)| **d)
+            .map(|(t, _)| {
+                let [a, b, d] = t.map(|v| p[v as usize].coords - c);
+                a.dot(&b.cross(&d))
+            })
+            .sum();
+        six.abs() / 6.0
+    }
+
+    /// Volume [m^3] the faceted dome on `sphere` cuts off the smooth dome: its cap volume
+    /// less that of the same construction on a fine icosphere (about converged). A coarse
+    /// dome's facets lie inside the smooth dome, so the mesh hands this much of the
+    /// abdomen's volume to the thorax (10 % of the thorax at level of detail 0); the observed
+    /// volumes add it back (see [`Abdomen::dome_faceting_volume`]).
+    fn faceting_volume(&self, sphere: &TriMesh, dirs: &[Vector3<f64>]) -> Result<f64> {
+        let fine = TriMesh::icosphere(REFERENCE_SUBDIVISIONS)?;
+        let fine_dirs: Vec<Vector3<f64>> =
+            fine.vertices.iter().map(|p| p.coords.normalize()).collect();
+        let (fine_dome, fine_rim) = dome_and_rim(&fine, &fine_dirs);
+        let mut p = Vec::new();
+        self.place(&fine_dirs, &fine_rim, &mut p);
+        let smooth = Self::cap_volume(&fine.triangles, &fine_dome, &fine_rim, &p);
+        let (dome, rim) = dome_and_rim(sphere, dirs);
+        self.place(dirs, &rim, &mut p);
+        Ok(smooth - Self::cap_volume(&sphere.triangles, &dome, &rim, &p))
+    }
+}
+
 /// The abdominal cavity surface.
 #[derive(Clone, Debug)]
 pub struct Abdomen {
@@ -72,6 +188,11 @@ pub struct Abdomen {
     pub floor_y: f64,
     /// Height of the dome apex at rest [m].
     pub apex_y: f64,
+    /// Volume [m^3] by which the faceted dome falls short of the smooth dome it samples
+    /// (0 for a subject's own cavity). The mesh's thorax is that much larger and its abdomen
+    /// that much smaller than the smooth surfaces'; the observed volumes are corrected by it,
+    /// so that the levels of detail agree on the split of the trunk (dynamics use the mesh).
+    pub dome_faceting_volume: f64,
 }
 
 impl Abdomen {
@@ -288,26 +409,14 @@ pub fn build(
         .iter()
         .map(|p| p.coords.normalize())
         .collect();
-    let dome_tri: Vec<bool> = sphere
-        .triangles
-        .iter()
-        .map(|t| t.iter().all(|&v| dirs[v as usize].y > DOME_CUT))
-        .collect();
-    // Rim: vertices on edges between dome and non-dome triangles.
-    let mut edge_faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (f, t) in sphere.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            edge_faces.entry((a.min(b), a.max(b))).or_default().push(f);
-        }
-    }
-    let mut rim_set: HashSet<u32> = HashSet::new();
-    for ((a, b), faces) in &edge_faces {
-        if faces.len() == 2 && dome_tri[faces[0]] != dome_tri[faces[1]] {
-            rim_set.insert(*a);
-            rim_set.insert(*b);
-        }
-    }
+    let (dome_tri, rim_set) = dome_and_rim(&sphere, &dirs);
+    let shape = DomeShape {
+        margin: &margin,
+        axis_x,
+        apex_x,
+        apex_y,
+    };
+    let dome_faceting_volume = shape.faceting_volume(&sphere, &dirs)?;
     let in_dome: Vec<bool> = (0..n).map(|v| dirs[v].y > DOME_CUT).collect();
 
     let mut roles = Vec::with_capacity(n);
@@ -327,13 +436,7 @@ pub fn build(
             positions.push(rim_p);
             carriers.push(rim_body);
         } else if in_dome[v] {
-            // Quarter-ellipse profile: vertical at the rim (zone of apposition), flat at the apex.
-            let t = ((u.y - DOME_CUT) / (1.0 - DOME_CUT)).clamp(0.0, 1.0);
-            let c = (t * FRAC_PI_2).cos();
-            let apex = Vector3::new(apex_x - axis_x, 0.0, 0.0);
-            let h = apex + (rim_h - apex) * c;
-            let y = rim_p.y + (apex_y - rim_p.y) * (t * FRAC_PI_2).sin().powf(DOME_FULLNESS);
-            positions.push(Point3::new(axis_x + h.x, y, h.z));
+            positions.push(shape.point(&u));
             roles.push(VertexRole::Dome);
             carriers.push(Body::Vertex(0));
         } else {
@@ -421,5 +524,6 @@ pub fn build(
         axis_x,
         floor_y,
         apex_y,
+        dome_faceting_volume,
     })
 }

@@ -488,6 +488,8 @@ pub(super) fn fit_cavity(
         .with_role(VertexRole::Dome)
         .map(|v| fitted[v as usize].y)
         .fold(f64::NEG_INFINITY, f64::max);
+    // the subject's own cavity is the reference: no smooth dome to correct toward
+    abdomen.dome_faceting_volume = 0.0;
     let fitted_mesh = TriMesh {
         vertices: fitted,
         triangles: abdomen.triangles.clone(),

@@ -203,6 +203,10 @@ pub struct Model {
     pub abdomen_rest_volume: f64,
     /// Rest volume of the thorax [m^3].
     pub thorax_rest_volume: f64,
+    /// Volume [m^3] the faceted dome falls short of the smooth dome it samples
+    /// ([`crate::anatomy::abdomen::Abdomen::dome_faceting_volume`]): taken from the observed
+    /// thorax and added to the observed abdomen, never used by the dynamics.
+    pub dome_faceting_volume: f64,
     /// Gravity vector [m/s^2].
     pub gravity: Vector3<f64>,
     /// Anchor at the middle of the sternum (for its displacement).
@@ -557,6 +561,7 @@ impl Model {
             thorax_triangles,
             abdomen_rest_volume,
             thorax_rest_volume,
+            dome_faceting_volume: ab.dome_faceting_volume,
             gravity,
             sternum_probe,
             params,
@@ -618,6 +623,7 @@ impl Model {
         eat(self.params.lung_elastance);
         eat(self.abdomen_rest_volume);
         eat(self.thorax_rest_volume);
+        eat(self.dome_faceting_volume);
         eat(self.gravity.x);
         eat(self.gravity.y);
         h

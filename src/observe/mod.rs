@@ -8,7 +8,9 @@
 //! V = 1/6 sum_t a . (b x c). The trunk's surface is the rib-cage lining plus the abdominal
 //! surface without the dome; splitting that sum by wall region (taken about the thorax's rest
 //! centroid) gives the displaced compartments, which add up to the trunk's volume change.
-//! V_thorax = V_trunk - V_abdomen and V_lung = ratio x V_thorax (thesis 4.2).
+//! V_thorax = V_trunk - V_abdomen and V_lung = ratio x V_thorax (thesis 4.2). The thorax and
+//! abdomen are corrected by the constant volume the faceted dome cuts off the smooth one
+//! (computed when the anatomy is built), so that the levels of detail agree.
 
 pub mod markers;
 pub mod skinning;
@@ -112,8 +114,11 @@ impl Compartments {
 
 /// Observes the state whose anchor positions are `pos`.
 pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) -> Observation {
-    let abdomen = volume(pos, &model.abdomen_triangles);
-    let thorax = volume(pos, &model.thorax_triangles);
+    // The mesh's volumes (the dynamics' own), then corrected for the dome's faceting so
+    // that every level of detail reports the volumes of the smooth surfaces.
+    let abdomen_mesh = volume(pos, &model.abdomen_triangles);
+    let thorax = volume(pos, &model.thorax_triangles) - model.dome_faceting_volume;
+    let abdomen = abdomen_mesh + model.dome_faceting_volume;
     let o = &compartments.origin;
     let rib_cage_displaced =
         partial_volume(pos, &compartments.lining, o) - compartments.lining_rest;
@@ -129,7 +134,8 @@ pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) 
         trunk: thorax + abdomen,
         rib_cage_displaced,
         abdomen_displaced,
-        abdominal_pressure: model.params.bulk_modulus * (model.abdomen_rest_volume / abdomen - 1.0),
+        abdominal_pressure: model.params.bulk_modulus
+            * (model.abdomen_rest_volume / abdomen_mesh - 1.0),
         diaphragm_displacement,
         sternum_displacement: pos[probe] - model.rest[probe],
     }
