@@ -5,7 +5,7 @@
 //! the sternum's motion and the upper marker rows split by what moves them (ribs, sternum,
 //! abdominal wall).
 //!
-//! `cargo run --release --example rib_kinematics [forced]`
+//! `cargo run --release --example rib_kinematics [forced] [cartilage=<stiffness factor>]`
 
 use breathing_torso::model::Drive;
 use breathing_torso::observe::markers::HandleSource;
@@ -24,8 +24,17 @@ fn main() {
     } else {
         Drive::quiet()
     };
+    // `cartilage=<factor>` scales the cartilage ball joints' stiffness (a crude stand-in for
+    // compliant costal cartilage).
+    let cartilage: f64 = std::env::args()
+        .find_map(|a| a.strip_prefix("cartilage=").and_then(|f| f.parse().ok()))
+        .unwrap_or(1.0);
+    let mut params =
+        breathing_torso::dynamics::Params::for_posture(Config::default().subject.posture);
+    params.cartilage_stiffness *= cartilage;
     let config = Config {
         drive,
+        params: Some(params),
         ..Config::default()
     };
     let mut torso = Torso::new(config).unwrap();
@@ -40,9 +49,7 @@ fn main() {
             let r = p - rib.head;
             (-r.y).atan2(r.x).to_degrees()
         };
-        let motion = |p: Point3<f64>| {
-            rib.axis.cross(&(p - rib.head)) * 1e3 * 1f64.to_radians()
-        };
+        let motion = |p: Point3<f64>| rib.axis.cross(&(p - rib.head)) * 1e3 * 1f64.to_radians();
         let (me, mj) = (motion(end), motion(joint));
         println!(
             " {:2}   {:7.1}    {:7.1}     {}  v/c {:4.2}   {}  v/c {:4.2}",
@@ -64,11 +71,37 @@ fn main() {
     );
 
     let mm = torso.marker_model().unwrap();
+    {
+        let lm = &mm.skin().landmarks;
+        let lowest10 = anatomy.ribs[9]
+            .bone
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        let spine = |n: &str| anatomy.spine.joint(n).map(|p| (p.y * 1e3).round());
+        println!(
+            "skin: suprasternale {:.0} chest {:.0} tenth rib {:.0} omphalion {:.0} | bones: jugular {:.0} rib10 lowest {:.0} T1 {:?} T12 {:?} L3 {:?} sacrum {:?}",
+            lm.suprasternale_height * 1e3,
+            lm.chest_height * 1e3,
+            lm.tenth_rib_height * 1e3,
+            lm.omphalion_height * 1e3,
+            s.jugular.y * 1e3,
+            lowest10 * 1e3,
+            spine("thoracic1"),
+            spine("thoracic12"),
+            spine("lumbar3"),
+            spine("sacrum"),
+        );
+        for (n, p) in &anatomy.spine.joints {
+            print!(" {n} {:.0}/{:.0}", p.x * 1e3, p.y * 1e3);
+        }
+        println!();
+    }
     let period = 1.0 / drive.frequency;
     let rate = 56.0;
     let n = (2.0 * period * rate).round() as usize;
-    let mut lo = (f64::INFINITY, Vec::new());
-    let mut hi = (f64::NEG_INFINITY, Vec::new());
+    let mut lo = (f64::INFINITY, Vec::new(), 0.0);
+    let mut hi = (f64::NEG_INFINITY, Vec::new(), 0.0);
     for i in 1..=n {
         let t = i as f64 / rate;
         torso.advance_to(t).unwrap();
@@ -76,11 +109,12 @@ fn main() {
             continue;
         }
         let v = torso.read(Quantity::LungVolume).unwrap();
+        let rc = torso.read(Quantity::RibCageDisplaced).unwrap();
         if v < lo.0 {
-            lo = (v, torso.state().to_vec());
+            lo = (v, torso.state().to_vec(), rc);
         }
         if v > hi.0 {
-            hi = (v, torso.state().to_vec());
+            hi = (v, torso.state().to_vec(), rc);
         }
     }
     println!("tidal volume {:.3} L", hi.0 - lo.0);
@@ -94,6 +128,17 @@ fn main() {
         );
     }
     println!();
+    let mean_turn = (1..10)
+        .map(|r| (yhi[layout.theta + r] - ylo[layout.theta + r]).to_degrees())
+        .sum::<f64>()
+        / 9.0;
+    let rib_cage = hi.2 - lo.2;
+    println!(
+        "rib cage displaces {:.3} L end-expiration to end-inspiration; ribs 2-10 turn {:.2} deg on average: {:.0} mL per degree",
+        rib_cage,
+        mean_turn,
+        1e3 * rib_cage / mean_turn
+    );
     // Sternum landmarks.
     let sternum_pose = |y: &[f64]| {
         let q = &y[layout.sternum_q..layout.sternum_q + 4];
@@ -126,7 +171,11 @@ fn main() {
         dr.axis().map(|a| a.into_inner())
     );
     // Rib joint ends: where each right rib's cartilage end goes vs where the sternum's notch goes.
-    for rib in anatomy.ribs.iter().filter(|r| r.side.sign() > 0.0 && r.level <= 7) {
+    for rib in anatomy
+        .ribs
+        .iter()
+        .filter(|r| r.side.sign() > 0.0 && r.level <= 7)
+    {
         let joint = *rib.cartilage.last().unwrap();
         let r = rib.index();
         let rot = |y: &[f64]| {
@@ -192,7 +241,11 @@ fn main() {
     }
 
     for &m in &[0usize, 6, 8, 12, 14, 18] {
-        print!("m{:2} rest {:?} by handle:", m + 1, rest[m].coords.map(|v| (v * 1e3).round()));
+        print!(
+            "m{:2} rest {:?} by handle:",
+            m + 1,
+            rest[m].coords.map(|v| (v * 1e3).round())
+        );
         for (k, src) in mm.sources().iter().enumerate() {
             if matches!(src, HandleSource::WallVertex(_)) {
                 continue;
@@ -204,6 +257,17 @@ fn main() {
         }
         println!();
     }
+    let upper: Vec<f64> = (cols..3 * cols).map(|i| all[i].norm()).collect();
+    let (umin, umax) = upper
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &n| (a.min(n), b.max(n)));
+    println!(
+        "rows 2-3: {umin:.2}-{umax:.2} mm, i.e. {:.0}-{:.0} mm per litre of rib-cage displacement and {:.2}-{:.2} mm per degree of mean rib rotation",
+        umin / rib_cage,
+        umax / rib_cage,
+        umin / mean_turn,
+        umax / mean_turn
+    );
     let lm = &mm.skin().landmarks;
     println!("omphalion height {:.0} mm", lm.omphalion_height * 1e3);
     for i in 0..rest.len() {
