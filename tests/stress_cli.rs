@@ -43,6 +43,7 @@ fn bench_core_writes_consistent_json() {
         json.to_str().expect("utf-8 path"),
     ]);
     assert!(stdout.contains("ratio (60 markers / volumes only)"));
+    assert!(stdout.contains("ratio (whole skin / volumes only)"));
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).expect("json written"))
             .expect("valid JSON");
@@ -53,6 +54,8 @@ fn bench_core_writes_consistent_json() {
     assert!(rhs > 28, "at least one evaluation per frame, got {rhs}");
     // the same integration whatever is read
     assert_eq!(volumes["rhs_evaluations"], markers["rhs_evaluations"]);
+    assert_eq!(volumes["rhs_evaluations"], v["skin"]["rhs_evaluations"]);
+    assert!(v["ratio_skin_over_volumes"].as_f64().expect("ratio") > 0.0);
     assert!(volumes["median_wall_s"].as_f64().expect("wall") > 0.0);
     let levels = v["rhs"].as_array().expect("rhs per level");
     assert_eq!(levels.len(), 3);

@@ -1,5 +1,5 @@
 //! Measurement kernels behind `torso bench`: timed frame loops of the model facade
-//! (volumes only or volumes plus markers), the cost of one right-hand-side evaluation,
+//! (volumes only, volumes plus markers, or volumes plus the whole skin), the cost of one right-hand-side evaluation,
 //! trajectories for work-precision studies (lung volume and marker positions at the output
 //! rate, with a wall-time cap, by the model's own adaptive solver or by a fixed-step
 //! semi-implicit Euler of the kind game engines use), and random scenes drawn from the
@@ -39,6 +39,9 @@ pub enum Reads {
     Volumes,
     /// The volumes plus every marker of the grid (x, y, z).
     VolumesAndMarkers,
+    /// The volumes plus every vertex of the deformed skin (what an export of the whole skin
+    /// at every frame needs).
+    VolumesAndSkin,
 }
 
 /// One timed frame loop.
@@ -61,9 +64,10 @@ pub struct FrameRun {
 /// starts when markers are read.
 pub fn frame_loop(config: &Config, frames: usize, reads: Reads) -> Result<FrameRun> {
     let mut torso = Torso::new(config.clone())?;
-    if reads == Reads::VolumesAndMarkers {
+    if reads != Reads::Volumes {
         torso.marker_model()?;
     }
+    let mut skin = Vec::new();
     let before = torso.solver_stats();
     let start = Instant::now();
     let mut checksum = 0.0;
@@ -77,9 +81,16 @@ pub fn frame_loop(config: &Config, frames: usize, reads: Reads) -> Result<FrameR
         ] {
             checksum += torso.read(q)?;
         }
-        if reads == Reads::VolumesAndMarkers {
-            for p in torso.markers()? {
-                checksum += p.x + p.y + p.z;
+        match reads {
+            Reads::Volumes => {}
+            Reads::VolumesAndMarkers => {
+                for p in torso.markers()? {
+                    checksum += p.x + p.y + p.z;
+                }
+            }
+            Reads::VolumesAndSkin => {
+                torso.skin_vertices(&mut skin)?;
+                checksum += skin.iter().map(|p| p.x + p.y + p.z).sum::<f64>();
             }
         }
     }

@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 /// The benchmarks.
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
-    /// Frame-loop wall time (volumes only vs 60 markers) and right-hand-side cost per level of detail.
+    /// Frame-loop wall time (volumes only, 60 markers, whole skin) and right-hand-side cost per level of detail.
     Core(CoreArgs),
     /// Wall time and RHS evaluations against error for every method and tolerance.
     WorkPrecision(WorkPrecisionArgs),
@@ -163,7 +163,9 @@ struct CoreReport {
     rtol: f64,
     volumes: LoopFigures,
     markers: LoopFigures,
+    skin: LoopFigures,
     ratio_markers_over_volumes: f64,
+    ratio_skin_over_volumes: f64,
     rhs: Vec<RhsCost>,
 }
 
@@ -197,7 +199,11 @@ fn core(args: &CoreArgs) -> Result<()> {
         args.repeats
     );
     let mut figures = Vec::new();
-    for reads in [Reads::Volumes, Reads::VolumesAndMarkers] {
+    for reads in [
+        Reads::Volumes,
+        Reads::VolumesAndMarkers,
+        Reads::VolumesAndSkin,
+    ] {
         let runs = (0..args.repeats)
             .map(|_| frame_loop(&config, args.frames, reads))
             .collect::<Result<Vec<_>>>()?;
@@ -207,6 +213,7 @@ fn core(args: &CoreArgs) -> Result<()> {
             match reads {
                 Reads::Volumes => "volumes only",
                 Reads::VolumesAndMarkers => "volumes + 60 markers",
+                Reads::VolumesAndSkin => "volumes + whole skin",
             },
             f.median_wall_s,
             f.min_wall_s,
@@ -217,14 +224,12 @@ fn core(args: &CoreArgs) -> Result<()> {
         );
         figures.push(f);
     }
-    let markers = figures
-        .pop()
-        .ok_or_else(|| Error::State("no runs".into()))?;
-    let volumes = figures
-        .pop()
-        .ok_or_else(|| Error::State("no runs".into()))?;
+    let [volumes, markers, skin] =
+        <[LoopFigures; 3]>::try_from(figures).map_err(|_| Error::State("no runs".into()))?;
     let ratio = markers.median_wall_s / volumes.median_wall_s;
+    let ratio_skin = skin.median_wall_s / volumes.median_wall_s;
     println!("ratio (60 markers / volumes only): {ratio:.2}");
+    println!("ratio (whole skin / volumes only): {ratio_skin:.2}");
     let mut rhs = Vec::new();
     println!(
         "right-hand side, median of 5 batches of {} calls:",
@@ -247,7 +252,9 @@ fn core(args: &CoreArgs) -> Result<()> {
             rtol: config.solver.rtol,
             volumes,
             markers,
+            skin,
             ratio_markers_over_volumes: ratio,
+            ratio_skin_over_volumes: ratio_skin,
             rhs,
         };
         let text = serde_json::to_string_pretty(&report)
