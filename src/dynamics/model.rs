@@ -3,6 +3,7 @@
 //! an [`Anatomy`] and shared between instances (`Arc`), as MuJoCo splits `mjModel` from `mjData`.
 
 use super::params::Params;
+use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
 use nalgebra::{Matrix3, Point3, Vector3};
 
@@ -203,6 +204,10 @@ pub struct Model {
     pub abdomen_rest_volume: f64,
     /// Rest volume of the thorax [m^3].
     pub thorax_rest_volume: f64,
+    /// Pressure-volume law of the lungs: the pleural pressure is `-pleural.recoil(V_thorax)`
+    /// (linear about rest with slope `params.lung_elastance`, bounded by the subject's
+    /// residual volume and total lung capacity).
+    pub pleural: PleuralLaw,
     /// Gravity vector [m/s^2].
     pub gravity: Vector3<f64>,
     /// Anchor at the middle of the sternum (for its displacement).
@@ -478,6 +483,12 @@ impl Model {
         let thorax_triangles = anatomy.thorax_triangles();
         let abdomen_rest_volume = volume(&rest, &abdomen_triangles);
         let thorax_rest_volume = volume(&rest, &thorax_triangles);
+        let pleural = PleuralLaw::new(
+            thorax_rest_volume,
+            params.lung_elastance,
+            capacity_ratios(&anatomy.subject),
+            params.pleural_barrier_margin,
+        );
         let st = &anatomy.sternum;
         let sternum_com = st.centre_of_mass();
         rest.push(nalgebra::center(&st.angle, &st.xiphisternal));
@@ -557,6 +568,7 @@ impl Model {
             thorax_triangles,
             abdomen_rest_volume,
             thorax_rest_volume,
+            pleural,
             gravity,
             sternum_probe,
             params,
@@ -593,8 +605,8 @@ impl Model {
     }
 
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
-    /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes and
-    /// gravity), so that a snapshot is only restored into the model it was taken from.
+    /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
+    /// pleural law's asymptotes and margin, and gravity), so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: f64| {
@@ -618,6 +630,9 @@ impl Model {
         eat(self.params.lung_elastance);
         eat(self.abdomen_rest_volume);
         eat(self.thorax_rest_volume);
+        eat(self.pleural.lower);
+        eat(self.pleural.upper);
+        eat(self.params.pleural_barrier_margin);
         eat(self.gravity.x);
         eat(self.gravity.y);
         h

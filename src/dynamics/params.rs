@@ -64,6 +64,15 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// --probe 1 1.711`), so the model keeps the smaller increase.
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
+/// Default [`Params::pleural_barrier_margin`]: the tangent takes over a hundredth of the way
+/// from each asymptote to rest, where the recoil is already about 40 cmH2O for the default
+/// subject (beyond any quiet or forced breath) and its slope about 70 x the lung elastance.
+pub const PLEURAL_BARRIER_MARGIN: f64 = 0.01;
+
+fn default_pleural_barrier_margin() -> f64 {
+    PLEURAL_BARRIER_MARGIN
+}
+
 /// Constants of the dynamics. `Params::for_posture` gives the defaults.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Params {
@@ -83,6 +92,14 @@ pub struct Params {
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the thorax,
     /// 1 / (0.2 L/cmH2O) (lung compliance, physiology reference).
     pub lung_elastance: f64,
+    /// Margin of the pleural pressure-volume law's logarithmic barriers, as a fraction of the
+    /// distance from the rest volume to each asymptote (residual volume below, total lung
+    /// capacity above): within it the law follows its tangent, a slope of about
+    /// `lung_elastance / margin` (see [`super::pleural::PleuralLaw`]), so that it is finite
+    /// for every volume an overshooting solver stage may probe. In (0, 0.5); configurations
+    /// written before it existed read [`PLEURAL_BARRIER_MARGIN`].
+    #[serde(default = "default_pleural_barrier_margin")]
+    pub pleural_barrier_margin: f64,
     /// Stiffness of a cartilage ball joint [N/m].
     pub cartilage_stiffness: f64,
     /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
@@ -135,6 +152,7 @@ impl Params {
             damping_ratio: 1.0,
             bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
+            pleural_barrier_margin: PLEURAL_BARRIER_MARGIN,
             cartilage_stiffness: 1.0e4,
             rib_joint_stiffness: 2.0 * rib_stiffness_factor,
             membrane_stiffness: 400.0,
@@ -171,6 +189,13 @@ impl Params {
             if !(v.is_finite() && v > 0.0) {
                 return Err(crate::Error::invalid(name, v, "finite and > 0"));
             }
+        }
+        if !(self.pleural_barrier_margin > 0.0 && self.pleural_barrier_margin < 0.5) {
+            return Err(crate::Error::invalid(
+                "params.pleural_barrier_margin",
+                self.pleural_barrier_margin,
+                "(0, 0.5)",
+            ));
         }
         for (name, v) in [
             ("params.beta_max", self.beta_max),
