@@ -173,6 +173,28 @@ fn held_maximal_abdominal_contraction_stops_near_residual_volume() {
     assert!(log.borrow().is_empty(), "{:?}", log.borrow());
 }
 
+#[test]
+fn held_maximal_inspiration_stays_below_total_lung_capacity() {
+    let (mut inst, log) = instance();
+    set(&mut inst, "scene.level_of_detail", 0.0);
+    for family in ["ribs", "diaphragm", "abdominals"] {
+        set(&mut inst, &format!("drive.{family}.amplitude"), 0.0);
+    }
+    initialise(&mut inst);
+    let rest = get(&mut inst, "volume.lung");
+    let tlc = rest * capacity_ratios(&Subject::default()).1;
+    for g in ["diaphragm", "external_intercostals", "scalenes"] {
+        set(&mut inst, &format!("activation.{g}"), 1.0);
+    }
+    let (lo, hi) = run_ok(&mut inst, &log, 10.0, 0.02);
+    println!(
+        "inspiratory groups at 1 for 10 s: lung {lo:.3}-{hi:.3} L (rest {rest:.3} L, TLC {tlc:.3} L)"
+    );
+    assert!(hi > rest, "the contraction inspires: {hi} L from {rest} L");
+    assert!(hi <= (1.0 + RV_MARGIN) * tlc, "lung {hi} L, TLC {tlc} L");
+    assert!(log.borrow().is_empty(), "{:?}", log.borrow());
+}
+
 /// Replaces the model snapshot inside a serialised FMU state (the FMI 2.0 serialised-state
 /// layout of this FMU: magic, version, length of the instance part, instance part, model
 /// snapshot).

@@ -210,8 +210,8 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
 }
 
 /// Pleural pressure from the thoracic volume: the lungs' elastic recoil, the pressure-volume
-/// law of [`super::pleural::PleuralLaw`] (Venegas et al. 1998, linear with the lung elastance
-/// about rest, bounded by the residual volume and total lung capacity). The dome's
+/// law of [`super::pleural::PleuralLaw`] (linear with the lung elastance about rest, with
+/// inverse barriers at the residual volume and total lung capacity). The dome's
 /// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
 /// volume terms negated (exactly what recomputing them would give).
 fn pleural_pressure(model: &Model, data: &mut Data) {

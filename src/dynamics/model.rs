@@ -487,6 +487,7 @@ impl Model {
             thorax_rest_volume,
             params.lung_elastance,
             capacity_ratios(&anatomy.subject),
+            params.pleural_barrier_pressure,
             params.pleural_barrier_margin,
         );
         let st = &anatomy.sternum;
@@ -606,7 +607,7 @@ impl Model {
 
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
     /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
-    /// pleural law's asymptotes and margin, and gravity), so that a snapshot is only restored into the model it was taken from.
+    /// pleural law's asymptotes, barrier pressure and margin, and gravity), so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: f64| {
@@ -632,6 +633,7 @@ impl Model {
         eat(self.thorax_rest_volume);
         eat(self.pleural.lower);
         eat(self.pleural.upper);
+        eat(self.params.pleural_barrier_pressure);
         eat(self.params.pleural_barrier_margin);
         eat(self.gravity.x);
         eat(self.gravity.y);
