@@ -66,7 +66,7 @@ pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
 /// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
 /// lungs stay within 5 % of linear over a forced breath (1 L below rest, the barrier adds
-/// 0.3 cmH2O to 5 cmH2O of recoil for the default subject), large enough that the recoil
+/// 0.1 cmH2O to 5 cmH2O of recoil for the default subject), large enough that the recoil
 /// passes 30 cmH2O a few percent of the way from the residual volume to rest.
 pub const PLEURAL_BARRIER_PRESSURE: f64 = 0.5 * 98.0665;
 

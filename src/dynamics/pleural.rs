@@ -279,6 +279,25 @@ mod tests {
     }
 
     #[test]
+    fn params_refuse_a_barrier_without_pressure_or_margin() {
+        let ok = crate::dynamics::Params::for_posture(crate::anatomy::Posture::Standing);
+        assert!(ok.validate().is_ok());
+        for (pressure, margin, name) in [
+            (0.0, 0.02, "params.pleural_barrier_pressure"),
+            (f64::NAN, 0.02, "params.pleural_barrier_pressure"),
+            (49.0, 0.0, "params.pleural_barrier_margin"),
+            (49.0, 0.5, "params.pleural_barrier_margin"),
+            (49.0, f64::NAN, "params.pleural_barrier_margin"),
+        ] {
+            let mut p = ok.clone();
+            p.pleural_barrier_pressure = pressure;
+            p.pleural_barrier_margin = margin;
+            let e = p.validate().expect_err(name).to_string();
+            assert!(e.contains(name), "{e}");
+        }
+    }
+
+    #[test]
     fn capacity_ratios_bracket_rest_over_the_subject_ranges() {
         use crate::anatomy::{SUBJECT_RANGES, Sex};
         for sex in [Sex::Male, Sex::Female] {
