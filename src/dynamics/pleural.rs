@@ -15,10 +15,10 @@
 //!
 //! and the pleural pressure on the thoracic surface is -P(V). psi and its first two
 //! derivatives vanish at s = 1, so the law equals the linear one at rest in value, slope and
-//! curvature (C2), is exactly linear on the far side of rest from each asymptote, and stays
-//! within a few percent of it over quiet and forced breaths; near an asymptote psi ~ 1 / s,
-//! so p_b ([`super::Params::pleural_barrier_pressure`]) is the recoil added a distance x0
-//! above the residual volume times x0 / x.
+//! curvature (C2), each barrier vanishes on the far side of rest from its asymptote, and the
+//! law stays within a few percent of linear over quiet and forced breaths; near an asymptote
+//! psi ~ 1 / s, so the barrier adds about p_b x0 / x a distance x above the residual volume
+//! (p_b: [`super::Params::pleural_barrier_pressure`]).
 //!
 //! Why not the sigmoid of Venegas, Harris & Simon (1998, J Appl Physiol 84:389) inverted,
 //! P = c + d ln((V - a)/(a + b - V)), with the same asymptotes and fitted to E at rest: its
