@@ -164,6 +164,17 @@ impl Subject {
         }
     }
 
+    /// ECSC/ERS 1993 residual volume [L] (Quanjer et al. 1993, Eur Respir J 6 Suppl 16:5-40,
+    /// stature H in m, age A in years): men 1.31 H + 0.022 A - 1.23, women
+    /// 1.81 H + 0.016 A - 2.00.
+    pub fn rv_ecsc(&self) -> f64 {
+        let (h, a) = (self.stature, self.age);
+        match self.sex {
+            Sex::Male => 1.31 * h + 0.022 * a - 1.23,
+            Sex::Female => 1.81 * h + 0.016 * a - 2.00,
+        }
+    }
+
     /// ECSC/ERS 1993 total lung capacity [L].
     pub fn tlc_ecsc(&self) -> f64 {
         let h = self.stature;

@@ -1,7 +1,8 @@
 //! Mechanical energy of a state, for tests of dissipation: kinetic energy of ribs, sternum and
 //! vertices; elastic energy of elements (muscles count only when stretched, as they only pull;
 //! evaluated at zero activation), vector springs and rib joints; the pressure potentials of the
-//! abdomen, K (V - V0 - V0 ln(V/V0)), and of the lungs, E_L (V - V0)^2 / 2; gravity; and the
+//! abdomen, K (V - V0 - V0 ln(V/V0)), and of the lungs, the integral of their recoil
+//! ([`super::pleural::PleuralLaw::energy`], E_L (V - V0)^2 / 2 near rest); gravity; and the
 //! potential of the constant preloads.
 
 use super::model::{Model, PASSIVE, RIBS, volume};
@@ -58,7 +59,7 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     );
     e += model.params.bulk_modulus * (va - v0 - v0 * (va / v0).ln());
     let vt = volume(&data.pos, &model.thorax_triangles);
-    e += 0.5 * model.params.lung_elastance * (vt - model.thorax_rest_volume).powi(2);
+    e += model.pleural.energy(vt);
     // Gravity and preloads (constant generalised forces have linear potentials).
     for r in 0..RIBS {
         let h = model.rib_head[r];

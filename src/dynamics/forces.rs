@@ -209,7 +209,9 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
     data.abdomen_pressure = p;
 }
 
-/// Pleural pressure from the thoracic volume: the lungs' elastic recoil. The dome's
+/// Pleural pressure from the thoracic volume: the lungs' elastic recoil, the pressure-volume
+/// law of [`super::pleural::PleuralLaw`] (linear with the lung elastance about rest, with
+/// inverse barriers at the residual volume and total lung capacity). The dome's
 /// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
 /// volume terms negated (exactly what recomputing them would give).
 fn pleural_pressure(model: &Model, data: &mut Data) {
@@ -240,7 +242,7 @@ fn pleural_pressure(model: &Model, data: &mut Data) {
         sum
     };
     let v = sum / 6.0;
-    let p = -model.params.lung_elastance * (v - model.thorax_rest_volume);
+    let p = -model.pleural.recoil(v);
     apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
     data.pleural_pressure = p;

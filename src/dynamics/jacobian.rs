@@ -181,7 +181,7 @@ impl TorsoJacobian {
         let vt = volume(&data.pos, &model.thorax_triangles);
         let p = &model.params;
         let pa = p.bulk_modulus * (model.abdomen_rest_volume / va - 1.0);
-        let pt = -p.lung_elastance * (vt - model.thorax_rest_volume);
+        let pt = -model.pleural.recoil(vt);
         let frozen = [pa, pt];
         let mut f = |yy: &[f64], out: &mut [f64]| rhs_frozen(model, data, act, yy, out, frozen);
         let mut evals = self.colouring.differences(
@@ -196,7 +196,7 @@ impl TorsoJacobian {
         // u = ∂f/∂P (exact: f is affine in each pressure); V = (dP/dV) dV/dy
         let slopes = [
             -p.bulk_modulus * model.abdomen_rest_volume / (va * va),
-            -p.lung_elastance,
+            -model.pleural.slope(vt),
         ];
         for k in 0..2 {
             let mut bumped = frozen;

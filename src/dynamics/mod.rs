@@ -21,11 +21,13 @@ pub mod jacobian;
 pub mod kinematics;
 mod model;
 mod params;
+pub mod pleural;
 pub mod state;
 
 pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VIA, VectorSprings, volume};
 pub use params::{
-    DIAPHRAGM_CONTRACTION_UPRIGHT, Params, diaphragm_contraction, diaphragm_length_ratio,
+    DIAPHRAGM_CONTRACTION_UPRIGHT, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
+    diaphragm_contraction, diaphragm_length_ratio,
 };
 pub use state::{Layout, rest_state};
 

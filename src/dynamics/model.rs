@@ -3,6 +3,7 @@
 //! an [`Anatomy`] and shared between instances (`Arc`), as MuJoCo splits `mjModel` from `mjData`.
 
 use super::params::Params;
+use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
 use nalgebra::{Matrix3, Point3, Vector3};
 
@@ -207,6 +208,10 @@ pub struct Model {
     /// ([`crate::anatomy::abdomen::Abdomen::dome_faceting_volume`]): taken from the observed
     /// thorax and added to the observed abdomen, never used by the dynamics.
     pub dome_faceting_volume: f64,
+    /// Pressure-volume law of the lungs: the pleural pressure is `-pleural.recoil(V_thorax)`
+    /// (linear about rest with slope `params.lung_elastance`, bounded by the subject's
+    /// residual volume and total lung capacity).
+    pub pleural: PleuralLaw,
     /// Gravity vector [m/s^2].
     pub gravity: Vector3<f64>,
     /// Anchor at the middle of the sternum (for its displacement).
@@ -482,6 +487,19 @@ impl Model {
         let thorax_triangles = anatomy.thorax_triangles();
         let abdomen_rest_volume = volume(&rest, &abdomen_triangles);
         let thorax_rest_volume = volume(&rest, &thorax_triangles);
+        // The capacity ratios hold for the observed thorax (the mesh's less the dome's
+        // faceting volume d): an asymptote at r x (V0 - d) observed is at d + r (V0 - d) on
+        // the mesh, i.e. at the ratio (d + r (V0 - d)) / V0 of the mesh's rest volume.
+        let d = ab.dome_faceting_volume;
+        let on_mesh = |r: f64| (d + r * (thorax_rest_volume - d)) / thorax_rest_volume;
+        let (rv, tlc) = capacity_ratios(&anatomy.subject);
+        let pleural = PleuralLaw::new(
+            thorax_rest_volume,
+            params.lung_elastance,
+            (on_mesh(rv), on_mesh(tlc)),
+            params.pleural_barrier_pressure,
+            params.pleural_barrier_margin,
+        );
         let st = &anatomy.sternum;
         let sternum_com = st.centre_of_mass();
         rest.push(nalgebra::center(&st.angle, &st.xiphisternal));
@@ -562,6 +580,7 @@ impl Model {
             abdomen_rest_volume,
             thorax_rest_volume,
             dome_faceting_volume: ab.dome_faceting_volume,
+            pleural,
             gravity,
             sternum_probe,
             params,
@@ -598,8 +617,8 @@ impl Model {
     }
 
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
-    /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes and
-    /// gravity), so that a snapshot is only restored into the model it was taken from.
+    /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
+    /// pleural law's asymptotes, barrier pressure and margin, and gravity), so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: f64| {
@@ -624,6 +643,10 @@ impl Model {
         eat(self.abdomen_rest_volume);
         eat(self.thorax_rest_volume);
         eat(self.dome_faceting_volume);
+        eat(self.pleural.lower);
+        eat(self.pleural.upper);
+        eat(self.params.pleural_barrier_pressure);
+        eat(self.params.pleural_barrier_margin);
         eat(self.gravity.x);
         eat(self.gravity.y);
         h

@@ -64,6 +64,25 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// --probe 1 1.711`), so the model keeps the smaller increase.
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
+/// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
+/// lungs stay within 5 % of linear over a forced breath (1 L below rest, the barrier adds
+/// 0.1 cmH2O to 5 cmH2O of recoil for the default subject), large enough that the recoil
+/// passes 30 cmH2O a few percent of the way from the residual volume to rest.
+pub const PLEURAL_BARRIER_PRESSURE: f64 = 0.5 * 98.0665;
+
+/// Default [`Params::pleural_barrier_margin`]: the tangent takes over 2 % of the way from
+/// each asymptote to rest, where the recoil is already about 34 cmH2O for the default
+/// subject (beyond any quiet or forced breath).
+pub const PLEURAL_BARRIER_MARGIN: f64 = 0.02;
+
+fn default_pleural_barrier_pressure() -> f64 {
+    PLEURAL_BARRIER_PRESSURE
+}
+
+fn default_pleural_barrier_margin() -> f64 {
+    PLEURAL_BARRIER_MARGIN
+}
+
 /// Constants of the dynamics. `Params::for_posture` gives the defaults.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Params {
@@ -83,6 +102,19 @@ pub struct Params {
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the thorax,
     /// 1 / (0.2 L/cmH2O) (lung compliance, physiology reference).
     pub lung_elastance: f64,
+    /// Barrier pressure p_b [Pa] of the pleural pressure-volume law
+    /// ([`super::pleural::PleuralLaw`]): the recoil added near the residual volume (and the
+    /// total lung capacity) is about p_b x0 / x at a distance x from it (x0 from rest). > 0;
+    /// configurations written before it existed read [`PLEURAL_BARRIER_PRESSURE`].
+    #[serde(default = "default_pleural_barrier_pressure")]
+    pub pleural_barrier_pressure: f64,
+    /// Margin of the pleural pressure-volume law's barriers, as a fraction of the distance
+    /// from the rest volume to each asymptote (residual volume below, total lung capacity
+    /// above): within it the law follows its tangent (see [`super::pleural::PleuralLaw`]), so
+    /// that it is finite for every volume an overshooting solver stage may probe. In (0, 0.5);
+    /// configurations written before it existed read [`PLEURAL_BARRIER_MARGIN`].
+    #[serde(default = "default_pleural_barrier_margin")]
+    pub pleural_barrier_margin: f64,
     /// Stiffness of a cartilage ball joint [N/m].
     pub cartilage_stiffness: f64,
     /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
@@ -135,6 +167,8 @@ impl Params {
             damping_ratio: 1.0,
             bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
+            pleural_barrier_pressure: PLEURAL_BARRIER_PRESSURE,
+            pleural_barrier_margin: PLEURAL_BARRIER_MARGIN,
             cartilage_stiffness: 1.0e4,
             rib_joint_stiffness: 2.0 * rib_stiffness_factor,
             membrane_stiffness: 400.0,
@@ -153,6 +187,10 @@ impl Params {
             ("params.damping_ratio", self.damping_ratio),
             ("params.bulk_modulus", self.bulk_modulus),
             ("params.lung_elastance", self.lung_elastance),
+            (
+                "params.pleural_barrier_pressure",
+                self.pleural_barrier_pressure,
+            ),
             ("params.cartilage_stiffness", self.cartilage_stiffness),
             ("params.rib_joint_stiffness", self.rib_joint_stiffness),
             ("params.membrane_stiffness", self.membrane_stiffness),
@@ -171,6 +209,13 @@ impl Params {
             if !(v.is_finite() && v > 0.0) {
                 return Err(crate::Error::invalid(name, v, "finite and > 0"));
             }
+        }
+        if !(self.pleural_barrier_margin > 0.0 && self.pleural_barrier_margin < 0.5) {
+            return Err(crate::Error::invalid(
+                "params.pleural_barrier_margin",
+                self.pleural_barrier_margin,
+                "(0, 0.5)",
+            ));
         }
         for (name, v) in [
             ("params.beta_max", self.beta_max),
