@@ -41,10 +41,12 @@ fn main() -> breathing_torso::Result<()> {
         let mut torso = Torso::new(config.clone())?;
         let model = &torso.compiled().model;
         let litres = 1e3 * config.lung_ratio;
+        // as observed: the mesh's thorax less the dome's faceting volume
+        let d = model.dome_faceting_volume;
         let (rest, rv, tlc) = (
-            model.thorax_rest_volume * litres,
-            model.pleural.lower * litres,
-            model.pleural.upper * litres,
+            (model.thorax_rest_volume - d) * litres,
+            (model.pleural.lower - d) * litres,
+            (model.pleural.upper - d) * litres,
         );
         let outcome = stress_torso(&mut torso, seconds, 56.0)?;
         let stats = torso.solver_stats();
