@@ -145,8 +145,10 @@ fn soak_scene_35_no_longer_collapses_and_every_step_is_ok() {
     assert!(log.borrow().is_empty(), "{:?}", log.borrow());
 }
 
-#[test]
-fn held_maximal_abdominal_contraction_stops_near_residual_volume() {
+/// A level-0 default instance with the drive off, its rest lung volume [L], and the lung
+/// volume range [L] over 10 s (0.02 s steps, every step OK) with `groups` held at activation 1.
+#[allow(clippy::type_complexity)]
+fn hold_at_full_activation(groups: &[&str]) -> (Instance, Log, f64, (f64, f64)) {
     let (mut inst, log) = instance();
     set(&mut inst, "scene.level_of_detail", 0.0);
     for family in ["ribs", "diaphragm", "abdominals"] {
@@ -154,16 +156,22 @@ fn held_maximal_abdominal_contraction_stops_near_residual_volume() {
     }
     initialise(&mut inst);
     let rest = get(&mut inst, "volume.lung");
-    let rv = residual_volume(&Subject::default(), rest);
-    for g in [
+    for g in groups {
+        set(&mut inst, &format!("activation.{g}"), 1.0);
+    }
+    let range = run_ok(&mut inst, &log, 10.0, 0.02);
+    (inst, log, rest, range)
+}
+
+#[test]
+fn held_maximal_abdominal_contraction_stops_near_residual_volume() {
+    let (mut inst, log, rest, (lo, hi)) = hold_at_full_activation(&[
         "transversus_abdominis",
         "rectus_abdominis",
         "external_obliques",
         "internal_obliques",
-    ] {
-        set(&mut inst, &format!("activation.{g}"), 1.0);
-    }
-    let (lo, hi) = run_ok(&mut inst, &log, 10.0, 0.02);
+    ]);
+    let rv = residual_volume(&Subject::default(), rest);
     let end = get(&mut inst, "volume.lung");
     println!(
         "all four abdominal groups at 1 for 10 s: lung {lo:.3}-{hi:.3} L, {end:.3} L at the end (rest {rest:.3} L, RV {rv:.3} L)"
@@ -175,18 +183,9 @@ fn held_maximal_abdominal_contraction_stops_near_residual_volume() {
 
 #[test]
 fn held_maximal_inspiration_stays_below_total_lung_capacity() {
-    let (mut inst, log) = instance();
-    set(&mut inst, "scene.level_of_detail", 0.0);
-    for family in ["ribs", "diaphragm", "abdominals"] {
-        set(&mut inst, &format!("drive.{family}.amplitude"), 0.0);
-    }
-    initialise(&mut inst);
-    let rest = get(&mut inst, "volume.lung");
+    let (_inst, log, rest, (lo, hi)) =
+        hold_at_full_activation(&["diaphragm", "external_intercostals", "scalenes"]);
     let tlc = rest * capacity_ratios(&Subject::default()).1;
-    for g in ["diaphragm", "external_intercostals", "scalenes"] {
-        set(&mut inst, &format!("activation.{g}"), 1.0);
-    }
-    let (lo, hi) = run_ok(&mut inst, &log, 10.0, 0.02);
     println!(
         "inspiratory groups at 1 for 10 s: lung {lo:.3}-{hi:.3} L (rest {rest:.3} L, TLC {tlc:.3} L)"
     );
