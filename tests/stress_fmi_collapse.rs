@@ -12,7 +12,9 @@
 
 use breathing_torso::anatomy::{Posture, Sex, Subject};
 use breathing_torso::dynamics::pleural::capacity_ratios;
-use breathing_torso::fmi::instance::{CAVITY_BOUNDS, FmuState, Instance, LogSink, Phase, mask};
+use breathing_torso::fmi::instance::{
+    CAVITY_BOUNDS, FmuState, Instance, LogSink, Phase, cavity_bounds, mask,
+};
 use breathing_torso::fmi::table;
 use breathing_torso::fmi::types::fmi2Status::{self, *};
 use breathing_torso::fmi::types::{fmi2LastSuccessfulTime, fmi2Terminated};
@@ -234,7 +236,8 @@ fn a_state_leaving_the_bounds_is_discarded_with_the_bound_named() {
         fmi2OK
     );
     let crushed = get(&mut inst, "volume.thorax");
-    assert!(crushed < CAVITY_BOUNDS.0 * rest, "{crushed} L of {rest} L");
+    let (lo, hi) = cavity_bounds(&Subject::default())[0];
+    assert!(crushed < lo * rest, "{crushed} L of {rest} L");
     let status = inst.do_step(t, 1e-6);
     assert_eq!(status, fmi2Discard, "the step must be discarded");
     assert_eq!(inst.phase(), Phase::StepFailed);
@@ -252,10 +255,7 @@ fn a_state_leaving_the_bounds_is_discarded_with_the_bound_named() {
     assert_eq!(category, "logStatusDiscard");
     assert!(
         message.contains("volume.thorax")
-            && message.contains(&format!(
-                "[{}, {}] x rest",
-                CAVITY_BOUNDS.0, CAVITY_BOUNDS.1
-            ))
+            && message.contains(&format!("[{lo:.3}, {hi:.3}] x rest"))
             && message.contains("discarded"),
         "{message}"
     );
@@ -273,5 +273,66 @@ fn quiet_breathing_is_never_discarded() {
     set(&mut inst, "drive.diaphragm.amplitude", 0.25);
     initialise(&mut inst);
     run_ok(&mut inst, &log, 4.0, 0.1);
+    assert!(log.borrow().is_empty(), "{:?}", log.borrow());
+}
+
+/// A short young woman: RV/FRC 0.42 (ECSC 1993), below the fixed 0.5 x rest the thorax was
+/// once bounded by.
+fn young_short_woman() -> Subject {
+    Subject {
+        sex: Sex::Female,
+        age: 18.0,
+        stature: 1.50,
+        mass: 48.0,
+        breast_size: 0.3,
+        posture: Posture::Standing,
+    }
+}
+
+#[test]
+fn a_full_expiration_to_a_low_residual_volume_is_not_discarded() {
+    let s = young_short_woman();
+    let (rv_ratio, _) = capacity_ratios(&s);
+    assert!(rv_ratio < 0.45, "RV/FRC {rv_ratio}");
+    let bounds = cavity_bounds(&s);
+    assert!(bounds[0].0 < rv_ratio && bounds[0].0 <= CAVITY_BOUNDS.0);
+    let (mut inst, log) = instance();
+    for (name, value) in [
+        ("subject.sex", 1.0),
+        ("subject.age", s.age),
+        ("subject.stature", s.stature),
+        ("subject.mass", s.mass),
+        ("subject.breast_size", s.breast_size),
+        ("scene.level_of_detail", 0.0),
+        ("drive.ribs.amplitude", 0.0),
+        ("drive.diaphragm.amplitude", 0.0),
+        ("drive.abdominals.amplitude", 0.0),
+    ] {
+        set(&mut inst, name, value);
+    }
+    initialise(&mut inst);
+    let rest = get(&mut inst, "volume.lung");
+    for g in [
+        "internal_intercostals",
+        "transversus_abdominis",
+        "rectus_abdominis",
+        "external_obliques",
+        "internal_obliques",
+    ] {
+        set(&mut inst, &format!("activation.{g}"), 1.0);
+    }
+    // the effort empties the lungs within the first step and holds them near RV
+    let (lo, _) = run_ok(&mut inst, &log, 0.3, 0.02);
+    let rv = rest * rv_ratio;
+    println!(
+        "maximal expiratory effort for 0.3 s: lung down to {lo:.3} L = {:.3} x rest {rest:.3} L (RV {rv:.3} L, bound {:.3} x rest)",
+        lo / rest,
+        bounds[0].0
+    );
+    assert!(
+        lo < CAVITY_BOUNDS.0 * rest,
+        "the lungs pass below the fixed bound: {lo} L of {rest} L"
+    );
+    assert!(lo >= (1.0 - RV_MARGIN) * rv, "lung {lo} L, RV {rv} L");
     assert!(log.borrow().is_empty(), "{:?}", log.borrow());
 }

@@ -417,8 +417,10 @@ pub fn random_scene(rng: &mut Pcg64, lod: u32) -> Result<Config> {
 pub const LUNG_BOUNDS: (f64, f64) = (0.2, 15.0);
 
 /// Bounds on every cavity volume (thorax, abdomen, trunk) relative to its value at the start
-/// of a stress run: a wall that halves or doubles a cavity has blown up.
-pub const RELATIVE_VOLUME_BOUNDS: (f64, f64) = (0.5, 2.0);
+/// of a stress run (the rest state): a wall that halves or doubles a cavity has blown up. The
+/// thorax's widen to the subject's residual volume and total lung capacity where those lie
+/// beyond ([`crate::dynamics::pleural::cavity_bounds`]).
+pub const RELATIVE_VOLUME_BOUNDS: (f64, f64) = crate::dynamics::pleural::CAVITY_BOUNDS;
 
 /// Outcome of one stress scene.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -445,7 +447,8 @@ pub enum SceneOutcome {
 
 /// Simulates `config` for `seconds`, checking every output frame (at `rate` Hz) that the
 /// state is finite, the lung volume within [`LUNG_BOUNDS`] and the thorax, abdomen and trunk
-/// volumes within [`RELATIVE_VOLUME_BOUNDS`] of their values at the start.
+/// volumes within the subject's bounds ([`RELATIVE_VOLUME_BOUNDS`], the thorax's widened to its
+/// residual volume and total lung capacity) of their values at the start.
 /// Errors other than [`Error::Numerical`] are returned as errors.
 pub fn stress_scene(config: &Config, seconds: f64, rate: f64) -> Result<SceneOutcome> {
     let mut torso = Torso::new(config.clone())?;
@@ -466,6 +469,7 @@ pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneO
     for (s, q) in start.iter_mut().zip(cavities) {
         *s = torso.read(q)?;
     }
+    let bounds = crate::dynamics::pleural::cavity_bounds(&torso.config().subject);
     for i in 0..=frames {
         if i > 0 {
             match torso.advance_to(t0 + i as f64 / rate) {
@@ -485,13 +489,15 @@ pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneO
         }
         min_lung = min_lung.min(lung);
         max_lung = max_lung.max(lung);
-        for (s, q) in start.iter().zip(cavities) {
+        for ((s, q), (lo, hi)) in start.iter().zip(cavities).zip(bounds) {
             let v = torso.read(q)?;
             let r = v / s;
-            if !(r.is_finite() && r >= RELATIVE_VOLUME_BOUNDS.0 && r <= RELATIVE_VOLUME_BOUNDS.1) {
+            if !(r.is_finite() && r >= lo && r <= hi) {
                 return Ok(SceneOutcome::OutOfBounds {
                     time: torso.time(),
-                    what: format!("{q:?} = {v} L ({r} x its start value {s} L)"),
+                    what: format!(
+                        "{q:?} = {v} L ({r} x its start value {s} L, outside [{lo:.3}, {hi:.3}])"
+                    ),
                 });
             }
         }

@@ -6,9 +6,11 @@
 //!
 //! Bounds are those of the random-scene soak ([`super::LUNG_BOUNDS`],
 //! [`super::RELATIVE_VOLUME_BOUNDS`]): a finite state, a lung volume within broad adult
-//! limits, and thorax, abdomen and trunk volumes within half and twice their start values.
+//! limits, and thorax, abdomen and trunk volumes within half and twice their start values (the
+//! thorax's widened to the subject's residual volume and total lung capacity where those lie
+//! beyond).
 
-use super::{LUNG_BOUNDS, RELATIVE_VOLUME_BOUNDS, SceneOutcome, set_all_activations};
+use super::{LUNG_BOUNDS, SceneOutcome, set_all_activations};
 use crate::model::{Config, Quantity, Torso};
 use crate::stats::rng::Pcg64;
 use crate::{Error, Result};
@@ -42,7 +44,9 @@ fn work(torso: &Torso, start: Instant) -> Work {
 }
 
 /// Watches a run: after every advance, the state must be finite, the lung volume within
-/// [`LUNG_BOUNDS`] and every cavity within [`RELATIVE_VOLUME_BOUNDS`] of its start value.
+/// [`LUNG_BOUNDS`] and every cavity within its subject's bounds of its start value
+/// ([`super::RELATIVE_VOLUME_BOUNDS`], the thorax's widened to the residual volume and total lung
+/// capacity).
 /// Keeps the extremes seen.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Monitor {
@@ -54,6 +58,8 @@ pub struct Monitor {
     pub ratios: [(f64, f64); 3],
     /// Checks made.
     pub checks: u64,
+    /// Bounds of each cavity's ratio (the subject's: `dynamics::pleural::cavity_bounds`).
+    pub bounds: [(f64, f64); 3],
 }
 
 const CAVITIES: [Quantity; 3] = [
@@ -74,6 +80,7 @@ impl Monitor {
             lung: (f64::INFINITY, f64::NEG_INFINITY),
             ratios: [(f64::INFINITY, f64::NEG_INFINITY); 3],
             checks: 0,
+            bounds: crate::dynamics::pleural::cavity_bounds(&torso.config().subject),
         })
     }
 
@@ -96,10 +103,11 @@ impl Monitor {
         for (k, q) in CAVITIES.into_iter().enumerate() {
             let v = torso.read(q)?;
             let r = v / self.start[k];
-            if !(r.is_finite() && r >= RELATIVE_VOLUME_BOUNDS.0 && r <= RELATIVE_VOLUME_BOUNDS.1) {
+            let (lo, hi) = self.bounds[k];
+            if !(r.is_finite() && r >= lo && r <= hi) {
                 return out(format!(
-                    "{q:?} = {v} L, {r} x its start value {} L, outside [{}, {}] x",
-                    self.start[k], RELATIVE_VOLUME_BOUNDS.0, RELATIVE_VOLUME_BOUNDS.1
+                    "{q:?} = {v} L, {r} x its start value {} L, outside [{lo:.3}, {hi:.3}] x",
+                    self.start[k]
                 ));
             }
             self.ratios[k] = (self.ratios[k].0.min(r), self.ratios[k].1.max(r));

@@ -160,16 +160,9 @@ const ALL_CATEGORIES: u32 = (1 << 6) - 1;
 /// instance's time.
 pub const TIME_TOLERANCE: f64 = 1e-9;
 
-/// Bounds of the thorax, abdomen and trunk cavity volumes after a communication step, as
-/// multiples of their volumes in the rest state of the same model (muscles relaxed: the
-/// functional residual capacity). In adults the residual volume is about half the functional
-/// residual capacity and the total lung capacity about twice it (ECSC reference values,
-/// Quanjer et al. 1993, Eur Respir J 6 Suppl 16: e.g. 30 y, 1.75 m man: RV 1.7 L, FRC 3.3 L,
-/// TLC 7.0 L), so a cavity leaving [0.5, 2] x rest has left physiology: the step is
-/// discarded (`fmi2Discard`) rather than continued with an unphysical state.
-pub const CAVITY_BOUNDS: (f64, f64) = (0.5, 2.0);
+pub use crate::dynamics::pleural::{CAPACITY_SLACK, CAVITY_BOUNDS, cavity_bounds};
 
-/// The cavity volumes checked against [`CAVITY_BOUNDS`], with their FMI names.
+/// The cavity volumes checked against [`cavity_bounds`], with their FMI names.
 const CHECKED_VOLUMES: [(Quantity, &str); 3] = [
     (Quantity::ThoraxVolume, "volume.thorax"),
     (Quantity::AbdomenVolume, "volume.abdomen"),
@@ -177,18 +170,18 @@ const CHECKED_VOLUMES: [(Quantity, &str); 3] = [
 ];
 
 /// Why the state of `torso` is unphysical: a non-finite state variable, or a cavity volume
-/// outside [`CAVITY_BOUNDS`] x `rest`; `None` when it is within bounds.
+/// outside its [`cavity_bounds`] x `rest`; `None` when it is within bounds.
 fn physiology_violation(torso: &mut Torso, rest: &[f64; 3]) -> Result<Option<String>> {
+    let bounds = cavity_bounds(&torso.config().subject);
     if let Some(i) = torso.state().iter().position(|v| !v.is_finite()) {
         return Ok(Some(format!("state variable {i} is not finite")));
     }
-    for ((q, name), r) in CHECKED_VOLUMES.into_iter().zip(rest) {
+    for (((q, name), r), (lo, hi)) in CHECKED_VOLUMES.into_iter().zip(rest).zip(bounds) {
         let v = torso.read(q)?;
         let ratio = v / r;
-        if !(ratio.is_finite() && (CAVITY_BOUNDS.0..=CAVITY_BOUNDS.1).contains(&ratio)) {
+        if !(ratio.is_finite() && (lo..=hi).contains(&ratio)) {
             return Ok(Some(format!(
-                "{name} = {v:.4} L is {ratio:.3} x its rest value {r:.4} L, outside the physiological bounds [{}, {}] x rest (residual volume to total lung capacity)",
-                CAVITY_BOUNDS.0, CAVITY_BOUNDS.1
+                "{name} = {v:.4} L is {ratio:.3} x its rest value {r:.4} L, outside the physiological bounds [{lo:.3}, {hi:.3}] x rest (the subject's residual volume to total lung capacity, with room)"
             )));
         }
     }
@@ -220,7 +213,7 @@ pub struct Instance {
     last_step_status: fmi2Status,
     strings: Vec<CString>,
     /// Thorax, abdomen and trunk volumes [L] of the rest state of the built model, with the
-    /// model's fingerprint (the reference of [`CAVITY_BOUNDS`]).
+    /// model's fingerprint (the reference of [`cavity_bounds`]).
     rest_volumes: Option<(u64, [f64; 3])>,
     /// Whether the explicit solver's stiffness flag has been logged.
     stiffness_logged: bool,
