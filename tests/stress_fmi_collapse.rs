@@ -336,3 +336,58 @@ fn a_full_expiration_to_a_low_residual_volume_is_not_discarded() {
     assert!(lo >= (1.0 - RV_MARGIN) * rv, "lung {lo} L, RV {rv} L");
     assert!(log.borrow().is_empty(), "{:?}", log.borrow());
 }
+
+/// Held maximal expiratory effort of the short young woman, 2 s at level of detail 0: the
+/// transversus abdominis drags its first via vertex onto its origin 1 cm away. As a string
+/// through points this stalled the solver (over 550,000 RHS evaluations for 0.1 s, steps of
+/// about 1.4 us); the band's core (`dynamics::PATH_CORE`) keeps the pull smooth there. Counts,
+/// not times: the bound is an RHS budget.
+#[test]
+fn held_maximal_expiration_does_not_stall_the_solver() {
+    use breathing_torso::anatomy::MuscleGroup;
+    use breathing_torso::model::{Drive, Scene};
+    use breathing_torso::{Config, Quantity, Torso};
+    let mut drive = Drive::quiet();
+    drive.ribs.amplitude = 0.0;
+    drive.diaphragm.amplitude = 0.0;
+    let mut torso = Torso::new(Config {
+        subject: young_short_woman(),
+        drive,
+        scene: Scene {
+            level_of_detail: 0,
+            ..Scene::default()
+        },
+        ..Config::default()
+    })
+    .expect("the subject builds");
+    let rest = torso.read(Quantity::LungVolume).unwrap();
+    for g in [
+        MuscleGroup::InternalIntercostals,
+        MuscleGroup::TransversusAbdominis,
+        MuscleGroup::RectusAbdominis,
+        MuscleGroup::ExternalObliques,
+        MuscleGroup::InternalObliques,
+    ] {
+        torso.set_activation(g, 1.0).unwrap();
+    }
+    for k in 1..=100 {
+        torso
+            .advance_to(0.02 * k as f64)
+            .expect("the effort integrates");
+    }
+    let lung = torso.read(Quantity::LungVolume).unwrap();
+    let stats = torso.solver_stats();
+    println!(
+        "2 s of maximal expiratory effort: lung {:.3} x rest, {} RHS evaluations, {} steps (+{} rejected)",
+        lung / rest,
+        stats.rhs_evaluations,
+        stats.steps,
+        stats.rejected
+    );
+    assert!(lung < 0.5 * rest, "the effort holds the lungs near RV");
+    assert!(
+        stats.rhs_evaluations < 50_000,
+        "{} RHS evaluations",
+        stats.rhs_evaluations
+    );
+}

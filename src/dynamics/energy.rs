@@ -5,7 +5,7 @@
 //! ([`super::pleural::PleuralLaw::energy`], E_L (V - V0)^2 / 2 near rest); gravity; and the
 //! potential of the constant preloads.
 
-use super::model::{Model, PASSIVE, RIBS, volume};
+use super::model::{Model, PASSIVE, RIBS, path_length, volume};
 use super::state::Layout;
 use super::{Data, kinematics};
 use nalgebra::Vector3;
@@ -31,11 +31,7 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     // Elastic.
     let el = &model.elements;
     for i in 0..el.len() {
-        let len: f64 = el
-            .path_of(i)
-            .windows(2)
-            .map(|w| (data.pos[w[1] as usize] - data.pos[w[0] as usize]).norm())
-            .sum();
+        let len = path_length(&data.pos, el.path_of(i));
         let stretch = len - el.rest_length[i];
         if el.group[i] == PASSIVE || stretch > 0.0 {
             e += 0.5 * el.stiffness[i] * stretch * stretch;

@@ -9,7 +9,7 @@
 //!   with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx.
 //! - Pleural pressure: P_pl = -E_L (V_th - V_th0) on the thoracic surface (lung recoil).
 
-use super::model::{Model, PASSIVE, VIA};
+use super::model::{Model, PASSIVE, VIA, via_segment_length};
 use super::{Activations, Data};
 use nalgebra::{Point3, Vector3};
 
@@ -46,9 +46,11 @@ fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
 }
 
 /// Muscle and membrane elements. An element along a path p_0 .. p_m has length
-/// L = sum |p_{k+1} - p_k| and rate L' = sum (v_{k+1} - v_k) . n_k; its tension f acts on each
-/// via point along the bisector n_k - n_{k-1}, on the origin along n_0 and on the insertion
-/// along -n_{m-1}.
+/// L = sum s_k, s_k = sqrt(|d_k|^2 + c^2) with d_k = p_{k+1} - p_k and c the band's core
+/// ([`super::model::PATH_CORE`]; c = 0 for two-point elements), and rate
+/// L' = sum (v_{k+1} - v_k) . n_k with n_k = d_k / s_k; its tension f acts on each via point
+/// along n_k - n_{k-1}, on the origin along n_0 and on the insertion along -n_{m-1}
+/// (f = -dE/dx of the element's energy).
 fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let el = &model.elements;
     let level = act.table();
@@ -89,11 +91,9 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
             let d = pos[b] - pos[a];
-            let l = d.norm();
+            let l = via_segment_length(&d);
             len += l;
-            if l > 1e-12 {
-                rate += (vel[b] - vel[a]).dot(&d) / l;
-            }
+            rate += (vel[b] - vel[a]).dot(&d) / l;
         }
         let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
         if muscle && f < 0.0 {
@@ -105,12 +105,9 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
             let d = pos[b] - pos[a];
-            let l = d.norm();
-            if l > 1e-12 {
-                let fv = d * (f / l);
-                force[a] += fv;
-                force[b] -= fv;
-            }
+            let fv = d * (f / via_segment_length(&d));
+            force[a] += fv;
+            force[b] -= fv;
         }
     }
 }

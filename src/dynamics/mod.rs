@@ -24,7 +24,10 @@ mod params;
 pub mod pleural;
 pub mod state;
 
-pub use model::{Carrier, Elements, Model, PASSIVE, RIBS, VIA, VectorSprings, volume};
+pub use model::{
+    Carrier, Elements, Model, PASSIVE, PATH_CORE, RIBS, VIA, VectorSprings, path_length,
+    via_segment_length, volume,
+};
 pub use params::{
     DIAPHRAGM_CONTRACTION_UPRIGHT, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
     diaphragm_contraction, diaphragm_length_ratio,
