@@ -25,4 +25,4 @@ pub(crate) use drive::check;
 pub use drive::{Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::{Checkpoint, Snapshot};
-pub use torso::{AdvanceStats, Sample, Torso};
+pub use torso::{AdvanceStats, Compiled, Sample, Torso};
