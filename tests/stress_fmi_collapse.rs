@@ -76,16 +76,29 @@ fn subject_35() -> Subject {
     }
 }
 
-/// Scene 35 of the soak, as printed in docs/bench/soak_250_seed2011_lod0.txt.
-fn scene_35(inst: &mut Instance) {
-    let s = subject_35();
+/// Sets the subject's parameters of `inst` (a standing subject).
+fn set_subject(inst: &mut Instance, s: &Subject) {
+    assert_eq!(s.posture, Posture::Standing);
+    let sex = match s.sex {
+        Sex::Male => 0.0,
+        Sex::Female => 1.0,
+    };
     for (name, value) in [
-        ("subject.sex", 1.0),
+        ("subject.sex", sex),
         ("subject.age", s.age),
         ("subject.stature", s.stature),
         ("subject.mass", s.mass),
         ("subject.breast_size", s.breast_size),
         ("posture", 0.0),
+    ] {
+        set(inst, name, value);
+    }
+}
+
+/// Scene 35 of the soak, as printed in docs/bench/soak_250_seed2011_lod0.txt.
+fn scene_35(inst: &mut Instance) {
+    set_subject(inst, &subject_35());
+    for (name, value) in [
         ("scene.level_of_detail", 0.0),
         ("drive.frequency", 1.1087322289538222),
         ("drive.ribs.amplitude", 0.9888127133082364),
@@ -297,12 +310,8 @@ fn a_full_expiration_to_a_low_residual_volume_is_not_discarded() {
     let bounds = cavity_bounds(&s);
     assert!(bounds[0].0 < rv_ratio && bounds[0].0 <= CAVITY_BOUNDS.0);
     let (mut inst, log) = instance();
+    set_subject(&mut inst, &s);
     for (name, value) in [
-        ("subject.sex", 1.0),
-        ("subject.age", s.age),
-        ("subject.stature", s.stature),
-        ("subject.mass", s.mass),
-        ("subject.breast_size", s.breast_size),
         ("scene.level_of_detail", 0.0),
         ("drive.ribs.amplitude", 0.0),
         ("drive.diaphragm.amplitude", 0.0),

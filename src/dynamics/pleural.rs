@@ -334,23 +334,33 @@ mod tests {
 
     #[test]
     fn capacity_ratios_bracket_rest_over_the_subject_ranges() {
-        use crate::anatomy::{SUBJECT_RANGES, Sex};
+        use crate::anatomy::SUBJECT_RANGES;
+        let ages = [SUBJECT_RANGES[0].1, SUBJECT_RANGES[0].2];
+        for s in subjects(&ages, &[SUBJECT_RANGES[1].1, SUBJECT_RANGES[1].2]) {
+            let (rv, tlc) = capacity_ratios(&s);
+            let raw = (s.rv_ecsc() / s.frc_ecsc(), s.tlc_ecsc() / s.frc_ecsc());
+            assert_eq!((rv, tlc), raw, "no clamp within the ranges: {s:?}");
+            assert!(rv > 0.38 && rv < 0.89 && tlc > 1.36 && tlc < 2.44, "{s:?}");
+        }
+    }
+
+    /// Both sexes at every pair of the given ages and statures, other fields default.
+    fn subjects(ages: &[f64], statures: &[f64]) -> Vec<Subject> {
+        use crate::anatomy::Sex;
+        let mut out = Vec::new();
         for sex in [Sex::Male, Sex::Female] {
-            for age in [SUBJECT_RANGES[0].1, SUBJECT_RANGES[0].2] {
-                for stature in [SUBJECT_RANGES[1].1, SUBJECT_RANGES[1].2] {
-                    let s = Subject {
+            for &age in ages {
+                for &stature in statures {
+                    out.push(Subject {
                         sex,
                         age,
                         stature,
                         ..Subject::default()
-                    };
-                    let (rv, tlc) = capacity_ratios(&s);
-                    let raw = (s.rv_ecsc() / s.frc_ecsc(), s.tlc_ecsc() / s.frc_ecsc());
-                    assert_eq!((rv, tlc), raw, "no clamp within the ranges: {s:?}");
-                    assert!(rv > 0.38 && rv < 0.89 && tlc > 1.36 && tlc < 2.44, "{s:?}");
+                    });
                 }
             }
         }
+        out
     }
 
     /// Over the corners of the subject ranges the thorax's bounds hold the subject's RV and TLC
@@ -361,26 +371,18 @@ mod tests {
     fn cavity_bounds_hold_the_subjects_capacities() {
         use crate::anatomy::{SUBJECT_RANGES, Sex};
         let mut widened = 0;
-        for sex in [Sex::Male, Sex::Female] {
-            for age in [SUBJECT_RANGES[0].1, 30.0, SUBJECT_RANGES[0].2] {
-                for stature in [SUBJECT_RANGES[1].1, 1.6, 1.75, SUBJECT_RANGES[1].2] {
-                    let s = Subject {
-                        sex,
-                        age,
-                        stature,
-                        ..Subject::default()
-                    };
-                    let (rv, tlc) = capacity_ratios(&s);
-                    let [thorax, abdomen, trunk] = cavity_bounds(&s);
-                    assert!(thorax.0 <= (1.0 - CAPACITY_SLACK) * rv + 1e-12, "{s:?}");
-                    assert!(thorax.1 >= (1.0 + CAPACITY_SLACK) * tlc - 1e-12, "{s:?}");
-                    assert!(thorax.0 <= CAVITY_BOUNDS.0 && thorax.1 >= CAVITY_BOUNDS.1);
-                    assert!(thorax.0 > 0.3 && thorax.1 < 2.7, "{s:?}: {thorax:?}");
-                    assert_eq!((abdomen, trunk), (CAVITY_BOUNDS, CAVITY_BOUNDS));
-                    if thorax != CAVITY_BOUNDS {
-                        widened += 1;
-                    }
-                }
+        let ages = [SUBJECT_RANGES[0].1, 30.0, SUBJECT_RANGES[0].2];
+        let statures = [SUBJECT_RANGES[1].1, 1.6, 1.75, SUBJECT_RANGES[1].2];
+        for s in subjects(&ages, &statures) {
+            let (rv, tlc) = capacity_ratios(&s);
+            let [thorax, abdomen, trunk] = cavity_bounds(&s);
+            assert!(thorax.0 <= (1.0 - CAPACITY_SLACK) * rv + 1e-12, "{s:?}");
+            assert!(thorax.1 >= (1.0 + CAPACITY_SLACK) * tlc - 1e-12, "{s:?}");
+            assert!(thorax.0 <= CAVITY_BOUNDS.0 && thorax.1 >= CAVITY_BOUNDS.1);
+            assert!(thorax.0 > 0.3 && thorax.1 < 2.7, "{s:?}: {thorax:?}");
+            assert_eq!((abdomen, trunk), (CAVITY_BOUNDS, CAVITY_BOUNDS));
+            if thorax != CAVITY_BOUNDS {
+                widened += 1;
             }
         }
         assert!(widened > 0);
