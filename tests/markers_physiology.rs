@@ -126,7 +126,7 @@ fn quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
 }
 
 #[test]
-#[ignore = "physics calibration: markers near the umbilicus move 2.9-3.3 mm, 2.9-3.2 mm of it cranially and -0.1 to +0.7 mm ventrally (all from the abdominal-wall patches): the ventral wall does not bulge, the rising costal margin drags it cranially; see examples/rib_kinematics.rs"]
+#[ignore = "physics calibration: markers near the umbilicus move 2.9-3.3 mm, 2.9-3.2 mm of it cranially and -0.1 to +0.7 mm ventrally (all from the abdominal-wall patches): the ventral wall does not bulge; the wall's 0.40 L comes from its upper part moving out with the lower ribs and from the whole wall sliding 1-5 mm cranially with the costal margin, and a 4x softer membrane removes the pressure swing and turns the umbilicus inward; see examples/rib_kinematics.rs and examples/wall_motion.rs"]
 fn quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
     let b = quiet();
     let group = near_umbilicus(b);
