@@ -22,8 +22,9 @@ pub enum FmuCommand {
         /// Where to write the FMU.
         #[arg(long, default_value = "fmu/BreathingTorso.fmu")]
         out: PathBuf,
-        /// The cdylib to package (default: the one beside this executable, as written by
-        /// `cargo build --release`).
+        /// The cdylib to package (default: the newer of the one beside this executable,
+        /// written by `cargo build --release`, and the one in its deps/ folder, refreshed by
+        /// `cargo run` and `cargo test`).
         #[arg(long)]
         lib: Option<PathBuf>,
         /// A folder copied into the FMU's resources/.

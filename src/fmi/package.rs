@@ -38,14 +38,35 @@ pub fn cargo_library_name() -> String {
     }
 }
 
-/// The cdylib next to the running executable (`target/release/torso` sits beside
-/// `target/release/libbreathing_torso.so`).
+/// The cdylib built with the running executable: the newer of the one beside it
+/// (`target/release/libbreathing_torso.so`, which `cargo build` writes) and the one in its
+/// `deps/` folder (which `cargo run` and `cargo test` refresh without copying it up); see
+/// [`newest_library`].
 pub fn default_library() -> Result<PathBuf> {
     let exe = std::env::current_exe().map_err(|e| Error::io("current executable", e))?;
     let dir = exe
         .parent()
         .ok_or_else(|| Error::State("the executable has no folder".into()))?;
-    Ok(dir.join(cargo_library_name()))
+    Ok(newest_library(dir))
+}
+
+/// The newer (by modification time) of `dir/<library>` and `dir/deps/<library>`, the first
+/// when neither exists (so that an error names where it was looked for).
+///
+/// Building only the executable (`cargo run --release -- demo`, `cargo test`) compiles the
+/// library as both rlib and cdylib but leaves the cdylib in `deps/`; a
+/// `libbreathing_torso.so` beside the executable may then be older than the code the
+/// executable runs, and an FMU packaged from it would disagree with the command-line tool.
+pub fn newest_library(dir: &Path) -> PathBuf {
+    let name = cargo_library_name();
+    let beside = dir.join(&name);
+    let deps = dir.join("deps").join(&name);
+    let modified = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
+    match (modified(&beside), modified(&deps)) {
+        (Some(a), Some(b)) if b > a => deps,
+        (None, Some(_)) => deps,
+        _ => beside,
+    }
 }
 
 /// What [`build_fmu`] wrote.
@@ -159,4 +180,34 @@ fn collect_files(root: &Path, dir: &Path, out: &mut Vec<(String, PathBuf)>) -> R
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::{Duration, SystemTime};
+
+    fn touch(path: &Path, at: SystemTime) {
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        let f = fs::File::create(path).unwrap();
+        f.set_modified(at).unwrap();
+    }
+
+    #[test]
+    fn the_newer_of_the_two_cargo_libraries_is_packaged() {
+        let dir = std::env::temp_dir().join(format!("bt_newest_library_{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let name = cargo_library_name();
+        let (beside, deps) = (dir.join(&name), dir.join("deps").join(&name));
+        // neither: the error will name the one beside the executable
+        assert_eq!(newest_library(&dir), beside);
+        let t0 = SystemTime::UNIX_EPOCH + Duration::from_secs(1_800_000_000);
+        touch(&deps, t0);
+        assert_eq!(newest_library(&dir), deps, "only in deps/");
+        touch(&beside, t0 + Duration::from_secs(60));
+        assert_eq!(newest_library(&dir), beside, "beside is newer");
+        touch(&deps, t0 + Duration::from_secs(120));
+        assert_eq!(newest_library(&dir), deps, "deps/ is newer");
+        fs::remove_dir_all(&dir).unwrap();
+    }
 }
