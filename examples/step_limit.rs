@@ -12,8 +12,15 @@ use breathing_torso::{Config, Quantity, Torso};
 use std::sync::Arc;
 
 /// One run: `tendon` scales the central tendon's stiffness, `dome` and `wall` the masses of
-/// the dome's and the wall's free vertices.
-fn run(lod: u32, tendon: f64, dome: f64, wall: f64) -> Result<(), Box<dyn std::error::Error>> {
+/// the dome's and the wall's free vertices, `bones` the masses (and so the inertias) of the
+/// ribs and the sternum.
+fn run(
+    lod: u32,
+    tendon: f64,
+    dome: f64,
+    wall: f64,
+    bones: f64,
+) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config {
         drive: Drive::quiet(),
         scene: Scene {
@@ -29,6 +36,12 @@ fn run(lod: u32, tendon: f64, dome: f64, wall: f64) -> Result<(), Box<dyn std::e
             _ => wall,
         };
     }
+    for rib in &mut anatomy.ribs {
+        for (_, m) in &mut rib.mass_points {
+            *m *= bones;
+        }
+    }
+    anatomy.sternum.mass *= bones;
     let mut params = Params::for_posture(config.subject.posture);
     params.tendon_stiffness *= tendon;
     let model = Model::compile(&anatomy, params);
@@ -48,7 +61,7 @@ fn run(lod: u32, tendon: f64, dome: f64, wall: f64) -> Result<(), Box<dyn std::e
     }
     let s = torso.solver_stats();
     println!(
-        "LOD {lod}, tendon x{tendon}, dome mass x{dome}, wall mass x{wall}: {} RHS evaluations, {} steps (+{} rejected), lung volume range {:.3} L",
+        "LOD {lod}, tendon x{tendon}, dome mass x{dome}, wall mass x{wall}, rib and sternum mass x{bones}: {} RHS evaluations, {} steps (+{} rejected), lung volume range {:.3} L",
         s.rhs_evaluations,
         s.steps,
         s.rejected,
@@ -63,14 +76,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|s| s.parse())
         .transpose()?
         .unwrap_or(1);
-    for (tendon, dome, wall) in [
-        (1.0, 1.0, 1.0),
-        (0.25, 1.0, 1.0),
-        (0.0625, 1.0, 1.0),
-        (1.0, 4.0, 1.0),
-        (1.0, 4.0, 4.0),
+    for (tendon, dome, wall, bones) in [
+        (1.0, 1.0, 1.0, 1.0),
+        (0.25, 1.0, 1.0, 1.0),
+        (0.0625, 1.0, 1.0, 1.0),
+        (1.0, 4.0, 1.0, 1.0),
+        (1.0, 4.0, 4.0, 1.0),
+        (1.0, 1.0, 1.0, 4.0),
+        (1.0, 4.0, 1.0, 4.0),
     ] {
-        run(lod, tendon, dome, wall)?;
+        run(lod, tendon, dome, wall, bones)?;
     }
     Ok(())
 }

@@ -147,3 +147,59 @@ fn left_and_right_mirror_each_other() {
         assert!((r.inertia_about_axis() - l.inertia_about_axis()).abs() < 1e-12);
     }
 }
+
+/// The clavicles (fixed skinning handles) are anatomical: 13-18 cm long for adults of the
+/// default build and the range's extremes (adult clavicle about 15 cm in men, 13.5 cm in
+/// women), mirrored, running laterally and dorsally, nearly level (within 2 cm), from beside
+/// the jugular notch to the acromion, within the biacromial breadth.
+#[test]
+fn clavicles_run_from_the_jugular_notch_to_the_acromia() {
+    use breathing_torso::anatomy::Sex;
+    use breathing_torso::anatomy::skin::{TorsoDimensions, clavicles};
+    let subjects = [
+        Subject::default(),
+        Subject {
+            sex: Sex::Female,
+            stature: 1.55,
+            mass: 50.0,
+            ..Subject::default()
+        },
+        Subject {
+            stature: 1.95,
+            mass: 100.0,
+            ..Subject::default()
+        },
+    ];
+    for subject in subjects {
+        let anatomy = Anatomy::build(&subject, 0).unwrap();
+        let dims = TorsoDimensions::from_subject(&subject).unwrap();
+        let j = anatomy.sternum.jugular;
+        let c = clavicles(&anatomy);
+        assert_eq!(c.len(), 2);
+        let length = |p: &[nalgebra::Point3<f64>]| -> f64 {
+            p.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+        };
+        for (i, (name, points)) in c.iter().enumerate() {
+            let side = if i == 0 { 1.0 } else { -1.0 };
+            let (medial, lateral) = (points[0], *points.last().unwrap());
+            let l = length(points);
+            println!("{subject:?} {name}: {:.1} cm", l * 100.0);
+            assert!((0.13..=0.18).contains(&l), "{name} is {l:.3} m long");
+            assert!(medial.z * side > 0.0 && lateral.z * side > medial.z * side);
+            assert!(
+                (medial - j).norm() < 0.04,
+                "{name} starts {medial:?}, notch {j:?}"
+            );
+            assert!(
+                (lateral.y - medial.y).abs() < 0.02 && lateral.x < medial.x,
+                "{name}: {medial:?} -> {lateral:?}"
+            );
+            assert!(lateral.z.abs() <= 0.5 * dims.biacromial_breadth);
+            let (m, n) = (&c[0].1, &c[1].1);
+            for (p, q) in m.iter().zip(n) {
+                assert!((p.x - q.x).abs() < 1e-12 && (p.y - q.y).abs() < 1e-12);
+                assert!((p.z + q.z).abs() < 1e-12);
+            }
+        }
+    }
+}

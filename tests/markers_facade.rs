@@ -70,7 +70,9 @@ fn direct_poses(torso: &Torso) -> Vec<HandlePose> {
                     rot,
                 ))
             }
-            HandleSource::Spine => HandlePose::Rigid(Isometry3::identity()),
+            HandleSource::Spine | HandleSource::Clavicle => {
+                HandlePose::Rigid(Isometry3::identity())
+            }
             HandleSource::WallVertex(j) => {
                 let k = l.vertex_x + 3 * j as usize;
                 let rest = model.rest[model.vertex_anchor[j as usize] as usize];

@@ -42,12 +42,24 @@ pub enum HandleSource {
     Sternum,
     /// The thoracic and lumbar spine (fixed).
     Spine,
+    /// A clavicle (fixed: the shoulder girdle does not take part in breathing here). The skin
+    /// along the clavicle line is tethered to the clavicles, not to the first ribs below.
+    Clavicle,
     /// A free vertex of the abdominal wall, by index among the free vertices.
     WallVertex(u32),
 }
 
 /// The skinning handles of an anatomy and what moves each: 24 ribs, the sternum, the spine
-/// (rigid), then the free lateral and ventral abdominal-wall vertices (translation).
+/// (rigid), the two clavicles (rigid, fixed), then the free lateral and ventral
+/// abdominal-wall vertices (translation).
+///
+/// Without the clavicles the skin of the clavicle line took the nearest bones' motion, the
+/// first and second ribs', which the scalenes turn most (8.6 deg in quiet breathing): the top
+/// marker row moved 8-13 mm. The clavicles belong to the shoulder girdle, which the model
+/// does not move (no arms, no scapulae); in quiet breathing it stays nearly still, only the
+/// clavicles' medial ends following the manubrium a little. Held fixed, they keep the skin of
+/// the clavicle line still as well (`cargo run --release --example rib_kinematics` prints the
+/// upper rows' motion by handle).
 pub fn anatomy_handles(anatomy: &Anatomy) -> (Vec<Handle>, Vec<HandleSource>) {
     let mut handles = Vec::new();
     let mut sources = Vec::new();
@@ -63,6 +75,14 @@ pub fn anatomy_handles(anatomy: &Anatomy) -> (Vec<Handle>, Vec<HandleSource>) {
             points,
         });
         sources.push(source);
+    }
+    for (name, points) in crate::anatomy::skin::clavicles(anatomy) {
+        handles.push(Handle {
+            kind: HandleKind::Rigid,
+            name,
+            points,
+        });
+        sources.push(HandleSource::Clavicle);
     }
     let ab = &anatomy.abdomen;
     for v in ab.with_role(VertexRole::Wall) {
@@ -136,7 +156,9 @@ impl PoseRig {
                 let h = self.rib_head[r].coords;
                 HandlePose::Rigid(Isometry3::from_parts(Translation3::from(h - rot * h), rot))
             }
-            HandleSource::Rib(_) | HandleSource::Spine => HandlePose::Rigid(Isometry3::identity()),
+            HandleSource::Rib(_) | HandleSource::Spine | HandleSource::Clavicle => {
+                HandlePose::Rigid(Isometry3::identity())
+            }
             HandleSource::Sternum => HandlePose::Rigid(sternum),
             HandleSource::WallVertex(j) => {
                 let k = l.vertex_x + 3 * j as usize;

@@ -1,7 +1,7 @@
 //! Skin deformation by bone heat (Baran & Popovic 2007, "Automatic rigging and animation of
 //! 3D characters"; thesis 3.3) and linear blend skinning (thesis 3.3, [34]).
 //!
-//! Handles are rigid bones (ribs, sternum, the fixed spine) and translation handles (the
+//! Handles are rigid bones (ribs, sternum, the fixed spine and clavicles) and translation handles (the
 //! abdominal wall's vertices). Translation handles are grouped into patches of neighbouring
 //! vertices, each patch one influence moving with the mean displacement of its members. For
 //! each influence j the weights solve the heat equilibrium on the skin (Baran & Popovic,
@@ -33,7 +33,7 @@ use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 /// The kind of a skinning handle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HandleKind {
-    /// A bone: rib, sternum, spine (fixed); moves by an isometry.
+    /// A bone: rib, sternum, spine or clavicle (the last two fixed); moves by an isometry.
     Rigid,
     /// An abdominal-wall vertex; moves by a displacement.
     Translation,

@@ -21,8 +21,8 @@ pub use markers::{MAX_GRID_SIZE, Marker, MarkerGrid, SurfaceBinding};
 pub use profile::{Pchip, Section};
 pub use reference::{
     BONE_CLEARANCE, REFERENCE_STATURE, SPINE_CENTRES_MM, WALL_CLEARANCE, anatomy_clearance,
-    bone_polylines, dense_bone_points, densify, is_trunk_vertebra, spinous_tips, trunk_spine,
-    wall_points,
+    bone_polylines, clavicles, dense_bone_points, densify, is_trunk_vertebra, spinous_tips,
+    trunk_spine, wall_points,
 };
 pub use register::{FitOptions, Registration, RigidTransform, SkinFitReport, register_rigid};
 pub use smooth::{taubin_smooth, vertex_neighbours};

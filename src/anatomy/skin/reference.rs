@@ -80,6 +80,40 @@ pub fn bone_polylines(anatomy: &Anatomy) -> Vec<(String, Vec<Point3<f64>>)> {
     out
 }
 
+/// The clavicles as polylines from the sternoclavicular joint to the acromioclavicular
+/// joint, right then left. The medial end sits beside the jugular notch; the lateral end 3 cm
+/// inside half the biacromial breadth (measured over the acromia's lateral edges), at the
+/// acromion's height above the suprasternale (the joint lies about 5 mm below the skin
+/// over the acromion, as the medial end lies 5 mm above the notch: nearly level standing)
+/// and set back 4 cm dorsally (the clavicle runs about 15 deg backwards from the coronal
+/// plane); the medial part bows ventrally. The default man's clavicles are 16.5 cm long
+/// (adults: about 15 cm in men, 13.5 cm in women).
+pub fn clavicles(anatomy: &Anatomy) -> Vec<(String, Vec<Point3<f64>>)> {
+    let s = anatomy.subject.stature / REFERENCE_STATURE;
+    let j = anatomy.sternum.jugular;
+    let dims = super::anthropometry::TorsoDimensions::from_subject(&anatomy.subject);
+    let (half, rise) = match dims {
+        Ok(d) => (
+            0.5 * d.biacromial_breadth - 0.03 * s,
+            d.acromial_height - d.suprasternale_height,
+        ),
+        Err(_) => (0.175 * s, 0.0),
+    };
+    [("right", 1.0), ("left", -1.0)]
+        .into_iter()
+        .map(|(side, z)| {
+            let medial = Point3::new(j.x - 0.005 * s, j.y + 0.005 * s, z * 0.025 * s);
+            let lateral = Point3::new(j.x - 0.04 * s, j.y + rise - 0.005 * s, z * half);
+            let bow = Point3::new(
+                j.x + 0.005 * s,
+                j.y + 0.4 * rise,
+                z * (0.025 * s + 0.6 * (half - 0.025 * s)),
+            );
+            (format!("clavicle_{side}"), vec![medial, bow, lateral])
+        })
+        .collect()
+}
+
 /// Joint centres of the thoracic and lumbar vertebrae, caudal to cranial.
 pub fn trunk_spine(anatomy: &Anatomy) -> Vec<Point3<f64>> {
     anatomy
