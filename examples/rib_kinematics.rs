@@ -7,10 +7,11 @@
 //!
 //! `cargo run --release --example rib_kinematics [forced] [cartilage=<stiffness factor>]`
 
-use breathing_torso::model::Drive;
+mod common;
+
+use breathing_torso::Quantity;
 use breathing_torso::observe::markers::HandleSource;
 use breathing_torso::observe::skinning::HandlePose;
-use breathing_torso::{Config, Quantity, Torso};
 use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
 
 fn vcl(d: Vector3<f64>) -> String {
@@ -18,26 +19,11 @@ fn vcl(d: Vector3<f64>) -> String {
 }
 
 fn main() {
-    let forced = std::env::args().any(|a| a == "forced");
-    let drive = if forced {
-        Drive::forced()
-    } else {
-        Drive::quiet()
-    };
+    let drive = common::drive_from_args();
     // `cartilage=<factor>` scales the cartilage ball joints' stiffness (a crude stand-in for
     // compliant costal cartilage).
-    let cartilage: f64 = std::env::args()
-        .find_map(|a| a.strip_prefix("cartilage=").and_then(|f| f.parse().ok()))
-        .unwrap_or(1.0);
-    let mut params =
-        breathing_torso::dynamics::Params::for_posture(Config::default().subject.posture);
-    params.cartilage_stiffness *= cartilage;
-    let config = Config {
-        drive,
-        params: Some(params),
-        ..Config::default()
-    };
-    let mut torso = Torso::new(config).unwrap();
+    let cartilage = common::factor_from_args("cartilage");
+    let mut torso = common::torso_with(drive, |p| p.cartilage_stiffness *= cartilage);
     let compiled = torso.compiled().clone();
     let anatomy = &compiled.anatomy;
     println!("right ribs: inclination below horizontal (sagittal), unit-rotation motion [mm/deg]");
@@ -97,28 +83,9 @@ fn main() {
         }
         println!();
     }
-    let period = 1.0 / drive.frequency;
-    let rate = 56.0;
-    let n = (2.0 * period * rate).round() as usize;
-    let mut lo = (f64::INFINITY, Vec::new(), 0.0);
-    let mut hi = (f64::NEG_INFINITY, Vec::new(), 0.0);
-    for i in 1..=n {
-        let t = i as f64 / rate;
-        torso.advance_to(t).unwrap();
-        if t < period - 1e-9 {
-            continue;
-        }
-        let v = torso.read(Quantity::LungVolume).unwrap();
-        let rc = torso.read(Quantity::RibCageDisplaced).unwrap();
-        if v < lo.0 {
-            lo = (v, torso.state().to_vec(), rc);
-        }
-        if v > hi.0 {
-            hi = (v, torso.state().to_vec(), rc);
-        }
-    }
-    println!("tidal volume {:.3} L", hi.0 - lo.0);
-    let (ylo, yhi) = (&lo.1, &hi.1);
+    let (lo, hi) = common::second_breath(&mut torso, &[Quantity::RibCageDisplaced]);
+    println!("tidal volume {:.3} L", hi.lung - lo.lung);
+    let (ylo, yhi) = (&lo.state, &hi.state);
     let layout = breathing_torso::dynamics::Layout::new(&compiled.model);
     print!("rib rotation [deg], right 1-12:");
     for r in 0..12 {
@@ -132,7 +99,7 @@ fn main() {
         .map(|r| (yhi[layout.theta + r] - ylo[layout.theta + r]).to_degrees())
         .sum::<f64>()
         / 9.0;
-    let rib_cage = hi.2 - lo.2;
+    let rib_cage = hi.reads[0] - lo.reads[0];
     println!(
         "rib cage displaces {:.3} L end-expiration to end-inspiration; ribs 2-10 turn {:.2} deg on average: {:.0} mL per degree",
         rib_cage,

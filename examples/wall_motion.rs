@@ -7,10 +7,11 @@
 //!
 //! `cargo run --release --example wall_motion [forced] [membrane=<stiffness factor>]`
 
+mod common;
+
+use breathing_torso::Quantity;
 use breathing_torso::anatomy::VertexRole;
-use breathing_torso::dynamics::{Layout, Params};
-use breathing_torso::model::Drive;
-use breathing_torso::{Config, Quantity, Torso};
+use breathing_torso::dynamics::Layout;
 use std::collections::{BTreeMap, HashMap};
 
 /// Azimuth sector of a wall vertex (0 ventral .. 3 dorsolateral), 9 for the dome.
@@ -27,60 +28,30 @@ fn sector(role: Option<VertexRole>, dx: f64, z: f64) -> u8 {
 }
 
 fn main() {
-    let forced = std::env::args().any(|a| a == "forced");
-    let drive = if forced {
-        Drive::forced()
-    } else {
-        Drive::quiet()
-    };
-    let membrane: f64 = std::env::args()
-        .find_map(|a| a.strip_prefix("membrane=").and_then(|f| f.parse().ok()))
-        .unwrap_or(1.0);
-    let mut params = Params::for_posture(Config::default().subject.posture);
-    params.membrane_stiffness *= membrane;
-    let config = Config {
-        drive,
-        params: Some(params.clone()),
-        ..Config::default()
-    };
-    let mut torso = Torso::new(config).unwrap();
+    let membrane = common::factor_from_args("membrane");
+    let mut torso = common::torso_with(common::drive_from_args(), |p| {
+        p.membrane_stiffness *= membrane
+    });
+    let params = torso.config().params.clone().unwrap();
     let compiled = torso.compiled().clone();
     let ab = &compiled.anatomy.abdomen;
     let role: HashMap<u32, VertexRole> = ab.anchor.iter().copied().zip(ab.roles.clone()).collect();
     let model = &compiled.model;
     let layout = Layout::new(model);
-    let period = 1.0 / drive.frequency;
-    let rate = 56.0;
-    let frames = (2.0 * period * rate).round() as usize;
-    let mut lo = (f64::INFINITY, Vec::new(), [0.0; 3]);
-    let mut hi = (f64::NEG_INFINITY, Vec::new(), [0.0; 3]);
-    for i in 1..=frames {
-        let t = i as f64 / rate;
-        torso.advance_to(t).unwrap();
-        if t < period - 1e-9 {
-            continue;
-        }
-        let v = torso.read(Quantity::LungVolume).unwrap();
-        let p = [
-            Quantity::AbdominalPressure,
-            Quantity::AbdomenDisplaced,
-            Quantity::RibCageDisplaced,
-        ]
-        .map(|q| torso.read(q).unwrap());
-        if v < lo.0 {
-            lo = (v, torso.state().to_vec(), p);
-        }
-        if v > hi.0 {
-            hi = (v, torso.state().to_vec(), p);
-        }
-    }
-    let (dp, dab, drc) = (hi.2[0] - lo.2[0], hi.2[1] - lo.2[1], hi.2[2] - lo.2[2]);
+    let reads = [
+        Quantity::AbdominalPressure,
+        Quantity::AbdomenDisplaced,
+        Quantity::RibCageDisplaced,
+    ];
+    let (lo, hi) = common::second_breath(&mut torso, &reads);
+    let d = |k: usize| hi.reads[k] - lo.reads[k];
+    let (dp, dab, drc) = (d(0), d(1), d(2));
     println!(
         "tidal volume {:.3} L; abdominal pressure {:.1} -> {:.1} Pa (above rest); displaced by \
          the rib cage {drc:.3} L, by the abdominal wall {dab:.3} L",
-        hi.0 - lo.0,
-        lo.2[0],
-        hi.2[0],
+        hi.lung - lo.lung,
+        lo.reads[0],
+        hi.reads[0],
     );
     println!(
         "abdominal wall: displaced volume / pressure rise {:.2e} m^3/Pa against its \
@@ -92,7 +63,7 @@ fn main() {
     for (j, &a) in model.vertex_anchor.iter().enumerate() {
         let p = model.rest[a as usize];
         let at = |s: &[f64], k: usize| s[layout.vertex_x + 3 * j + k];
-        let d = [0, 1, 2].map(|k| (at(&hi.1, k) - at(&lo.1, k)) * 1e3);
+        let d = [0, 1, 2].map(|k| (at(&hi.state, k) - at(&lo.state, k)) * 1e3);
         // lateral motion counted outward on both sides
         let outward = if p.z < 0.0 { -d[2] } else { d[2] };
         let key = (
