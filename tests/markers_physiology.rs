@@ -148,6 +148,26 @@ fn quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
     }
 }
 
+/// The top row lies on the clavicle line (thesis 3.2), whose skin is held by the clavicles;
+/// the shoulder girdle does not take part in quiet breathing, so that row moves less than
+/// the rows over the ribs below it: every top-row marker under 4 mm, and the row's mean under
+/// half the upper chest's.
+#[test]
+fn the_clavicle_line_moves_less_than_the_chest_below() {
+    let b = quiet();
+    let top: Vec<usize> = (0..COLS).collect();
+    let mean_top = report("quiet, clavicle line", b, &top);
+    let mean_chest = report("quiet, upper chest", b, &upper_chest());
+    for &i in &top {
+        let n = b.displacement[i].norm() * 1e3;
+        assert!(n < 4.0, "marker[{}] moves {n:.2} mm", i + 1);
+    }
+    assert!(
+        mean_top < 0.5 * mean_chest,
+        "clavicle line {mean_top:.2} mm against {mean_chest:.2} mm below"
+    );
+}
+
 #[test]
 fn forced_breathing_moves_markers_about_three_times_more() {
     let (q, f) = (quiet(), forced());
