@@ -1,7 +1,9 @@
 //! The bones the skin must enclose, taken from the subject's [`Anatomy`]: rib centrelines
 //! (bone and costal cartilage), the sternum (jugular notch, sternal angle, xiphisternal
 //! joint), the spinous processes of the thoracic and lumbar vertebrae, and the free
-//! abdominal wall. Also the reference spine profile the trunk sections are hung from.
+//! abdominal wall. Also the reference spine profile the trunk sections are hung from, and
+//! the clavicles, which the skin need not enclose but which hold the skin of the clavicle
+//! line as skinning handles.
 
 use super::Clearance;
 use crate::anatomy::{Anatomy, VertexRole};
