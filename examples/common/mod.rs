@@ -35,6 +35,7 @@ pub fn torso_with(drive: Drive, tune: impl FnOnce(&mut Params)) -> Torso {
 }
 
 /// One end of a breath: lung volume [L], state, and the extra quantities asked for.
+#[derive(Clone)]
 pub struct BreathEnd {
     pub lung: f64,
     pub state: Vec<f64>,
@@ -67,17 +68,11 @@ pub fn second_breath(torso: &mut Torso, reads: &[Quantity]) -> (BreathEnd, Breat
                 state: torso.state().to_vec(),
                 reads: reads.iter().map(|&q| torso.read(q).unwrap()).collect(),
             };
-            match (low, high) {
-                (true, true) => {
-                    hi = BreathEnd {
-                        lung: v,
-                        state: here.state.clone(),
-                        reads: here.reads.clone(),
-                    };
-                    lo = here;
-                }
-                (true, false) => lo = here,
-                _ => hi = here,
+            if low {
+                lo = here.clone();
+            }
+            if high {
+                hi = here;
             }
         }
     }
