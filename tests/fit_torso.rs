@@ -9,7 +9,7 @@
 use breathing_torso::anatomy::{Posture, Sex, Subject};
 use breathing_torso::fit::fitting::wrap_angle;
 use breathing_torso::fit::{FitOptions, SynthOptions, TorsoMarkers, fit_recording, synthesize};
-use breathing_torso::model::{Drive, Wave};
+use breathing_torso::model::Drive;
 use breathing_torso::{Config, Error, Quantity, Torso};
 
 fn config(subject: Subject) -> Config {
@@ -48,15 +48,9 @@ fn subject_b() -> Subject {
 }
 
 /// Quiet and forced drives of the thesis's ranges (Table 4.3), with the abdominal muscles
-/// off: the fit searches the rib-cage and diaphragm waves only.
+/// off: the fit searches the rib-cage and diaphragm waves only (the acceptance sweep's).
 fn drive(forced: bool) -> Drive {
-    let mut d = if forced {
-        Drive::forced()
-    } else {
-        Drive::quiet()
-    };
-    d.abdominals = Wave::default();
-    d
+    breathing_torso::fit::sweep::case_drive(forced)
 }
 
 /// Synthesises, fits, checks the acceptance bounds; returns the fit's wall time.

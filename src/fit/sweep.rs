@@ -82,16 +82,30 @@ pub fn default_cases() -> Vec<SweepCase> {
         .collect()
 }
 
-/// The drive of a case: the thesis-range quiet or forced drive with the abdominal muscles
-/// off (the fit searches the rib-cage and diaphragm waves only, thesis 4.3).
+/// The drive of a case, with the abdominal muscles off (the fit searches the rib-cage and
+/// diaphragm waves only, thesis 4.3): quiet is A_ribs 0.2, A_diaphragm 0.25 at 0.25 Hz, the
+/// diaphragm 0.1 rad ahead; forced is 0.5 / 0.5 at 0.2 Hz, the ribs 0.1 rad ahead. Both lie
+/// in the range the thesis's fits found (Table 4.3) and are fixed here, apart from the
+/// model's [`Drive::quiet`] and [`Drive::forced`] scenarios, so the acceptance cases do not
+/// move when the scenarios are recalibrated.
 pub fn case_drive(forced: bool) -> Drive {
-    let mut d = if forced {
-        Drive::forced()
+    let (frequency, ribs, diaphragm, phase) = if forced {
+        (0.2, 0.5, 0.5, -0.1)
     } else {
-        Drive::quiet()
+        (0.25, 0.2, 0.25, 0.1)
     };
-    d.abdominals = Wave::default();
-    d
+    Drive {
+        frequency,
+        ribs: Wave {
+            amplitude: ribs,
+            phase: 0.0,
+        },
+        diaphragm: Wave {
+            amplitude: diaphragm,
+            phase,
+        },
+        abdominals: Wave::default(),
+    }
 }
 
 /// Settings of a sweep.
