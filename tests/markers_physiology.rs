@@ -104,7 +104,6 @@ fn report(name: &str, b: &Breath, group: &[usize]) -> f64 {
 }
 
 #[test]
-#[ignore = "physics calibration: quiet upper-chest markers move 4.0-9.9 mm (mean 7.4), 2.2-3.0x more cranially than ventrally (range 1-6 mm): rigid ribs turning 3.7-8.6 deg about their rib-neck axes carry the skin 0.9-2.3 mm per degree, 12-29 mm per litre of rib-cage displacement, and the rib cage displaces 0.34 L; the fixed clavicles hold the clavicle line to 1.5-3.5 mm but not the rows below; see examples/rib_kinematics.rs"]
 fn quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
     let b = quiet();
     let group = upper_chest();
@@ -126,7 +125,6 @@ fn quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
 }
 
 #[test]
-#[ignore = "physics calibration: markers near the umbilicus move 2.9-3.3 mm, 2.9-3.2 mm of it cranially and -0.1 to +0.7 mm ventrally (all from the abdominal-wall patches): the ventral wall does not bulge; the wall's 0.40 L comes from its upper part moving out with the lower ribs and from the whole wall sliding 1-5 mm cranially with the costal margin, and a 4x softer membrane removes the pressure swing and turns the umbilicus inward; see examples/rib_kinematics.rs and examples/wall_motion.rs"]
 fn quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
     let b = quiet();
     let group = near_umbilicus(b);

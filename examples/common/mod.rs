@@ -24,12 +24,16 @@ pub fn factor_from_args(name: &str) -> f64 {
 
 /// The default subject upright with `drive`, its constants changed by `tune`.
 pub fn torso_with(drive: Drive, tune: impl FnOnce(&mut Params)) -> Torso {
-    let mut params = Params::for_posture(Config::default().subject.posture);
+    let mut config = Config::default();
+    if std::env::args().any(|a| a == "supine") {
+        config.subject.posture = breathing_torso::anatomy::Posture::Supine;
+    }
+    let mut params = Params::for_posture(config.subject.posture);
     tune(&mut params);
     let config = Config {
         drive,
         params: Some(params),
-        ..Config::default()
+        ..config
     };
     Torso::new(config).unwrap()
 }

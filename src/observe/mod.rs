@@ -6,8 +6,10 @@
 //!
 //! Volumes use the divergence theorem over closed, outward-oriented triangle surfaces:
 //! V = 1/6 sum_t a . (b x c). The trunk's surface is the rib-cage lining plus the abdominal
-//! surface without the dome; splitting that sum by wall region (taken about the thorax's rest
-//! centroid) gives the displaced compartments, which add up to the trunk's volume change.
+//! surface without the dome; splitting that sum (taken about the thorax's rest centroid) by
+//! the horizontal plane through the lowest point of the costal margin gives the displaced
+//! compartments of optoelectronic plethysmography, rib cage above and abdomen below, which
+//! add up to the trunk's volume change.
 //! V_thorax = V_trunk - V_abdomen and V_lung = ratio x V_thorax (thesis 4.2). The thorax and
 //! abdomen are corrected by the constant volume the faceted dome cuts off the smooth one
 //! (computed when the anatomy is built), so that the levels of detail agree.
@@ -65,16 +67,26 @@ pub struct Compartments {
 }
 
 impl Compartments {
-    /// Splits `model`'s trunk surface into the rib-cage wall and the abdominal wall.
+    /// Splits `model`'s trunk surface into the rib-cage wall and the abdominal wall as
+    /// optoelectronic plethysmography does (Aliverti et al. 2001; Cala et al. 1996): by the
+    /// horizontal plane through the lowest point of the costal margin. Above it lie the
+    /// pulmonary rib cage and the abdominal (diaphragm-apposed) rib cage, whose wall inside
+    /// the costal margin is the upper abdominal surface; below it, the abdomen. A surface
+    /// triangle belongs to the side of its rest centroid.
     pub fn new(model: &Model) -> Compartments {
-        let lining = model.thorax_triangles[..model.lining_count].to_vec();
-        let abdominal_wall: Vec<[u32; 3]> = model
-            .abdomen_triangles
-            .iter()
-            .zip(&model.abdomen_dome)
-            .filter(|(_, d)| !**d)
-            .map(|(t, _)| *t)
-            .collect();
+        let margin = costal_margin_height(model);
+        let above =
+            |t: &[u32; 3]| t.iter().map(|&i| model.rest[i as usize].y).sum::<f64>() / 3.0 >= margin;
+        let trunk_surface = model.thorax_triangles[..model.lining_count].iter().chain(
+            model
+                .abdomen_triangles
+                .iter()
+                .zip(&model.abdomen_dome)
+                .filter(|(_, d)| !**d)
+                .map(|(t, _)| t),
+        );
+        let (lining, abdominal_wall): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
+            trunk_surface.partition(|t| above(t));
         let dome: Vec<[u32; 3]> = model
             .abdomen_triangles
             .iter()
@@ -91,9 +103,10 @@ impl Compartments {
             })
             .sum::<f64>()
             .max(1e-9);
-        let n = (model.lining_count * 3) as f64;
+        let lining_tris = &model.thorax_triangles[..model.lining_count];
+        let n = (lining_tris.len() * 3) as f64;
         let origin = Point3::from(
-            lining
+            lining_tris
                 .iter()
                 .flatten()
                 .fold(Vector3::zeros(), |s, &i| s + model.rest[i as usize].coords)
@@ -109,6 +122,28 @@ impl Compartments {
             abdominal_wall,
             origin,
         }
+    }
+}
+
+/// Height [m] of the lowest point of the costal margin at rest: the lowest anchor carried by
+/// either tenth rib (the costal margin's lowest point lies on the tenth costal cartilage), or
+/// the lowest lining vertex if the model has no ribs.
+pub fn costal_margin_height(model: &Model) -> f64 {
+    let tenth = [9usize, 21];
+    let lowest = tenth
+        .iter()
+        .filter_map(|&r| model.rib_anchors.get(r))
+        .flatten()
+        .map(|&i| model.rest[i as usize].y)
+        .fold(f64::INFINITY, f64::min);
+    if lowest.is_finite() {
+        lowest
+    } else {
+        model.thorax_triangles[..model.lining_count]
+            .iter()
+            .flatten()
+            .map(|&i| model.rest[i as usize].y)
+            .fold(f64::INFINITY, f64::min)
     }
 }
 
