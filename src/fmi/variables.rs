@@ -801,7 +801,7 @@ fn build() -> Vec<Variable> {
             1004,
             Q::RibCageDisplaced,
             "L",
-            "Volume displaced by the rib-cage wall since the start",
+            "Volume displaced by the trunk wall above the lowest point of the costal margin (rib cage, as in optoelectronic plethysmography) since the start",
         )
         .0,
         out(
@@ -809,7 +809,7 @@ fn build() -> Vec<Variable> {
             1005,
             Q::AbdomenDisplaced,
             "L",
-            "Volume displaced by the abdominal wall since the start",
+            "Volume displaced by the trunk wall below the lowest point of the costal margin (abdomen, as in optoelectronic plethysmography) since the start",
         )
         .0,
         out(

@@ -15,9 +15,12 @@ pub enum Quantity {
     AbdomenVolume,
     /// Trunk cavity volume (rib-cage lining plus abdominal wall) [L].
     TrunkVolume,
-    /// Volume displaced by the rib-cage wall since the start [L].
+    /// Volume displaced by the trunk wall above the horizontal plane through the lowest point
+    /// of the costal margin (the rib cage of optoelectronic plethysmography) since the start
+    /// [L].
     RibCageDisplaced,
-    /// Volume displaced by the abdominal wall since the start [L].
+    /// Volume displaced by the trunk wall below that plane (the abdomen of optoelectronic
+    /// plethysmography) since the start [L].
     AbdomenDisplaced,
     /// Abdominal pressure above rest [Pa] (thesis eq. 2.5).
     AbdominalPressure,
