@@ -6,11 +6,12 @@
 //! fraction), from end-expiration to end-inspiration of the second breath. With `forced`, the
 //! forced scenario too and the forced / quiet ratios of the mean displacements.
 //!
-//! `cargo run --release --example marker_calibration [forced] [supine] [rg=F dg=F] [frg=F
-//! fdg=F] [membrane=F compliance=F joint=F support=F domemem=F betad=F]`: `rg`, `dg` scale the
-//! quiet rib and diaphragm amplitudes, `frg`, `fdg` the forced ones; the others scale the
-//! model's constants (membrane and dome-membrane stiffness, abdominal wall compliance,
-//! rib-joint stiffness, dome support, the diaphragm's largest contraction).
+//! `cargo run --release --example marker_calibration [forced] [supine] [female] [stature=M]
+//! [rg=F dg=F] [frg=F fdg=F] [membrane=F compliance=F joint=F support=F domemem=F betad=F]`:
+//! `female` is a 1.63 m, 60 kg woman with breast size 0.4, `stature` replaces the subject's;
+//! `rg`, `dg` scale the quiet rib and diaphragm amplitudes, `frg`, `fdg` the forced ones; the
+//! others scale the model's constants (membrane and dome-membrane stiffness, abdominal wall
+//! compliance, rib-joint stiffness, dome support, the diaphragm's largest contraction).
 
 // Shared helpers of the examples; not every one is used here.
 #[allow(dead_code)]

@@ -28,6 +28,15 @@ pub fn torso_with(drive: Drive, tune: impl FnOnce(&mut Params)) -> Torso {
     if std::env::args().any(|a| a == "supine") {
         config.subject.posture = breathing_torso::anatomy::Posture::Supine;
     }
+    if std::env::args().any(|a| a == "female") {
+        config.subject.sex = breathing_torso::anatomy::Sex::Female;
+        config.subject.stature = 1.63;
+        config.subject.mass = 60.0;
+        config.subject.breast_size = 0.4;
+    }
+    if let Some(s) = std::env::args().find_map(|a| a.strip_prefix("stature=")?.parse().ok()) {
+        config.subject.stature = s;
+    }
     let mut params = Params::for_posture(config.subject.posture);
     tune(&mut params);
     let config = Config {
