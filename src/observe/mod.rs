@@ -17,6 +17,7 @@
 pub mod markers;
 pub mod skinning;
 
+use crate::anatomy::{Side, rib_index};
 use crate::dynamics::{Model, volume};
 use nalgebra::{Point3, Vector3};
 
@@ -59,10 +60,10 @@ pub struct Compartments {
     dome: Vec<[u32; 3]>,
     dome_rest: f64,
     dome_area: f64,
-    lining: Vec<[u32; 3]>,
+    rib_cage_wall: Vec<[u32; 3]>,
     abdominal_wall: Vec<[u32; 3]>,
     origin: Point3<f64>,
-    lining_rest: f64,
+    rib_cage_rest: f64,
     wall_rest: f64,
 }
 
@@ -85,7 +86,7 @@ impl Compartments {
                 .filter(|(_, d)| !**d)
                 .map(|(t, _)| t),
         );
-        let (lining, abdominal_wall): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
+        let (rib_cage_wall, abdominal_wall): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
             trunk_surface.partition(|t| above(t));
         let dome: Vec<[u32; 3]> = model
             .abdomen_triangles
@@ -116,9 +117,9 @@ impl Compartments {
             dome_rest: partial_volume(&model.rest, &dome, &origin),
             dome,
             dome_area,
-            lining_rest: partial_volume(&model.rest, &lining, &origin),
+            rib_cage_rest: partial_volume(&model.rest, &rib_cage_wall, &origin),
             wall_rest: partial_volume(&model.rest, &abdominal_wall, &origin),
-            lining,
+            rib_cage_wall,
             abdominal_wall,
             origin,
         }
@@ -129,7 +130,7 @@ impl Compartments {
 /// either tenth rib (the costal margin's lowest point lies on the tenth costal cartilage), or
 /// the lowest lining vertex if the model has no ribs.
 pub fn costal_margin_height(model: &Model) -> f64 {
-    let tenth = [9usize, 21];
+    let tenth = [Side::Right, Side::Left].map(|side| rib_index(10, side));
     let lowest = tenth
         .iter()
         .filter_map(|&r| model.rib_anchors.get(r))
@@ -156,7 +157,7 @@ pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) 
     let abdomen = abdomen_mesh + model.dome_faceting_volume;
     let o = &compartments.origin;
     let rib_cage_displaced =
-        partial_volume(pos, &compartments.lining, o) - compartments.lining_rest;
+        partial_volume(pos, &compartments.rib_cage_wall, o) - compartments.rib_cage_rest;
     let abdomen_displaced =
         partial_volume(pos, &compartments.abdominal_wall, o) - compartments.wall_rest;
     let diaphragm_displacement = (partial_volume(pos, &compartments.dome, o)
