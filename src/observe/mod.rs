@@ -78,23 +78,17 @@ impl Compartments {
         let margin = costal_margin_height(model);
         let above =
             |t: &[u32; 3]| t.iter().map(|&i| model.rest[i as usize].y).sum::<f64>() / 3.0 >= margin;
-        let trunk_surface = model.thorax_triangles[..model.lining_count].iter().chain(
-            model
-                .abdomen_triangles
-                .iter()
-                .zip(&model.abdomen_dome)
-                .filter(|(_, d)| !**d)
-                .map(|(t, _)| t),
-        );
-        let (rib_cage_wall, abdominal_wall): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
-            trunk_surface.partition(|t| above(t));
-        let dome: Vec<[u32; 3]> = model
+        let lining = &model.thorax_triangles[..model.lining_count];
+        let (dome, abdominal_surface): (Vec<_>, Vec<_>) = model
             .abdomen_triangles
             .iter()
             .zip(&model.abdomen_dome)
-            .filter(|(_, d)| **d)
-            .map(|(t, _)| *t)
-            .collect();
+            .partition(|(_, d)| **d);
+        let dome: Vec<[u32; 3]> = dome.into_iter().map(|(t, _)| *t).collect();
+        let (rib_cage_wall, abdominal_wall): (Vec<[u32; 3]>, Vec<[u32; 3]>) = lining
+            .iter()
+            .chain(abdominal_surface.into_iter().map(|(t, _)| t))
+            .partition(|t| above(t));
         // Projected area: the dome's outward (abdominal) normals point cranially.
         let dome_area = dome
             .iter()
@@ -104,10 +98,9 @@ impl Compartments {
             })
             .sum::<f64>()
             .max(1e-9);
-        let lining_tris = &model.thorax_triangles[..model.lining_count];
-        let n = (lining_tris.len() * 3) as f64;
+        let n = (lining.len() * 3) as f64;
         let origin = Point3::from(
-            lining_tris
+            lining
                 .iter()
                 .flatten()
                 .fold(Vector3::zeros(), |s, &i| s + model.rest[i as usize].coords)
