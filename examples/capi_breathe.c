@@ -84,7 +84,9 @@ int main(void) {
     printf("replay identical\n");
 
     /* The right-hand side for external integrators agrees with the model's own integrator:
-     * (y(t + dt) - y(t)) / dt approaches f(t, y(t)) for a small dt. */
+     * (y(t + dt) - y(t)) / dt approaches f(t, y(t)) for a small dt. Setting the state first
+     * makes the integrator start its step at (t, y) rather than continue the step it took
+     * past t (it steps past the communication points and reads them off that step). */
     size_t n = 0;
     if (!check(torso, bt_state_dim(torso, &n), "bt_state_dim")) return 1;
     double *y0 = malloc(n * sizeof(double)), *y1 = malloc(n * sizeof(double)), *f = malloc(n * sizeof(double));
@@ -93,6 +95,7 @@ int main(void) {
     const double dt = 1e-6;
     if (!check(torso, bt_get_state(torso, y0, n), "bt_get_state")) return 1;
     if (!check(torso, bt_rhs(torso, t0, y0, f, n), "bt_rhs")) return 1;
+    if (!check(torso, bt_set_state(torso, t0, y0, n), "bt_set_state")) return 1;
     if (!check(torso, bt_advance_to(torso, t0 + dt, NULL), "bt_advance_to (dt)")) return 1;
     bt_get_state(torso, y1, n);
     double err = 0, scale = 0;

@@ -7,7 +7,6 @@
 use breathing_torso::anatomy::{Anatomy, VertexRole};
 use breathing_torso::dynamics::{Model, Params};
 use breathing_torso::model::{Compiled, Drive, Scene};
-use breathing_torso::observe::Compartments;
 use breathing_torso::{Config, Quantity, Torso};
 use std::sync::Arc;
 
@@ -45,13 +44,7 @@ fn run(
     let mut params = Params::for_posture(config.subject.posture);
     params.tendon_stiffness *= tendon;
     let model = Model::compile(&anatomy, params);
-    let compiled = Compiled {
-        compartments: Compartments::new(&model),
-        fingerprint: model.fingerprint(),
-        anatomy,
-        model,
-        markers: Default::default(),
-    };
+    let compiled = Compiled::from_model(anatomy, model);
     let mut torso = Torso::with_compiled(config, Arc::new(compiled))?;
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 1..=1000 {

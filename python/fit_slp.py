@@ -565,7 +565,7 @@ def main(argv=None) -> int:
     p.add_argument("--posture", default="standing", choices=sorted(POSTURES))
     p.add_argument("--lod", type=int, default=1)
     p.add_argument("--max-evals", type=int, default=120)
-    p.add_argument("--rtol", type=float, default=1e-4,
+    p.add_argument("--rtol", type=float, default=1e-6,
                    help="solver.rtol of the FMU (the native fit's default: as accurate for fitting as tighter ones)")
     p.add_argument("--slp-reference", action="store_true",
                    help="fit the FMU's skin to the rest-pose grid a first fit implies (slp.reference), "

@@ -48,6 +48,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("file")
     parser.add_argument("--modes", type=int, default=12)
+    parser.add_argument("--slow", type=int, default=0,
+                        help="also list this many of the slowest oscillating modes "
+                             "(frequency and damping ratio)")
     args = parser.parse_args()
     n = int(np.fromfile(args.file, dtype="<u8", count=1)[0])
     jac = np.fromfile(args.file, dtype="<f8", offset=8).reshape(n, n).T
@@ -67,6 +70,22 @@ def main():
         shown += 1
         if shown >= args.modes:
             break
+    if args.slow:
+        osc = [k for k in range(n) if values[k].imag > 1e-9]
+        osc.sort(key=lambda k: abs(values[k]))
+        print("slowest oscillating modes:")
+        for k in osc[:args.slow]:
+            weight = np.abs(vectors[:, k])
+            top = np.argsort(-weight)[:3]
+            zeta = -values[k].real / abs(values[k])
+            names = ", ".join(component_name(i, n) for i in top)
+            print(f"  {abs(values[k]) / (2 * np.pi):6.2f} Hz, damping ratio {zeta:5.3f}: {names}")
+        damping = -values.real / np.abs(values)
+        inertial = values.imag > 1e-9
+        print(f"oscillating pairs: {inertial.sum()}, below 20 Hz: "
+              f"{(inertial & (np.abs(values) < 2 * np.pi * 20)).sum()}, "
+              f"median damping ratio {np.median(damping[inertial]):.3f}, "
+              f"below 0.2: {(inertial & (damping < 0.2)).sum()}")
     lo, hi = 1e-6, 1.0
     for _ in range(80):
         h = (lo * hi) ** 0.5

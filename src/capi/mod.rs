@@ -336,6 +336,7 @@ unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
             rtol: c.solver_rtol,
             atol: c.solver_atol,
             max_step: c.solver_max_step,
+            ..SolverConfig::default()
         },
         drive: drive_from_c(&c.drive),
         lung_ratio: c.lung_ratio,

@@ -38,10 +38,12 @@ pub struct ModelArgs {
     /// ODE solver: dopri5, bs3 or high-order.
     #[arg(long, default_value = "dopri5")]
     pub solver: String,
-    /// Relative tolerance of the solver. The default 1e-4 is as accurate for fitting as
-    /// tighter ones: the step is held by stability, and the markers of a fit's periodic
-    /// run agree with an rtol 1e-9 run within about 1e-8 m (tests/sampled_runs.rs).
-    #[arg(long, default_value_t = 1e-4)]
+    /// Relative tolerance of the solver. At the default 1e-6 the step is held by stability
+    /// at level of detail 0, so looser tolerances save nothing (1e-4 took as many
+    /// evaluations with 12 x the rejected steps: `cargo run --release --example
+    /// fast_dynamics -- 0 1e-4`), and the markers of a fit's periodic run agree with an
+    /// rtol 1e-9 run within 0.1 um (tests/sampled_runs.rs).
+    #[arg(long, default_value_t = 1e-6)]
     pub rtol: f64,
     /// Marker grid of the model, ROWSxCOLS.
     #[arg(long, default_value = "10x6")]
@@ -91,7 +93,7 @@ pub fn parse_grid(s: &str) -> Result<(usize, usize)> {
 }
 
 /// A fit's absolute tolerance relative to its relative one (atol = rtol / 100, the
-/// convention of the work-precision benchmark): at the default rtol 1e-4 the markers of a
+/// convention of the work-precision benchmark): at the default rtol 1e-6 the markers of a
 /// fit's periodic run agree with an rtol 1e-9 run within 0.1 um (tests/sampled_runs.rs),
 /// and the step stays at the stability limit.
 pub const FIT_ATOL_PER_RTOL: f64 = 1e-2;
@@ -368,7 +370,7 @@ pub struct SweepArgs {
     #[arg(long, default_value_t = 0)]
     pub lod: u32,
     /// Relative tolerance of the solver.
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = 1e-6)]
     pub rtol: f64,
     /// Search method: nelder-mead, multistart or cmaes.
     #[arg(long, default_value = "nelder-mead")]

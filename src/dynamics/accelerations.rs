@@ -5,10 +5,14 @@
 //!     I_r theta'' = sum ((p - h) x F) . u + tau_gravity - k theta - d theta' + tau_preload
 //! sternum (free rigid body):
 //!     m x'' = sum F + m g + F_preload
-//!     I_w w' = tau - w x I_w w,  I_w = R I_0 R^T,  q' = (0, w) q / 2
+//!     I_w w' = tau + tau_preload - w x I_w w,  I_w = R I_0 R^T,  q' = (0, w) q / 2
 //! free vertex j (thesis eq. 2.1):
 //!     m_j x'' = F_j + m_j g - gamma_j x' + F_preload
 //! ```
+//!
+//! The left-hand sides are those of the true masses; the accelerations solve the generalised
+//! forces against the scaled mass matrix of `dynamics::inertia` instead (M q'' = f, with
+//! q'' = (theta'', x'', w', vertex x'') contiguous in the state's rates).
 
 use super::Data;
 use super::model::{Model, RIBS};
@@ -17,6 +21,20 @@ use nalgebra::{Quaternion, Vector3};
 
 /// Writes y' into `dy`.
 pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+    forces_and_rates(model, data, l, y, dy);
+    model.mass.solve(&mut dy[l.theta_dot..]);
+}
+
+/// As [`compute`], with the mass matrix's block-diagonal part only (the cavities' volume
+/// inertances left out, [`super::inertia::MassMatrix::solve_local`]): the right-hand side
+/// whose Jacobian the stiff method approximates with a sparse one.
+pub fn compute_local(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+    forces_and_rates(model, data, l, y, dy);
+    model.mass.solve_local(&mut dy[l.theta_dot..]);
+}
+
+/// The position rates into `dy`, and the generalised forces where the accelerations go.
+fn forces_and_rates(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
     // Position derivatives are the velocities.
     dy[l.theta..l.theta + RIBS].copy_from_slice(&y[l.theta_dot..l.theta_dot + RIBS]);
     dy[l.sternum_x..l.sternum_x + 3].copy_from_slice(&y[l.sternum_v..l.sternum_v + 3]);
@@ -41,7 +59,7 @@ pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [
     vertices(model, data, l, y, dy);
 }
 
-/// Rib torques and angular accelerations.
+/// Rib torques (generalised forces).
 fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
     // one length for both arrays, so that one index check covers them
     let m = data.pos.len();
@@ -59,15 +77,15 @@ fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
         let torque = moment.dot(&u) - model.rib_stiffness[r] * theta - model.rib_damping[r] * rate
             + model.rib_preload[r];
         data.rib_torque[r] = torque;
-        dy[l.theta_dot + r] = torque / model.rib_inertia[r];
+        dy[l.theta_dot + r] = torque;
     }
 }
 
-/// Sternum linear and angular accelerations.
+/// Sternum force and torque, less the gyroscopic torque w x I w of its true inertia.
 fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
     let x = data.sternum_x;
     let mut force = model.gravity * model.sternum_mass + model.sternum_preload;
-    let mut torque = Vector3::zeros();
+    let mut torque = model.sternum_torque_preload;
     for &a in &model.sternum_anchors {
         let a = a as usize;
         force += data.force[a];
@@ -75,20 +93,15 @@ fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
     }
     data.sternum_force = force;
     data.sternum_torque = torque;
-    let acc = force / model.sternum_mass;
     let rot = data.sternum_rotation.to_rotation_matrix();
     let inertia = rot.matrix() * model.sternum_inertia * rot.matrix().transpose();
     let w = data.sternum_w;
     let rhs = torque - w.cross(&(inertia * w));
-    let alpha = inertia
-        .cholesky()
-        .map(|c| c.solve(&rhs))
-        .unwrap_or_else(Vector3::zeros);
-    dy[l.sternum_v..l.sternum_v + 3].copy_from_slice(acc.as_slice());
-    dy[l.sternum_w..l.sternum_w + 3].copy_from_slice(alpha.as_slice());
+    dy[l.sternum_v..l.sternum_v + 3].copy_from_slice(force.as_slice());
+    dy[l.sternum_w..l.sternum_w + 3].copy_from_slice(rhs.as_slice());
 }
 
-/// Free vertex accelerations.
+/// Free vertex forces.
 fn vertices(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
     let n = l.vertices;
     let (mass, damping, preload) = (
@@ -104,10 +117,8 @@ fn vertices(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64
         .zip(accs)
         .enumerate()
     {
-        let m = mass[j];
         let v = Vector3::new(v[0], v[1], v[2]);
-        let f = data.force[a as usize] + model.gravity * m + preload[j] - v * damping[j];
-        let f = f / m;
+        let f = data.force[a as usize] + model.gravity * mass[j] + preload[j] - v * damping[j];
         acc.copy_from_slice(f.as_slice());
     }
 }

@@ -15,26 +15,21 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     let l = Layout::new(model);
     kinematics::positions_and_velocities(model, data, &l, y);
     let mut e = 0.0;
-    // Kinetic.
-    for r in 0..RIBS {
-        e += 0.5 * model.rib_inertia[r] * y[l.theta_dot + r].powi(2);
-    }
-    let v = Vector3::new(y[l.sternum_v], y[l.sternum_v + 1], y[l.sternum_v + 2]);
-    e += 0.5 * model.sternum_mass * v.norm_squared();
-    let rot = data.sternum_rotation.to_rotation_matrix();
-    let inertia = rot.matrix() * model.sternum_inertia * rot.matrix().transpose();
-    e += 0.5 * data.sternum_w.dot(&(inertia * data.sternum_w));
-    for (j, m) in model.vertex_mass.iter().enumerate() {
-        let pv = l.vertex_v + 3 * j;
-        e += 0.5 * m * (y[pv].powi(2) + y[pv + 1].powi(2) + y[pv + 2].powi(2));
-    }
-    // Elastic.
+    // Kinetic: the generalised velocities (rib rates, sternum velocity and angular
+    // velocity, vertex velocities) are contiguous in the state.
+    e += model.mass.kinetic_energy(&y[l.theta_dot..]);
+    // Elastic: a muscle's tension is the softplus of its spring force (`forces::tension`),
+    // whose potential is the integral of that softplus over the stretch.
     let el = &model.elements;
+    let toe = model.params.tension_toe;
     for i in 0..el.len() {
         let len = path_length(&data.pos, el.path_of(i));
         let stretch = len - el.rest_length[i];
-        if el.group[i] == PASSIVE || stretch > 0.0 {
-            e += 0.5 * el.stiffness[i] * stretch * stretch;
+        let k = el.stiffness[i];
+        if el.group[i] == PASSIVE {
+            e += 0.5 * k * stretch * stretch;
+        } else {
+            e += softplus_integral(k * stretch, toe) / k;
         }
     }
     let s = &model.springs;
@@ -64,6 +59,11 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
         e -= model.rib_preload[r] * y[l.theta + r];
     }
     e -= (model.gravity * model.sternum_mass + model.sternum_preload).dot(&data.sternum_x.coords);
+    // the constant torque's potential over the sternum's rotation from rest (its rotation
+    // vector: exact for rotations about a fixed axis, and to second order otherwise)
+    e -= model
+        .sternum_torque_preload
+        .dot(&data.sternum_rotation.scaled_axis());
     for (j, m) in model.vertex_mass.iter().enumerate() {
         let px = l.vertex_x + 3 * j;
         let x = Vector3::new(y[px], y[px + 1], y[px + 2]);
@@ -71,4 +71,66 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     }
     let _: &mut Data = data;
     e
+}
+
+/// The integral of the softplus eps ln(1 + exp(u / eps)) from 0 to `x`. Beyond 40 eps from
+/// zero the softplus is max(u, 0) to rounding (`forces::tension`), so the tails are exact:
+/// eps^2 (pi^2 / 12 + 800) + (x^2 - (40 eps)^2) / 2 above and -eps^2 pi^2 / 12 below
+/// (-Li2(-1) = pi^2 / 12, and -Li2(-e^40) = 800 + pi^2 / 6 to rounding); in between,
+/// 16-point Gauss-Legendre quadrature on panels at most 2 eps wide (the integrand is analytic
+/// within pi eps of the real axis).
+pub fn softplus_integral(x: f64, eps: f64) -> f64 {
+    use std::f64::consts::PI;
+    let cut = 40.0 * eps;
+    let base = eps * eps * PI * PI / 12.0;
+    if x >= cut {
+        return eps * eps * 800.0 + base + 0.5 * (x * x - cut * cut);
+    }
+    if x <= -cut {
+        return -base;
+    }
+    let panels = (x.abs() / (2.0 * eps)).ceil().max(1.0) as usize;
+    let w = x / panels as f64;
+    let mut sum = 0.0;
+    for p in 0..panels {
+        let (a, b) = (p as f64 * w, (p + 1) as f64 * w);
+        let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+        for (node, weight) in GAUSS_LEGENDRE_16 {
+            for u in [mid - half * node, mid + half * node] {
+                sum += weight * half * super::forces::tension(u, eps);
+            }
+        }
+    }
+    sum
+}
+
+/// The positive nodes and their weights of 16-point Gauss-Legendre quadrature on [-1, 1]
+/// (Abramowitz & Stegun 25.4.29).
+const GAUSS_LEGENDRE_16: [(f64, f64); 8] = [
+    (0.095_012_509_837_637_44, 0.189_450_610_455_068_5),
+    (0.281_603_550_779_258_9, 0.182_603_415_044_923_6),
+    (0.458_016_777_657_227_4, 0.169_156_519_395_002_5),
+    (0.617_876_244_402_643_8, 0.149_595_988_816_576_7),
+    (0.755_404_408_355_003, 0.124_628_971_255_533_9),
+    (0.865_631_202_387_831_7, 0.095_158_511_682_492_8),
+    (0.944_575_023_073_232_6, 0.062_253_523_938_647_9),
+    (0.989_400_934_991_649_9, 0.027_152_459_411_754_1),
+];
+
+#[cfg(test)]
+mod tests {
+    use super::softplus_integral;
+
+    /// The integral's derivative is the softplus, across the cuts and the panel changes.
+    #[test]
+    fn softplus_integral_differentiates_to_the_softplus() {
+        let eps = 0.1;
+        for x in [-5.0, -4.0001, -1.3, -0.05, 0.0, 0.07, 0.9, 3.99, 4.01, 12.0] {
+            let h = 1e-5;
+            let d = (softplus_integral(x + h, eps) - softplus_integral(x - h, eps)) / (2.0 * h);
+            let f = crate::dynamics::forces::tension(x, eps);
+            assert!((d - f).abs() < 1e-7 * (1.0 + f), "{x}: {d} vs {f}");
+        }
+        assert_eq!(softplus_integral(0.0, eps), 0.0);
+    }
 }

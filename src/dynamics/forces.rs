@@ -3,11 +3,17 @@
 //! - Muscle and membrane elements (thesis eq. 2.2): f = c e + gamma e', e = |r| - l(t), with
 //!   l(t) = l0 r(t) (eq. 2.3) and r = 1 - beta_max a g for muscles (a the side's activation of
 //!   the group, g the element's regional gain). Muscles only pull (Zajac 1989, thesis 2.1):
-//!   f is clamped at zero.
+//!   their tension is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps
+//!   ([`super::Params::tension_toe`]) in place of max(0, f), so that the right-hand side is
+//!   smooth where a muscle goes slack.
 //! - Zero-length vector springs (cartilage ball joints, wall foundation): F = k d + c d'.
-//! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1); each triangle pushes each of its corners
-//!   with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx.
-//! - Pleural pressure: P_pl = -E_L (V_th - V_th0) on the thoracic surface (lung recoil).
+//! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1) - mu dV/dt; each triangle pushes each of
+//!   its corners with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx. The
+//!   viscous term mu (`Model::abdomen_viscosity`) damps the cavity's volume mode.
+//! - Pleural pressure: P_pl = -P_L(V_th) - R dV_th/dt on the thoracic surface: the lungs'
+//!   recoil and the pressure drop of the airflow through the airway resistance R
+//!   (`Model::airway_resistance`); dV/dt is the sum over the triangles of A n . (v_a + v_b +
+//!   v_c) / 3, exact on a closed surface.
 
 use super::model::{Model, PASSIVE, VIA, via_segment_length};
 use super::{Activations, Data};
@@ -59,6 +65,7 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
     let (rest_length, stiffness, damping) =
         (&el.rest_length[..n], &el.stiffness[..n], &el.damping[..n]);
     let (slot, gain) = (&el.slot[..n], &el.gain[..n]);
+    let toe = model.params.tension_toe;
     // one length for the three arrays, so that one index check covers them
     let m = data.pos.len();
     let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
@@ -78,8 +85,8 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             let n = d / len;
             let rate = (vel[b] - vel[a]).dot(&n);
             let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
-            if muscle && f < 0.0 {
-                f = 0.0;
+            if muscle {
+                f = tension(f, toe);
             }
             let fv = n * f;
             force[a] += fv;
@@ -96,8 +103,8 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             rate += (vel[b] - vel[a]).dot(&d) / l;
         }
         let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
-        if muscle && f < 0.0 {
-            f = 0.0;
+        if muscle {
+            f = tension(f, toe);
         }
         if f == 0.0 {
             continue;
@@ -109,6 +116,20 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             force[a] += fv;
             force[b] -= fv;
         }
+    }
+}
+
+/// Tension of a muscle element whose linear spring-damper force is `f`: the softplus
+/// eps ln(1 + exp(f / eps)) with eps = `toe`, written as max(f, 0) + eps ln(1 + exp(-|f| /
+/// eps)) so that it cannot overflow; beyond 40 eps from slack the correction is below
+/// 4e-18 eps, under the rounding of f, and is not computed.
+#[inline]
+pub fn tension(f: f64, toe: f64) -> f64 {
+    let x = f.abs() / toe;
+    if x > 40.0 {
+        f.max(0.0)
+    } else {
+        f.max(0.0) + toe * (-x).exp().ln_1p()
     }
 }
 
@@ -155,6 +176,24 @@ fn volume_and_faces(
     sum
 }
 
+/// Rate of change dV/dt of the volume enclosed by `tris` whose face vectors are `face`:
+/// sum over the moving triangles of face . (v_a + v_b + v_c) / 6 (the volume's gradient at a
+/// corner of a closed surface is the sum of face / 6 over its triangles).
+pub fn volume_rate(
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &[Vector3<f64>],
+    vel: &[Vector3<f64>],
+) -> f64 {
+    let mut rate = 0.0;
+    for ((t, face), &moving) in tris.iter().zip(face).zip(moving) {
+        if moving {
+            rate += face.dot(&(vel[t[0] as usize] + vel[t[1] as usize] + vel[t[2] as usize]));
+        }
+    }
+    rate / 6.0
+}
+
 /// Each triangle's doubled area vector (b - a) x (c - a) into `face`.
 fn face_vectors(pos: &[Point3<f64>], tris: &[[u32; 3]], face: &mut [Vector3<f64>]) {
     for (t, f) in tris.iter().zip(face.iter_mut()) {
@@ -193,6 +232,7 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
     let n = tris.len();
     let Data {
         pos,
+        vel,
         face,
         term,
         force,
@@ -200,7 +240,9 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
     } = data;
     let (face, term) = (&mut face[..n], &mut term[..n]);
     let v = volume_and_faces(pos, tris, face, term, -0.0) / 6.0;
-    let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0);
+    let rate = volume_rate(tris, &model.abdomen_moving, face, vel);
+    let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0)
+        - model.abdomen_viscosity * rate;
     apply_pressure(tris, &model.abdomen_moving, face, p, force);
     data.abdomen_volume = v;
     data.abdomen_pressure = p;
@@ -208,7 +250,8 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
 
 /// Pleural pressure from the thoracic volume: the lungs' elastic recoil, the pressure-volume
 /// law of [`super::pleural::PleuralLaw`] (linear with the lung elastance about rest, with
-/// inverse barriers at the residual volume and total lung capacity). The dome's
+/// inverse barriers at the residual volume and total lung capacity), less the pressure drop
+/// R dV/dt of the airflow through the airway resistance. The dome's
 /// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
 /// volume terms negated (exactly what recomputing them would give).
 fn pleural_pressure(model: &Model, data: &mut Data) {
@@ -216,6 +259,7 @@ fn pleural_pressure(model: &Model, data: &mut Data) {
     let (na, nt) = (model.abdomen_triangles.len(), tris.len());
     let Data {
         pos,
+        vel,
         face,
         term,
         force,
@@ -239,7 +283,8 @@ fn pleural_pressure(model: &Model, data: &mut Data) {
         sum
     };
     let v = sum / 6.0;
-    let p = -model.pleural.recoil(v);
+    let rate = volume_rate(tris, &model.thorax_moving, thorax_face, vel);
+    let p = -model.pleural.recoil(v) - model.airway_resistance * rate;
     apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
     data.pleural_pressure = p;

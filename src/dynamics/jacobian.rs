@@ -8,11 +8,16 @@
 //!   the positions and velocities of the bodies it shares an element, a spring or a pressure
 //!   triangle with. S is estimated by forward differences, one evaluation per colour of a
 //!   distance-2 column colouring (Curtis, Powell & Reid 1974).
-//! - The two global pressures (thesis eq. 2.5: P_A = K (V0/V - 1); lung recoil
-//!   P_T = -E_L (V_T - V_T0)) couple every wall point to every other. Their part is exact in
+//! - The right-hand side differenced is the one with the mass matrix's block-diagonal part
+//!   only ([`super::accelerations::compute_local`]): the cavities' rank-two volume inertances
+//!   of `dynamics::inertia` would make every row dense. The stiff method is a W-method
+//!   (ROS34PW2), whose order does not need the exact Jacobian.
+//! - The two global pressures (thesis eq. 2.5: P_A = K (V0/V - 1) - mu dV/dt; lung recoil
+//!   and airway flow P_T = -P_L(V_T) - R dV_T/dt) couple every wall point to every other. Their part is exact in
 //!   rank: u = ∂f/∂P, the response of the accelerations to a unit pressure (f is linear in
 //!   each pressure, so one evaluation with P + 1 gives it exactly), times dP/dV
-//!   (-K V0 / V^2 and -E_L), times the volume gradient dV/dy: for a free vertex the
+//!   (-K V0 / V^2 and -E_L), times the volume gradient dV/dy, plus the viscous terms' -eta
+//!   dV/dy on the matching velocities: for a free vertex the
 //!   area-weighted normal Σ (b x c)/6 over its triangles (divergence theorem), for the ribs
 //!   and the sternum (whose anchors carry wall points) central differences of the volume.
 
@@ -32,6 +37,8 @@ pub struct TorsoJacobian {
     ypert: Vec<f64>,
     f1: Vec<f64>,
     f2: Vec<f64>,
+    /// The frozen right-hand side at the evaluation point (the differences' base).
+    f0: Vec<f64>,
     grad: Vec<Vector3<f64>>,
 }
 
@@ -148,6 +155,7 @@ impl TorsoJacobian {
             ypert: vec![0.0; n],
             f1: vec![0.0; n],
             f2: vec![0.0; n],
+            f0: vec![0.0; n],
             grad: vec![Vector3::zeros(); model.rest.len()],
         }
     }
@@ -180,11 +188,21 @@ impl TorsoJacobian {
         let va = volume(&data.pos, &model.abdomen_triangles);
         let vt = volume(&data.pos, &model.thorax_triangles);
         let p = &model.params;
-        let pa = p.bulk_modulus * (model.abdomen_rest_volume / va - 1.0);
-        let pt = -model.pleural.recoil(vt);
+        let rates = [
+            volume_rate(model, data, &model.abdomen_triangles),
+            volume_rate(model, data, &model.thorax_triangles),
+        ];
+        let viscous = [model.abdomen_viscosity, model.airway_resistance];
+        let pa = p.bulk_modulus * (model.abdomen_rest_volume / va - 1.0) - viscous[0] * rates[0];
+        let pt = -model.pleural.recoil(vt) - viscous[1] * rates[1];
         let frozen = [pa, pt];
+        // the base of the differences: the frozen right-hand side itself (the block-diagonal
+        // mass solve of `rhs_frozen` differs from the full one's by the volume inertances)
+        let _ = f0;
+        rhs_frozen(model, data, act, y, &mut self.f0, frozen);
+        let f0 = &self.f0;
         let mut f = |yy: &[f64], out: &mut [f64]| rhs_frozen(model, data, act, yy, out, frozen);
-        let mut evals = self.colouring.differences(
+        let mut evals = 1 + self.colouring.differences(
             &mut f,
             y,
             f0,
@@ -203,8 +221,12 @@ impl TorsoJacobian {
             bumped[k] += 1.0;
             rhs_frozen(model, data, act, y, &mut self.f2, bumped);
             evals += 1;
-            // f0 is the right-hand side with exactly these pressures
-            for ((u, &a), &b) in jac.u[k * n..(k + 1) * n].iter_mut().zip(&self.f2).zip(f0) {
+            // self.f0 is the right-hand side with exactly these pressures
+            for ((u, &a), &b) in jac.u[k * n..(k + 1) * n]
+                .iter_mut()
+                .zip(&self.f2)
+                .zip(&self.f0)
+            {
                 *u = a - b;
             }
             let tris = if k == 0 {
@@ -223,10 +245,109 @@ impl TorsoJacobian {
                 &mut self.ypert,
                 vk,
             );
+            // the viscous pressure -eta dV/dt: dV/dt = (dV/dq) q', so its velocity columns
+            // take the position columns' gradient (the sternum's angular velocity its own)
+            let grad_q: Vec<f64> = vk.to_vec();
             vk.iter_mut().for_each(|v| *v *= slopes[k]);
+            let eta = viscous[k];
+            for r in 0..RIBS {
+                vk[l.theta_dot + r] = -eta * grad_q[l.theta + r];
+            }
+            for c in 0..3 {
+                vk[l.sternum_v + c] = -eta * grad_q[l.sternum_x + c];
+            }
+            for i in 0..3 * l.vertices {
+                vk[l.vertex_v + i] = -eta * grad_q[l.vertex_x + i];
+            }
+            // and dV/dt changes with the positions too: -eta d(dV/dt)/dq on the positions
+            let mut rate_grad = std::mem::take(&mut self.f2);
+            volume_rate_gradient(
+                model,
+                data,
+                &l,
+                y,
+                tris,
+                &mut self.grad,
+                &mut self.ypert,
+                &mut rate_grad,
+            );
+            for (v, g) in vk.iter_mut().zip(&rate_grad) {
+                *v -= eta * g;
+            }
+            self.f2 = rate_grad;
+            self.ypert.copy_from_slice(y);
+            for c in 0..3 {
+                let i = l.sternum_w + c;
+                let d = 1e-6;
+                self.ypert[i] = y[i] + d;
+                kinematics::positions_and_velocities(model, data, &l, &self.ypert);
+                let up = volume_rate(model, data, tris);
+                self.ypert[i] = y[i] - d;
+                kinematics::positions_and_velocities(model, data, &l, &self.ypert);
+                let down = volume_rate(model, data, tris);
+                self.ypert[i] = y[i];
+                vk[i] = -eta * (up - down) / (2.0 * d);
+            }
         }
         evals
     }
+}
+
+/// d(dV/dt)/dy over the positions of `y` (zero on the velocities) into `out`: analytic for
+/// free vertices (for a triangle (a, b, c) with w = v_a + v_b + v_c, the derivatives of
+/// w . ((b - a) x (c - a)) are w x (c - b), (c - a) x w and w x (b - a)), central
+/// differences for the rib angles and the sternum pose. `grad` and `ytmp` are scratch.
+#[allow(clippy::too_many_arguments)]
+fn volume_rate_gradient(
+    model: &Model,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    tris: &[[u32; 3]],
+    grad: &mut [Vector3<f64>],
+    ytmp: &mut [f64],
+    out: &mut [f64],
+) {
+    out.fill(0.0);
+    kinematics::positions_and_velocities(model, data, l, y);
+    grad.iter_mut().for_each(|g| *g = Vector3::zeros());
+    let (pos, vel) = (&data.pos, &data.vel);
+    for t in tris {
+        let [a, b, c] = t.map(|i| i as usize);
+        let w = vel[a] + vel[b] + vel[c];
+        grad[a] += w.cross(&(pos[c] - pos[b])) / 6.0;
+        grad[b] += (pos[c] - pos[a]).cross(&w) / 6.0;
+        grad[c] += w.cross(&(pos[b] - pos[a])) / 6.0;
+    }
+    for (j, &a) in model.vertex_anchor.iter().enumerate() {
+        let g = grad[a as usize];
+        out[l.vertex_x + 3 * j..l.vertex_x + 3 * j + 3].copy_from_slice(g.as_slice());
+    }
+    ytmp.copy_from_slice(y);
+    for i in (l.theta..l.theta + RIBS).chain(l.sternum_x..l.sternum_x + 7) {
+        let d = 1e-6 * y[i].abs().max(1.0);
+        ytmp[i] = y[i] + d;
+        kinematics::positions_and_velocities(model, data, l, ytmp);
+        let up = volume_rate(model, data, tris);
+        ytmp[i] = y[i] - d;
+        kinematics::positions_and_velocities(model, data, l, ytmp);
+        let down = volume_rate(model, data, tris);
+        ytmp[i] = y[i];
+        out[i] = (up - down) / (2.0 * d);
+    }
+}
+
+/// dV/dt of the volume enclosed by `tris` at the positions and velocities in `data`.
+fn volume_rate(model: &Model, data: &Data, tris: &[[u32; 3]]) -> f64 {
+    let (pos, vel) = (&data.pos, &data.vel);
+    let mut rate = 0.0;
+    for t in tris {
+        let [a, b, c] = t.map(|i| i as usize);
+        let face = (pos[b] - pos[a]).cross(&(pos[c] - pos[a]));
+        rate += face.dot(&(vel[a] + vel[b] + vel[c]));
+    }
+    let _ = model;
+    rate / 6.0
 }
 
 /// The right-hand side with the two pressures held at `pressures` = [abdominal, pleural].
@@ -241,7 +362,7 @@ pub fn rhs_frozen(
     let layout = Layout::new(model);
     kinematics::positions_and_velocities(model, data, &layout, y);
     forces::accumulate_frozen(model, data, act, pressures);
-    super::accelerations::compute(model, data, &layout, y, dy);
+    super::accelerations::compute_local(model, data, &layout, y, dy);
 }
 
 /// dV/dy of the volume enclosed by `tris` at state `y` into `out`: analytic for free

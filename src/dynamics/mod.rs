@@ -17,6 +17,7 @@
 pub mod accelerations;
 pub mod energy;
 pub mod forces;
+pub mod inertia;
 pub mod jacobian;
 pub mod kinematics;
 mod model;
@@ -32,7 +33,7 @@ pub use params::{
     DIAPHRAGM_CONTRACTION_UPRIGHT, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
     diaphragm_contraction, diaphragm_length_ratio,
 };
-pub use state::{Layout, rest_state};
+pub use state::{Layout, error_weights, rest_state};
 
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 
@@ -141,6 +142,16 @@ impl Data {
             pleural_pressure: 0.0,
         }
     }
+}
+
+/// The right-hand side with the mass matrix's block-diagonal part only (no volume
+/// inertances, `inertia::MassMatrix::solve_local`): the function whose Jacobian
+/// [`jacobian::TorsoJacobian`] gives, for the stiff method.
+pub fn rhs_local(model: &Model, data: &mut Data, act: &Activations, y: &[f64], dy: &mut [f64]) {
+    let layout = Layout::new(model);
+    kinematics::positions_and_velocities(model, data, &layout, y);
+    forces::accumulate(model, data, act);
+    accelerations::compute_local(model, data, &layout, y, dy);
 }
 
 /// The right-hand side y' = f(y) for the given activations, in stages.

@@ -2,6 +2,7 @@
 //! lengths, stiffness and damping, masses, inertias, preloads, index tables), built once from
 //! an [`Anatomy`] and shared between instances (`Arc`), as MuJoCo splits `mjModel` from `mjData`.
 
+use super::inertia::MassMatrix;
 use super::params::Params;
 use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
@@ -180,9 +181,10 @@ pub struct Model {
     pub rib_head: Vec<Point3<f64>>,
     /// Rib hinge axes (unit).
     pub rib_axis: Vec<Vector3<f64>>,
-    /// Rib moments of inertia about their axes [kg m^2].
+    /// Rib moments of inertia about their axes [kg m^2] (true; the dynamics integrates with
+    /// [`Model::mass`]).
     pub rib_inertia: Vec<f64>,
-    /// Rib masses [kg].
+    /// Rib masses [kg] (true masses: gravity acts on them).
     pub rib_mass: Vec<f64>,
     /// Rib centres of mass at rest.
     pub rib_com: Vec<Point3<f64>>,
@@ -192,15 +194,18 @@ pub struct Model {
     pub rib_damping: Vec<f64>,
     /// Generalised preload torque per rib [N m] holding the rest pose against gravity.
     pub rib_preload: Vec<f64>,
-    /// Sternum mass [kg].
+    /// Sternum mass [kg] (true).
     pub sternum_mass: f64,
-    /// Sternum inertia about its centre of mass, at rest orientation [kg m^2].
+    /// Sternum inertia about its centre of mass, at rest orientation [kg m^2] (true).
     pub sternum_inertia: Matrix3<f64>,
     /// Sternum centre of mass at rest.
     pub sternum_com: Point3<f64>,
     /// Preload force on the sternum [N].
     pub sternum_preload: Vector3<f64>,
-    /// Free vertex masses [kg].
+    /// Preload torque on the sternum about its centre of mass [N m] (the slack muscles' toe
+    /// tension at rest has a moment).
+    pub sternum_torque_preload: Vector3<f64>,
+    /// Free vertex masses [kg] (true).
     pub vertex_mass: Vec<f64>,
     /// Nodal damping of each free vertex [N s/m] (thesis eq. 2.1, gamma_i).
     pub vertex_damping: Vec<f64>,
@@ -246,6 +251,16 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     /// Anchor at the middle of the sternum (for its displacement).
     pub sternum_probe: u32,
+    /// Airway resistance [Pa s/m^3] between the alveoli and the mouth: the pleural pressure
+    /// carries -R dV/dt of the thoracic volume's rate (1 / (sGaw FRC),
+    /// [`Params::specific_airway_conductance`]).
+    pub airway_resistance: f64,
+    /// Viscosity of the abdomen's volume [Pa s/m^3]: the abdominal pressure carries
+    /// -mu dV/dt (stiffness-proportional damping of its bulk modulus).
+    pub abdomen_viscosity: f64,
+    /// The mass matrix the dynamics integrates with: the true masses plus the selective
+    /// mass scaling of [`super::inertia`].
+    pub mass: MassMatrix,
 }
 
 /// Signed volume enclosed by triangles over points (divergence theorem).
@@ -297,7 +312,6 @@ impl Model {
                 Carrier::Ground => {}
             }
         }
-        // Effective translational mass seen at each anchor, for element damping.
         let rib_inertia: Vec<f64> = anatomy
             .ribs
             .iter()
@@ -311,80 +325,11 @@ impl Model {
             }
         }
         let sternum_mass = anatomy.sternum.mass;
-        let anchor_mass = |i: u32| -> f64 {
-            match carrier[i as usize] {
-                Carrier::Ground => f64::INFINITY,
-                Carrier::Rib(r) => {
-                    let rib = &anatomy.ribs[r as usize];
-                    let d = rest[i as usize] - rib.head;
-                    let perp = d - rib.axis.into_inner() * d.dot(&rib.axis);
-                    rib_inertia[r as usize] / perp.norm_squared().max(1e-4)
-                }
-                Carrier::Sternum => sternum_mass,
-                Carrier::Vertex(j) => vertex_mass[j as usize],
-            }
-        };
-        let pair_mass = |a: u32, b: u32| {
-            let (ma, mb) = (anchor_mass(a), anchor_mass(b));
-            1.0 / (1.0 / ma + 1.0 / mb)
-        };
-        let zeta = params.damping_ratio;
-        // Number of spring-dampers meeting at each body, so that the dampers of a body add up
-        // to about critical damping of its collective motion: c = 2 zeta sqrt(k m / n).
-        let body_of = |i: u32| match carrier[i as usize] {
-            Carrier::Ground => None,
-            Carrier::Rib(r) => Some(r as usize),
-            Carrier::Sternum => Some(RIBS),
-            Carrier::Vertex(j) => Some(RIBS + 1 + j as usize),
-        };
-        let mut degree = vec![0usize; RIBS + 1 + n_free];
-        let count_path = |path: &[u32], degree: &mut Vec<usize>| {
-            let mut seen: Vec<usize> = path.iter().filter_map(|&i| body_of(i)).collect();
-            seen.sort_unstable();
-            seen.dedup();
-            for b in seen {
-                degree[b] += 1;
-            }
-        };
-        for m in &anatomy.muscles {
-            count_path(&m.path, &mut degree);
-        }
-        for t in &ab.triangles {
-            for k in 0..3 {
-                // Each edge is seen from its two triangles: count half.
-                let (u, v) = (ab.anchor[t[k] as usize], ab.anchor[t[(k + 1) % 3] as usize]);
-                if (t[k] as usize) < (t[(k + 1) % 3] as usize) {
-                    count_path(&[u, v], &mut degree);
-                }
-            }
-        }
-        for j in &anatomy.joints {
-            count_path(&[j.a, j.b], &mut degree);
-        }
-        for (v, &anchor) in ab.anchor.iter().enumerate() {
-            if matches!(ab.roles[v], VertexRole::Wall | VertexRole::Dome) {
-                count_path(&[anchor], &mut degree);
-            }
-        }
-        let share = |path: &[u32]| {
-            path.iter()
-                .filter_map(|&i| body_of(i))
-                .map(|b| degree[b])
-                .max()
-                .unwrap_or(1)
-                .max(1) as f64
-        };
-        let damping_for =
-            |k: f64, a: u32, b: u32| 2.0 * zeta * (k * pair_mass(a, b) / share(&[a, b])).sqrt();
-        // A path's effective mass: its ends in series with its via points in parallel.
-        let path_mass = |path: &[u32]| {
-            let ends = pair_mass(path[0], path[path.len() - 1]);
-            let via: f64 = path[1..path.len() - 1]
-                .iter()
-                .map(|&i| anchor_mass(i))
-                .sum();
-            if via > 0.0 { ends.min(via) } else { ends }
-        };
+        // Stiffness-proportional damping c = beta k (Rayleigh), beta = 2 zeta / omega_i: the
+        // inertial modes near the inertia frequency are damped with the ratio zeta, every
+        // element relaxes with the same time constant beta (6 ms for zeta = 1 at 25 Hz).
+        let rayleigh =
+            2.0 * params.damping_ratio / (2.0 * std::f64::consts::PI * params.inertia_frequency);
         let path_length = |path: &[u32]| path_length(&rest, path);
 
         // Muscles: c = F_max / (beta_max l0) so that a full isometric contraction gives F_max.
@@ -398,7 +343,7 @@ impl Model {
                 Some(Side::Left) => 1,
                 None => 2,
             };
-            let c = 2.0 * zeta * (k * path_mass(&m.path) / share(&m.path)).sqrt();
+            let c = rayleigh * k;
             elements.push(
                 &m.path,
                 l0,
@@ -440,7 +385,7 @@ impl Model {
             } else {
                 params.membrane_stiffness
             };
-            elements.push(&[a, b], l0, k, damping_for(k, a, b), PASSIVE, 2, 0.0);
+            elements.push(&[a, b], l0, k, rayleigh * k, PASSIVE, 2, 0.0);
         }
         // Cartilage joints.
         let mut springs = VectorSprings::default();
@@ -450,7 +395,7 @@ impl Model {
             springs.a.push(j.a);
             springs.b.push(j.b);
             springs.stiffness.push(k);
-            springs.damping.push(damping_for(k, j.a, j.b));
+            springs.damping.push(rayleigh * k);
         }
         // Wall foundation: each free wall vertex tied to its rest position with stiffness
         // kappa A_v, kappa = A_wall / C_wall, so a uniform pressure P displaces the wall by
@@ -472,26 +417,14 @@ impl Model {
         for &v in &wall {
             let a = ab.anchor[v];
             let k = kappa * vertex_area[v];
-            ground_anchors.push((
-                a,
-                rest[a as usize],
-                k,
-                2.0 * zeta * (k * anchor_mass(a) / share(&[a])).sqrt(),
-                false,
-            ));
+            ground_anchors.push((a, rest[a as usize], k, rayleigh * k, false));
         }
         // Dome support: the dome slides within the rib cage (zone of apposition) and under the
         // lungs; its horizontal motion is held by a foundation of stiffness kappa_h per area.
         for v in (0..ab.len()).filter(|&v| ab.roles[v] == VertexRole::Dome) {
             let a = ab.anchor[v];
             let k = params.dome_support * vertex_area[v];
-            ground_anchors.push((
-                a,
-                rest[a as usize],
-                k,
-                2.0 * zeta * (k * anchor_mass(a) / share(&[a])).sqrt(),
-                true,
-            ));
+            ground_anchors.push((a, rest[a as usize], k, rayleigh * k, true));
         }
         let mut rest = rest;
         let mut carrier = carrier;
@@ -506,7 +439,8 @@ impl Model {
             springs.damping.push(c);
         }
         debug_assert!(rest.len() >= n_anchor);
-        // Nodal damping: light tissue viscosity on free vertices.
+        // Nodal damping: light tissue viscosity on free vertices (thesis eq. 2.1, gamma_i =
+        // 2 m_i per second with the true masses).
         let vertex_damping: Vec<f64> = vertex_mass.iter().map(|m| 2.0 * m).collect();
 
         let abdomen_triangles: Vec<[u32; 3]> = ab.anchor_triangles().collect();
@@ -580,16 +514,14 @@ impl Model {
             rib_mass: ribs.iter().map(|r| r.mass()).collect(),
             rib_com: ribs.iter().map(|r| r.centre_of_mass()).collect(),
             rib_stiffness: vec![params.rib_joint_stiffness; RIBS],
-            rib_damping: rib_inertia
-                .iter()
-                .map(|i| 2.0 * zeta * (params.rib_joint_stiffness * i).sqrt())
-                .collect(),
+            rib_damping: vec![rayleigh * params.rib_joint_stiffness; RIBS],
             rib_inertia,
             rib_preload: vec![0.0; RIBS],
             sternum_mass,
             sternum_inertia: st.inertia(),
             sternum_com,
             sternum_preload: Vector3::zeros(),
+            sternum_torque_preload: Vector3::zeros(),
             vertex_mass,
             vertex_damping,
             vertex_preload: vec![Vector3::zeros(); n_free],
@@ -609,8 +541,23 @@ impl Model {
             pleural,
             gravity,
             sternum_probe,
+            airway_resistance: 1.0
+                / (params.specific_airway_conductance * anatomy.subject.frc_ecsc() * 1e-3),
+            abdomen_viscosity: 0.0,
+            mass: MassMatrix::default(),
             params,
         };
+        // the abdomen's volume mode is damped like every other stiffness: beta dP/dV
+        model.abdomen_viscosity = rayleigh * model.params.bulk_modulus / model.abdomen_rest_volume;
+        model.mass = MassMatrix::new(
+            &model,
+            model.params.inertia_frequency,
+            [
+                model.params.bulk_modulus / model.abdomen_rest_volume,
+                model.pleural.slope(model.thorax_rest_volume),
+            ],
+            model.airway_resistance,
+        );
         model.compute_preload();
         model
     }
@@ -636,6 +583,7 @@ impl Model {
             self.rib_preload[r] = -data.rib_torque[r];
         }
         self.sternum_preload = -data.sternum_force;
+        self.sternum_torque_preload = -data.sternum_torque;
         for j in 0..self.free_vertices() {
             self.vertex_preload[j] =
                 -data.force[self.vertex_anchor[j] as usize] - self.gravity * self.vertex_mass[j];

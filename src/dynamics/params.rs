@@ -76,6 +76,40 @@ pub const PLEURAL_BARRIER_PRESSURE: f64 = 0.5 * 98.0665;
 /// below its residual volume along the tangent; with 1 % it stops at it.
 pub const PLEURAL_BARRIER_MARGIN: f64 = 0.01;
 
+/// Default [`Params::inertia_frequency`] [Hz]: ten times the fastest breathing the drive
+/// supports (2 Hz, `model::drive::FREQUENCY_RANGE`) and a little more, so that inertia changes
+/// the response to any drive by well under 1 % (the inertial force relative to the elastic one
+/// goes as (f / f_inertia)^2: (2 / 25)^2 = 0.6 % at the fastest drive, 1e-4 at quiet breathing).
+pub const INERTIA_FREQUENCY: f64 = 25.0;
+
+/// Default [`Params::specific_airway_conductance`] [1/(Pa s)]: 0.2 /(cmH2O s). Airway
+/// conductance grows in proportion to lung volume, so that its ratio to the volume, the
+/// specific conductance, is nearly constant between subjects (Briscoe & DuBois 1958, J Clin
+/// Invest 37:1279: sGaw about 0.13-0.35 /(cmH2O s) in healthy adults). At the default man's
+/// functional residual capacity (3.3 L, ECSC 1993) it gives an airway resistance of
+/// 1.5 cmH2O s/L, inside the 0.5-2.5 cmH2O s/L of healthy adults (West, Respiratory
+/// Physiology).
+pub const SPECIFIC_AIRWAY_CONDUCTANCE: f64 = 0.2 / 98.0665;
+
+/// Default [`Params::tension_toe`] [N]: the width of the smooth toe of the tension-only law.
+/// 0.1 N is about 1 % of the smallest muscle element's tension in quiet breathing and a few
+/// thousandths of its largest; it is measured, not cited: halving it changes the default
+/// subject's quiet tidal volume by under 0.1 % (`cargo run --release --example
+/// fast_dynamics -- toe`).
+pub const TENSION_TOE: f64 = 0.1;
+
+fn default_inertia_frequency() -> f64 {
+    INERTIA_FREQUENCY
+}
+
+fn default_specific_airway_conductance() -> f64 {
+    SPECIFIC_AIRWAY_CONDUCTANCE
+}
+
+fn default_tension_toe() -> f64 {
+    TENSION_TOE
+}
+
 fn default_pleural_barrier_pressure() -> f64 {
     PLEURAL_BARRIER_PRESSURE
 }
@@ -95,9 +129,35 @@ pub struct Params {
     /// fibres start longer and reach the same shortest length (see
     /// [`diaphragm_length_ratio`]), so their fraction is larger.
     pub beta_max_diaphragm: f64,
-    /// Damping ratio of every spring-damper element against the masses it joins (thesis 2.4:
-    /// critically damped).
+    /// Damping ratio zeta of the model's inertial modes at the inertia frequency
+    /// ([`Params::inertia_frequency`]): every spring-damper element, vector spring and rib
+    /// joint has the damping coefficient beta k of its stiffness k, beta = 2 zeta /
+    /// (2 pi f_inertia) (stiffness-proportional damping, Rayleigh; thesis 2.4 asks for
+    /// critically damped elements, zeta = 1).
     pub damping_ratio: f64,
+    /// Frequency [Hz] below which no inertial mode of the model may lie above: the masses and
+    /// inertias of the ribs, the sternum and the cavity vertices are raised where needed
+    /// (selective mass scaling, `dynamics::inertia`) so that no body's Gershgorin bound of
+    /// its stiffness (and damping) over its mass exceeds it. Breathing is quasi-static: the
+    /// respiratory system's inertance (0.01-0.02 cmH2O s^2/L, Mead 1956) makes its inertial
+    /// pressure about 0.3 % of the elastic recoil at 0.25 Hz, so the bodies' true masses only
+    /// set vibration modes (80-130 Hz for single ribs and dome vertices) that breathing never
+    /// excites but that would bound an explicit solver's step. Configurations written before
+    /// it existed read [`INERTIA_FREQUENCY`].
+    #[serde(default = "default_inertia_frequency")]
+    pub inertia_frequency: f64,
+    /// Specific airway conductance [1/(Pa s)]: the airway resistance between the alveoli and
+    /// the mouth is 1 / (sGaw FRC) for the subject's functional residual capacity, and the
+    /// pleural pressure carries the pressure drop R dV/dt of the flow through it.
+    /// Configurations written before it existed read [`SPECIFIC_AIRWAY_CONDUCTANCE`].
+    #[serde(default = "default_specific_airway_conductance")]
+    pub specific_airway_conductance: f64,
+    /// Width [N] of the smooth toe of the tension-only law of the muscles: the tension is
+    /// eps ln(1 + exp(f / eps)) of the linear spring-damper force f (softplus), so that it is
+    /// smooth where a muscle goes slack. Configurations written before it existed read
+    /// [`TENSION_TOE`].
+    #[serde(default = "default_tension_toe")]
+    pub tension_toe: f64,
     /// Bulk modulus K of the abdominal contents [Pa] (thesis eq. 2.5: P = K (V0/V - 1)).
     pub bulk_modulus: f64,
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the thorax,
@@ -166,6 +226,9 @@ impl Params {
             beta_max: 0.3,
             beta_max_diaphragm: diaphragm_contraction(posture),
             damping_ratio: 1.0,
+            inertia_frequency: INERTIA_FREQUENCY,
+            specific_airway_conductance: SPECIFIC_AIRWAY_CONDUCTANCE,
+            tension_toe: TENSION_TOE,
             bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
             pleural_barrier_pressure: PLEURAL_BARRIER_PRESSURE,
@@ -186,6 +249,12 @@ impl Params {
     pub fn validate(&self) -> crate::Result<()> {
         let positive = [
             ("params.damping_ratio", self.damping_ratio),
+            ("params.inertia_frequency", self.inertia_frequency),
+            (
+                "params.specific_airway_conductance",
+                self.specific_airway_conductance,
+            ),
+            ("params.tension_toe", self.tension_toe),
             ("params.bulk_modulus", self.bulk_modulus),
             ("params.lung_elastance", self.lung_elastance),
             (

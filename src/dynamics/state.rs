@@ -72,3 +72,20 @@ pub fn rest_state(model: &Model) -> Vec<f64> {
     }
     y
 }
+
+/// How the step-size control weighs each component of the state
+/// ([`crate::solver::Ode::error_weights`]): positions, angles and the quaternion as usual;
+/// each velocity with its absolute tolerance multiplied by omega = 2 pi f_inertia, the rate
+/// above which the model has no inertial mode ([`super::Params::inertia_frequency`]). An
+/// absolute velocity error then counts as much as the position error it makes within
+/// 1 / omega, and the errors of velocities that relax within a step cannot hold the step
+/// (about atol_v = 2 pi 20 Hz x atol). Returns `(reference, weight)`; every component refers
+/// to itself.
+pub fn error_weights(model: &Model) -> (Vec<u32>, Vec<f64>) {
+    let l = Layout::new(model);
+    let reference: Vec<u32> = (0..l.len as u32).collect();
+    let mut weight = vec![1.0; l.len];
+    let omega = 2.0 * std::f64::consts::PI * model.params.inertia_frequency;
+    weight[l.theta_dot..].fill(omega);
+    (reference, weight)
+}

@@ -128,7 +128,7 @@ impl Default for SweepOptions {
         SweepOptions {
             duration: 18.0,
             level_of_detail: 0,
-            rtol: 1e-4,
+            rtol: 1e-6,
             fit: FitOptions::default(),
             jobs: 1,
         }

@@ -43,6 +43,16 @@ pub struct SolverConfig {
     pub atol: f64,
     /// Largest internal step [s], in [1e-5, 1] (default 0.05).
     pub max_step: f64,
+    /// Whether the explicit methods step past the times the model is advanced to and read
+    /// the state there from the step's continuous extension (default), or end a step on
+    /// each of them (`false`: every communication point costs at least one step). See
+    /// [`crate::solver::Integrator::integrate_ahead`].
+    #[serde(default = "step_past_outputs_default")]
+    pub step_past_outputs: bool,
+}
+
+fn step_past_outputs_default() -> bool {
+    true
 }
 
 impl Default for SolverConfig {
@@ -52,6 +62,7 @@ impl Default for SolverConfig {
             rtol: 1e-6,
             atol: 1e-8,
             max_step: 0.05,
+            step_past_outputs: true,
         }
     }
 }

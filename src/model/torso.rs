@@ -7,7 +7,7 @@ use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
 use crate::observe::markers::{MarkerCache, MarkerOutputs};
 use crate::observe::{self, Compartments, Observation};
 use crate::solver::{
-    Integrator, Jacobian, JacobianStructure, Method, Ode, Options, Stats, StiffOde,
+    ErrorWeights, Integrator, Jacobian, JacobianStructure, Method, Ode, Options, Stats, StiffOde,
 };
 use crate::{Error, Result};
 use std::sync::Arc;
@@ -39,6 +39,9 @@ pub struct Compiled {
     pub compartments: Compartments,
     /// Fingerprint of `model`.
     pub fingerprint: u64,
+    /// The error weighting of the state for the step-size control
+    /// ([`dynamics::error_weights`]): reference component and weight of each.
+    pub error_weights: (Vec<u32>, Vec<f64>),
     /// Skin and marker grids, built when markers are first read.
     pub markers: MarkerCache,
 }
@@ -58,21 +61,28 @@ impl Compiled {
             .clone()
             .unwrap_or_else(|| Params::for_posture(config.subject.posture));
         let model = Model::compile(&anatomy, params);
-        let compartments = Compartments::new(&model);
-        let fingerprint = model.fingerprint();
-        Ok(Compiled {
+        Ok(Compiled::from_model(anatomy, model))
+    }
+
+    /// Wraps an anatomy and the model compiled from it (for experiments that compile a
+    /// modified anatomy or model).
+    pub fn from_model(anatomy: Anatomy, model: Model) -> Compiled {
+        Compiled {
+            error_weights: dynamics::error_weights(&model),
+            compartments: Compartments::new(&model),
+            fingerprint: model.fingerprint(),
             anatomy,
             model,
-            compartments,
-            fingerprint,
             markers: MarkerCache::default(),
-        })
+        }
     }
 }
 
 /// The ODE seen by the solver: the model with activations = clamp(input + drive, 0, 1).
 struct System<'a> {
     model: &'a Model,
+    /// Error weighting of the state ([`Compiled::error_weights`]).
+    weights: &'a (Vec<u32>, Vec<f64>),
     data: &'a mut Data,
     inputs: [f64; 8],
     drive: &'a Drive,
@@ -100,6 +110,12 @@ impl Ode for System<'_> {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) {
         let act = self.activations(t);
         dynamics::rhs(self.model, self.data, &act, y, dydt);
+    }
+    fn error_weights(&self) -> Option<ErrorWeights<'_>> {
+        Some(ErrorWeights {
+            reference: &self.weights.0,
+            weight: &self.weights.1,
+        })
     }
     fn as_stiff(&mut self) -> Option<&mut dyn StiffOde> {
         if self.jacobian.is_some() {
@@ -242,6 +258,7 @@ impl Torso {
         } = self;
         let system = System {
             model: &compiled.model,
+            weights: &compiled.error_weights,
             data,
             inputs: *inputs,
             drive: &config.drive,
@@ -264,8 +281,13 @@ impl Torso {
         }
         let before = self.integrator.stats();
         if t > self.time {
+            let past = self.config.solver.step_past_outputs;
             let (mut system, y, time, integrator) = self.integration_parts();
-            let result = integrator.integrate(&mut system, time, y, t);
+            let result = if past {
+                integrator.integrate_ahead(&mut system, time, y, t)
+            } else {
+                integrator.integrate(&mut system, time, y, t)
+            };
             self.observation = None;
             self.markers.invalidate();
             result.map_err(|e| Error::Numerical {
@@ -400,6 +422,7 @@ impl Torso {
         } = self;
         let mut system = System {
             model: &compiled.model,
+            weights: &compiled.error_weights,
             data,
             inputs: *inputs,
             drive: &config.drive,

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::control::{Chain, Controller, ERR_OLD_MIN};
 use super::rosenbrock::Rosenbrock;
 use super::tableau::{DOPRI5, Tableau};
-use super::{Method, Ode, Options, SolverError, Stats};
+use super::{ErrorWeights, Method, Ode, Options, SolverError, Stats};
 
 /// Safety factor of the step-size controller.
 const SAFETY: f64 = 0.9;
@@ -47,6 +47,31 @@ struct Work {
     yout: Vec<f64>,
 }
 
+/// The integration ahead of the caller ([`Integrator::integrate_ahead`]): the internal
+/// point, which may lie past the time the caller was last given, and the last accepted
+/// step's continuous extension, from which the caller's states are read.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct Ahead {
+    /// Whether the fields below belong to the integration the caller is on: cleared by
+    /// [`Integrator::invalidate`], [`Integrator::reset`] and any other way of integrating.
+    valid: bool,
+    /// The time and state the caller was last given: a call resumes the integration ahead
+    /// only from exactly these.
+    out_t: f64,
+    out_y: Vec<f64>,
+    /// The internal time and state (the end of the last accepted step).
+    t: f64,
+    y: Vec<f64>,
+    /// Whether `t0`, `h`, `y0` and `dense` hold a step.
+    have_step: bool,
+    /// Start and size of the last accepted step, and its start state.
+    t0: f64,
+    h: f64,
+    y0: Vec<f64>,
+    /// Dense-output vectors of that step.
+    dense: Vec<f64>,
+}
+
 /// Adaptive embedded Runge-Kutta integrator with memory across calls.
 ///
 /// Holds the method, its options, the step size to try next, the PI-controller memory,
@@ -72,6 +97,9 @@ pub struct Integrator {
     /// Memory of the stiff method when it is the method in use.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     stiff: Option<Box<Rosenbrock>>,
+    /// Stepping past the communication points.
+    #[serde(default)]
+    ahead: Ahead,
     #[serde(skip)]
     work: Work,
 }
@@ -107,6 +135,7 @@ impl Integrator {
             stiff_hits: 0,
             nonstiff_run: 0,
             stiff: (method == Method::Rosenbrock).then(|| Box::new(Rosenbrock::new(options, dim))),
+            ahead: Ahead::default(),
             work: Work::default(),
         };
         if it.stiff.is_none() {
@@ -166,6 +195,7 @@ impl Integrator {
     /// keep the step size and controller memory.
     pub fn invalidate(&mut self) {
         self.fsal_valid = false;
+        self.ahead.valid = false;
         if let Some(r) = &mut self.stiff {
             r.invalidate();
         }
@@ -188,6 +218,7 @@ impl Integrator {
             stiff_hits: self.stiff_hits,
             nonstiff_run: self.nonstiff_run,
             stiff: self.stiff.as_ref().map(|r| Box::new(r.memory())),
+            ahead: self.ahead.clone(),
             work: Work::default(),
         }
     }
@@ -212,6 +243,17 @@ impl Integrator {
         self.stats = src.stats;
         self.stiff_hits = src.stiff_hits;
         self.nonstiff_run = src.nonstiff_run;
+        let (dst, a) = (&mut self.ahead, &src.ahead);
+        dst.valid = a.valid;
+        dst.out_t = a.out_t;
+        dst.out_y.clone_from(&a.out_y);
+        dst.t = a.t;
+        dst.y.clone_from(&a.y);
+        dst.have_step = a.have_step;
+        dst.t0 = a.t0;
+        dst.h = a.h;
+        dst.y0.clone_from(&a.y0);
+        dst.dense.clone_from(&a.dense);
         match (&mut self.stiff, &src.stiff) {
             (Some(dst), Some(r)) => dst.copy_memory_from(r),
             (dst, r) => *dst = r.as_ref().map(|r| Box::new(r.memory())),
@@ -220,6 +262,7 @@ impl Integrator {
 
     /// Forgets everything: step size, controller memory, FSAL stage, statistics.
     pub fn reset(&mut self) {
+        self.ahead.valid = false;
         self.h_next = 0.0;
         self.err_old = ERR_OLD_MIN;
         self.fsal_valid = false;
@@ -241,7 +284,82 @@ impl Integrator {
         y: &mut [f64],
         t_end: f64,
     ) -> Result<(), SolverError> {
+        self.ahead.valid = false;
         self.run(ode, t, y, t_end, &[], &mut |_: f64, _: &[f64]| {})
+    }
+
+    /// As [`Integrator::integrate`], but the steps do not end on `t_end`: the integration
+    /// runs on to the first step end at or past `t_end` and gives the caller the state at
+    /// `t_end` from that step's continuous extension (Dormand-Prince's, of order 4, Hairer,
+    /// Norsett & Wanner II.6). The next call that starts where this one ended, with nothing
+    /// invalidated in between ([`Integrator::invalidate`] when the right-hand side changes),
+    /// continues from the internal point rather than from `y` (when `y` is still the state
+    /// this call gave; any other state restarts), so communication points cost
+    /// no step of their own and, while they fall inside one step, no evaluation at all. A
+    /// call from any other point restarts from `(t, y)`. The stiff method steps exactly to
+    /// `t_end` as [`Integrator::integrate`] does. On error, `*t` and `y` hold the last
+    /// accepted step (or stay as given when none was accepted).
+    pub fn integrate_ahead<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        if self.method == Method::Rosenbrock || self.stiff.is_some() {
+            return self.integrate(ode, t, y, t_end);
+        }
+        self.check_call(ode, *t, y, t_end)?;
+        if t_end == *t {
+            return Ok(());
+        }
+        self.ensure_workspace();
+        let n = self.dim;
+        let dense_len = self.work.dense.len();
+        let a = &mut self.ahead;
+        for (buf, len) in [
+            (&mut a.y, n),
+            (&mut a.y0, n),
+            (&mut a.out_y, n),
+            (&mut a.dense, dense_len),
+        ] {
+            if buf.len() != len {
+                buf.clear();
+                buf.resize(len, 0.0);
+                a.valid = false;
+            }
+        }
+        let resume =
+            a.valid && a.out_t == *t && a.t >= *t && a.have_step && a.out_y.as_slice() == &*y;
+        if !resume {
+            a.t = *t;
+            a.y.copy_from_slice(y);
+            a.have_step = false;
+        }
+        a.valid = false;
+        let mut yint = std::mem::take(&mut self.ahead.y);
+        let mut tint = self.ahead.t;
+        let result = self.step_past(ode, &mut tint, &mut yint, t_end);
+        self.ahead.y = yint;
+        self.ahead.t = tint;
+        if let Err(e) = result {
+            if tint > *t {
+                *t = tint;
+                y.copy_from_slice(&self.ahead.y);
+            }
+            return Err(e);
+        }
+        let a = &mut self.ahead;
+        if a.t == t_end {
+            y.copy_from_slice(&a.y);
+        } else {
+            interpolate(&a.dense, &a.y0, (t_end - a.t0) / a.h, y);
+        }
+        *t = t_end;
+        a.out_t = t_end;
+        a.out_y.copy_from_slice(y);
+        a.valid = true;
+        Ok(())
     }
 
     /// As [`Integrator::integrate`], calling `callback(τ, y(τ))` at every `output_times`
@@ -336,6 +454,73 @@ impl Integrator {
     }
 
     // -----------------------------------------------------------------------------------
+
+    /// Accepted steps from the internal point `(t, y)` until `t` reaches `t_end` (the last one
+    /// ending at or past it), keeping the last step's continuous extension in `self.ahead`.
+    fn step_past<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        if *t >= t_end {
+            return Ok(());
+        }
+        self.ensure_fsal(ode, *t, y)?;
+        if self.h_next <= 0.0 || !self.h_next.is_finite() {
+            self.h_next = match self.options.h_init {
+                Some(h) => h,
+                None => self.initial_step(ode, *t, y, t_end),
+            };
+        }
+        let tab = self.tableau();
+        let opts = self.options;
+        let ctl = Controller {
+            safety: SAFETY,
+            fac_min: FAC_MIN,
+            fac_max: FAC_MAX,
+            alpha: tab.pi_alpha,
+            beta: tab.pi_beta,
+            hold_ratio: 1.0,
+        };
+        let mut chain = Chain::new(self.h_next);
+        while *t < t_end {
+            let p = chain.plan(&mut self.h_next, *t, f64::INFINITY, &opts)?;
+            let h = p.h;
+            match self.attempt(ode, *t, y, h) {
+                Attempt::Error(err) if err <= 1.0 => {
+                    let t_new = *t + h;
+                    if t_new >= t_end {
+                        if !self.prepare_dense(ode, *t, y, h) {
+                            return Err(chain.fail_non_finite(&mut self.h_next, *t));
+                        }
+                        let a = &mut self.ahead;
+                        a.dense.copy_from_slice(&self.work.dense);
+                        a.y0.copy_from_slice(y);
+                        a.t0 = *t;
+                        a.h = h;
+                        a.have_step = true;
+                    }
+                    if opts.stiffness_check {
+                        self.stiffness_test(h, tab);
+                    }
+                    self.h_next = chain.accept(&ctl, err, &mut self.err_old, p);
+                    self.stats.steps += 1;
+                    self.commit(t, y, t_new);
+                }
+                outcome => {
+                    self.stats.rejected += 1;
+                    let err = match outcome {
+                        Attempt::Error(err) => Some(err),
+                        Attempt::NonFinite => None,
+                    };
+                    chain.reject(&ctl, err, h, *t, &mut self.h_next, &opts)?;
+                }
+            }
+        }
+        Ok(())
+    }
 
     /// The explicit pair in use (the stiff method never reaches the explicit paths).
     fn tableau(&self) -> &'static Tableau {
@@ -438,6 +623,7 @@ impl Integrator {
         output_times: &[f64],
         callback: &mut dyn FnMut(f64, &[f64]),
     ) -> Result<(), SolverError> {
+        self.ahead.valid = false;
         self.check_call(ode, *t, y, t_end)?;
         if t_end == *t {
             return Ok(());
@@ -555,7 +741,7 @@ impl Integrator {
         if !(all_finite(ynew) && all_finite(k_last)) {
             return Attempt::NonFinite;
         }
-        let err = self.error_norm(y, h);
+        let err = self.error_norm(y, h, ode.error_weights());
         if err.is_finite() {
             Attempt::Error(err)
         } else {
@@ -566,7 +752,7 @@ impl Integrator {
     /// Weighted RMS norm of the local error estimate h Σ e_j k_j with
     /// sc_i = atol + rtol · max(|y0_i|, |y1_i|) (Hairer, Norsett & Wanner, eq. II.4.11).
     /// DOP853 combines its two estimators as err5² / sqrt(err5² + 0.01 err3²).
-    fn error_norm(&mut self, y: &[f64], h: f64) -> f64 {
+    fn error_norm(&mut self, y: &[f64], h: f64, weights: Option<ErrorWeights>) -> f64 {
         let n = self.dim;
         let tab = self.tableau();
         let (atol, rtol) = (self.options.atol, self.options.rtol);
@@ -582,12 +768,25 @@ impl Integrator {
         let (y, ynew) = (&y[..n], &ynew[..n]);
         let scale = |a: f64, b: f64| (atol + rtol * a.abs().max(b.abs())).max(f64::MIN_POSITIVE);
         let weighted = |e: &[f64]| -> f64 {
-            e[..n]
-                .iter()
-                .zip(y)
-                .zip(ynew)
-                .map(|((&e, &a), &b)| (e / scale(a, b)).powi(2))
-                .sum()
+            match weights {
+                None => e[..n]
+                    .iter()
+                    .zip(y)
+                    .zip(ynew)
+                    .map(|((&e, &a), &b)| (e / scale(a, b)).powi(2))
+                    .sum(),
+                Some(w) => e[..n]
+                    .iter()
+                    .zip(&w.reference[..n])
+                    .zip(&w.weight[..n])
+                    .map(|((&e, &r), &w)| {
+                        let r = r as usize;
+                        let sc = (w * atol + rtol * y[r].abs().max(ynew[r].abs()))
+                            .max(f64::MIN_POSITIVE);
+                        (e / sc).powi(2)
+                    })
+                    .sum(),
+            }
         };
         let sum = weighted(e5);
         match tab.e_low {
@@ -732,6 +931,22 @@ impl Integrator {
             .min(h1)
             .min(self.options.h_max)
             .max(self.options.h_min)
+    }
+}
+
+/// The continuous extension of a step with dense-output vectors `r` (see
+/// `Integrator::prepare_dense`) from `y0`, at theta in [0, 1], into `out`.
+fn interpolate(r: &[f64], y0: &[f64], theta: f64, out: &mut [f64]) {
+    let n = y0.len();
+    let m = r.len() / n;
+    let th1 = 1.0 - theta;
+    for i in 0..n {
+        let mut acc = 0.0;
+        for j in (0..m).rev() {
+            let f = if j % 2 == 0 { theta } else { th1 };
+            acc = (r[j * n + i] + acc) * f;
+        }
+        out[i] = y0[i] + acc;
     }
 }
 

@@ -67,6 +67,25 @@ pub trait Ode {
     fn as_stiff(&mut self) -> Option<&mut dyn StiffOde> {
         None
     }
+    /// How the error norm weighs each component, if not all alike: for component i, a
+    /// factor `weight[i]` on the absolute tolerance and the component `reference[i]` whose
+    /// magnitude sets its relative tolerance, so that its scale is weight_i atol + rtol
+    /// max(|y0_r|, |y1_r|), r = reference_i. A second-order system gives each velocity the
+    /// weight omega (a rate the solver need not resolve): an absolute velocity error counts
+    /// as much as the position error it would make within 1 / omega. `None` (the default):
+    /// every component refers to itself with weight 1, the norm of Hairer, Norsett & Wanner.
+    fn error_weights(&self) -> Option<ErrorWeights<'_>> {
+        None
+    }
+}
+
+/// Per-component error weighting (see [`Ode::error_weights`]).
+#[derive(Clone, Copy, Debug)]
+pub struct ErrorWeights<'a> {
+    /// The component whose magnitude sets each component's relative tolerance.
+    pub reference: &'a [u32],
+    /// Factor on each component's scale (> 0).
+    pub weight: &'a [f64],
 }
 
 /// A problem that supplies its Jacobian J = S + U V^T to the stiff method: a sparse part S
