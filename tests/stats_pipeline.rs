@@ -177,7 +177,7 @@ fn outputs_are_written() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("validation.json")).unwrap())
             .unwrap();
     assert!(json["bars"]["equality"]["p_h0"].is_number());
-    assert!(json["cosinor"]["equality"]["hac_without_intercept"]["p_value"].is_number());
+    assert!(json["cosinor"]["equality"]["robust_without_intercept"]["p_value"].is_number());
     let md = std::fs::read_to_string(dir.join("summary.md")).unwrap();
     assert!(md.contains("BARS P(H0"));
     // SVG text is real text, so the plots are readable without raster fonts.

@@ -1,6 +1,6 @@
 """Cross-checks of `torso validate` against independent implementations: scipy's
 resample_poly and pearsonr, a direct ddof=1 Bland-Altman (and pingouin's), statsmodels OLS
-and F tests for the cosinor fits, the equality tests and the Newey-West variant.
+and F tests for the cosinor fits, the equality tests and the robust (AR-error GLS) test.
 
 The tests build nothing themselves: they call the release binary (`cargo build --release`
 first), which scripts/test.sh does before running pytest.
@@ -177,16 +177,69 @@ def test_cosinor_equality_tests_match_statsmodels(validated):
     assert rel(eq["f_with_intercept"]["p_value"], float(ft.pvalue)) < 1e-6 or float(ft.pvalue) < 1e-290
     ft = full.f_test(r_all[1:])
     assert rel(eq["f_without_intercept"]["f"], float(ft.fvalue)) < 1e-6
-    # Paired differences: iid F and Newey-West Wald.
+    # Paired differences: iid F.
     d = a["sim"] - a["spiro"]
     ft = sm.OLS(d, x).fit().f_test(np.eye(p))
     assert rel(eq["paired_f"]["f"], float(ft.fvalue)) < 1e-6
-    hac = sm.OLS(d, x).fit(cov_type="HAC", cov_kwds={"maxlags": eq["hac_lags"], "use_correction": False})
-    ft = hac.f_test(np.eye(p))
-    assert rel(eq["hac_with_intercept"]["f"], float(ft.fvalue)) < 1e-6
-    ft = hac.f_test(np.eye(p)[1:])
-    assert rel(eq["hac_without_intercept"]["f"], float(ft.fvalue)) < 1e-6
-    assert rel(eq["hac_without_intercept"]["p_value"], float(ft.pvalue)) < 1e-6 or float(ft.pvalue) < 1e-290
+
+
+def ar_filter(v, ar, start):
+    """v_t - sum_j ar_j v_{t-j} for t = start..n-1 (rows of a matrix or samples of a vector)."""
+    out = v[start:].copy()
+    for j, aj in enumerate(ar, 1):
+        out -= aj * v[start - j:len(v) - j]
+    return out
+
+
+def reml_criterion(ar, x, d, start):
+    """(m - k) ln RSS + ln det(X~'X~) of the filtered regression (conditional REML)."""
+    xt, dt = ar_filter(x, ar, start), ar_filter(d, ar, start)
+    fit = sm.OLS(dt, xt).fit()
+    m, k = xt.shape
+    return (m - k) * math.log(fit.ssr) + np.linalg.slogdet(xt.T @ xt)[1]
+
+
+def test_robust_equality_test_matches_statsmodels(validated):
+    """The AR-error GLS F test: order by BIC on statsmodels' Yule-Walker fits of the OLS
+    residuals, REML optimum of the criterion evaluated here with statsmodels OLS, and the
+    F statistics of the filtered regression by statsmodels' f_test."""
+    from statsmodels.regression.linear_model import yule_walker
+
+    _, report, a = validated
+    c = report["cosinor"]["sim"]
+    eq = report["cosinor"]["equality"]
+    x = design(a["time"], c["frequency_hz"], c["harmonics"])
+    n, p = x.shape
+    d = a["sim"] - a["spiro"]
+    big_p = eq["robust_config"]["max_order"]
+    resid = sm.OLS(d, x).fit().resid
+    bic = [n * math.log(np.mean(resid**2)) if k == 0 else
+           n * math.log(yule_walker(resid, order=k, method="mle", demean=False, result_object=False)[1] ** 2) + k * math.log(n)
+           for k in range(big_p + 1)]
+    assert eq["robust_ar_order"] == int(np.argmin(bic))
+    ar = np.array(eq["robust_ar"])
+    assert len(ar) == eq["robust_ar_order"]
+    if len(ar):
+        best = reml_criterion(ar, x, d, big_p)
+        # No nearby point does better (the search's tolerance is 1e-7 in the PACF).
+        for j in range(len(ar)):
+            for step in (-1e-3, 1e-3):
+                trial = ar.copy()
+                trial[j] += step
+                assert reml_criterion(trial, x, d, big_p) >= best - 1e-6
+    xt, dt = ar_filter(x, ar, big_p), ar_filter(d, ar, big_p)
+    fit = sm.OLS(dt, xt).fit()
+    # statsmodels' F uses m - k residual df; ours also subtracts the AR order.
+    df = len(dt) - p - len(ar)
+    for name, r in (("robust_with_intercept", np.eye(p)), ("robust_without_intercept", np.eye(p)[1:])):
+        ft = fit.f_test(r)
+        ours = eq[name]["f"]
+        assert rel(ours["f"], float(ft.fvalue) * df / fit.df_resid) < 1e-6
+        assert ours["df_den"] == df
+        assert 0 < eq[name]["p_value"] <= 1
+        # A bootstrap p-value has the form (1 + c) / (B + 1).
+        b = eq["robust_config"]["bootstrap"]
+        assert abs(eq[name]["p_value"] * (b + 1) - round(eq[name]["p_value"] * (b + 1))) < 1e-9
 
 
 def test_alignment_recovers_known_lag(tmp_path):

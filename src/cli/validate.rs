@@ -2,6 +2,7 @@
 //! statistic (JSON), the aligned data (CSV), plots (PNG and SVG) and a Markdown summary;
 //! and `torso synth-spirometry`, which writes a synthetic spirogram for tests.
 
+use crate::stats::autoreg::ArGlsConfig;
 use crate::stats::bars::BarsConfig;
 use crate::stats::io::{Series, read_table, write_csv};
 use crate::stats::prepare::{DEFAULT_LUNG_RATIO, PrepareOptions, SpiroKind};
@@ -38,9 +39,12 @@ pub struct ValidateArgs {
     /// Number of cosinor harmonics.
     #[arg(long, default_value_t = 4)]
     pub harmonics: usize,
-    /// Newey-West lag for the HAC test [samples] (default: one breathing period).
-    #[arg(long)]
-    pub hac_lags: Option<usize>,
+    /// Bootstrap replicates of the robust cosinor equality test (0: nominal F p-value).
+    #[arg(long, default_value_t = 399)]
+    pub bootstrap: usize,
+    /// Largest autoregressive order of the robust test's error model.
+    #[arg(long, default_value_t = 8)]
+    pub max_ar_order: usize,
     /// Seed of the BARS chains.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -87,6 +91,16 @@ fn read_spiro(args: &ValidateArgs) -> Result<(Series, SpiroKind)> {
 
 /// Builds the validation options from the arguments.
 pub fn options(args: &ValidateArgs) -> Result<ValidationOptions> {
+    if args.max_ar_order > 20 {
+        return Err(Error::invalid(
+            "--max-ar-order",
+            args.max_ar_order,
+            "0..=20",
+        ));
+    }
+    if args.bootstrap > 100_000 {
+        return Err(Error::invalid("--bootstrap", args.bootstrap, "0..=100000"));
+    }
     let burn_in = 200;
     if args.bars_iterations <= burn_in {
         return Err(Error::invalid(
@@ -107,7 +121,11 @@ pub fn options(args: &ValidateArgs) -> Result<ValidationOptions> {
             detrend_volume: args.detrend,
         },
         harmonics: args.harmonics,
-        hac_lags: args.hac_lags,
+        robust: ArGlsConfig {
+            max_order: args.max_ar_order,
+            bootstrap: args.bootstrap,
+            seed: args.seed,
+        },
         bars: BarsConfig {
             burn_in,
             samples: args.bars_iterations - burn_in,

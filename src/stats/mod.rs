@@ -17,21 +17,25 @@
 //! | [`frequency`] | breathing frequency: Hann-interpolated DFT, autocorrelation check |
 //! | [`agreement`] | Pearson correlation, Bland-Altman |
 //! | [`breaths`] | breath segmentation and pairing |
-//! | [`ols`] | least squares, Newey-West covariance, F and Wald tests |
+//! | [`ols`] | least squares, F and Wald tests |
+//! | [`autoreg`] | regression with AR errors: REML, GLS F test, sieve bootstrap |
 //! | [`cosinor`] | cosinor fits and equality tests |
 //! | [`bars`] | BARS fits and equality test |
 //! | [`special`] | gamma, incomplete beta, t, F, normal distributions |
 //! | [`rng`] | seeded PCG64 generator and variates |
 //! | [`synth`] | synthetic spirometry |
+//! | [`montecarlo`] | size and power of the equality tests by simulation |
 //! | [`plot`] | PNG/SVG figures |
 //! | [`validation`] | the whole pipeline and its outputs |
 
 pub mod agreement;
+pub mod autoreg;
 pub mod bars;
 pub mod breaths;
 pub mod cosinor;
 pub mod frequency;
 pub mod io;
+pub mod montecarlo;
 pub mod ols;
 pub mod plot;
 pub mod prepare;

@@ -1,6 +1,6 @@
-//! Ordinary least squares by Householder QR, the classical covariance, Newey-West (HAC)
-//! covariance and linear-hypothesis F/Wald tests. Small dense problems (a handful of
-//! columns), so nalgebra's QR is used as is.
+//! Ordinary least squares by Householder QR, the classical covariance and the F test of
+//! nested models. Small dense problems (a handful of columns), so nalgebra's QR is used as
+//! is.
 
 use super::special::f_sf;
 use crate::{Error, Result};
@@ -91,34 +91,6 @@ pub fn ols(x: &DMatrix<f64>, y: &[f64]) -> Result<OlsFit> {
     })
 }
 
-/// Newey-West (1987) heteroscedasticity and autocorrelation consistent covariance of the
-/// OLS coefficients, Bartlett weights `1 - l / (L + 1)` for lags `l = 1..L`:
-/// `V = (X'X)^-1 S (X'X)^-1`, `S = sum_t e_t^2 x_t x_t' + sum_l w_l sum_t e_t e_{t-l}
-/// (x_t x_{t-l}' + x_{t-l} x_t')`. With `small_sample` the result is scaled by n / (n - p).
-pub fn newey_west(x: &DMatrix<f64>, fit: &OlsFit, lags: usize, small_sample: bool) -> DMatrix<f64> {
-    let (n, p) = x.shape();
-    // Scores u_t = x_t e_t.
-    let mut u = DMatrix::<f64>::zeros(n, p);
-    for t in 0..n {
-        for j in 0..p {
-            u[(t, j)] = x[(t, j)] * fit.residuals[t];
-        }
-    }
-    let mut s = u.transpose() * &u;
-    for l in 1..=lags.min(n - 1) {
-        let w = 1.0 - l as f64 / (lags as f64 + 1.0);
-        let a = u.rows(l, n - l);
-        let b = u.rows(0, n - l);
-        let g = a.transpose() * b;
-        s += (&g + g.transpose()) * w;
-    }
-    let mut v = &fit.xtx_inv * s * &fit.xtx_inv;
-    if small_sample {
-        v *= n as f64 / (n - p) as f64;
-    }
-    v
-}
-
 /// An F test result.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct FTest {
@@ -152,18 +124,4 @@ impl FTest {
             df_f as f64,
         )
     }
-}
-
-/// Wald test that the coefficients `idx` are all zero with covariance `cov`, reported in
-/// F form W / q on (q, `df_den`) degrees of freedom (statsmodels' `f_test` convention).
-pub fn wald_zero(coef: &[f64], cov: &DMatrix<f64>, idx: &[usize], df_den: usize) -> Result<FTest> {
-    let q = idx.len();
-    let b = DVector::from_iterator(q, idx.iter().map(|&i| coef[i]));
-    let v = DMatrix::from_fn(q, q, |a, c| cov[(idx[a], idx[c])]);
-    let chol = v.cholesky().ok_or_else(|| Error::Numerical {
-        time: 0.0,
-        reason: "Wald covariance is not positive definite".into(),
-    })?;
-    let w = b.dot(&chol.solve(&b));
-    Ok(FTest::new(w / q as f64, q as f64, df_den as f64))
 }

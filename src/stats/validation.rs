@@ -4,6 +4,7 @@
 //! Markdown summary).
 
 use super::agreement::{BlandAltman, Pearson, bland_altman, pearson};
+use super::autoreg::ArGlsConfig;
 use super::bars::{BarsConfig, BarsEquality, BarsFit, bars_equality, bars_fit_on_stream};
 use super::breaths::{Breath, BreathDetector, pair_breaths, segment_breaths};
 use super::cosinor::{CosinorEquality, CosinorFit, compare_cosinor, fit_cosinor};
@@ -22,8 +23,8 @@ pub struct ValidationOptions {
     pub prepare: PrepareOptions,
     /// Number of cosinor harmonics C (thesis: 4).
     pub harmonics: usize,
-    /// Newey-West lag for the HAC test [samples]; `None`: one breathing period.
-    pub hac_lags: Option<usize>,
+    /// Settings of the robust cosinor equality test (AR errors, bootstrap).
+    pub robust: ArGlsConfig,
     /// BARS settings (the seed drives all three chains).
     pub bars: BarsConfig,
 }
@@ -33,7 +34,7 @@ impl Default for ValidationOptions {
         ValidationOptions {
             prepare: PrepareOptions::default(),
             harmonics: 4,
-            hac_lags: None,
+            robust: ArGlsConfig::default(),
             bars: BarsConfig::default(),
         }
     }
@@ -148,11 +149,14 @@ pub fn validate(
     };
     let c_sim = fit_cosinor(&prep.time, &prep.sim, f0, opts.harmonics)?;
     let c_spiro = fit_cosinor(&prep.time, &prep.spiro, f0, opts.harmonics)?;
-    let hac = opts
-        .hac_lags
-        .unwrap_or_else(|| (fs * period).round() as usize)
-        .clamp(1, n / 4);
-    let c_eq = compare_cosinor(&prep.time, &prep.sim, &prep.spiro, f0, opts.harmonics, hac)?;
+    let c_eq = compare_cosinor(
+        &prep.time,
+        &prep.sim,
+        &prep.spiro,
+        f0,
+        opts.harmonics,
+        &opts.robust,
+    )?;
     let (t, a, b) = (&prep.time, &prep.sim, &prep.spiro);
     let cfg = &opts.bars;
     let (r_sim, r_spiro, r_eq) = std::thread::scope(|s| {
@@ -333,17 +337,15 @@ pub fn summary_markdown(v: &Validation) -> String {
         fmt_p(cp.zero_amplitude.p_value)
     );
     for (name, t) in [
-        ("equality F with intercept", &ce.f_with_intercept),
-        ("equality F without intercept", &ce.f_without_intercept),
-        ("paired F on differences", &ce.paired_f),
         (
-            "HAC Wald (Newey-West) with intercept",
-            &ce.hac_with_intercept,
+            "equality F with intercept (iid errors)",
+            &ce.f_with_intercept,
         ),
         (
-            "HAC Wald (Newey-West) without intercept",
-            &ce.hac_without_intercept,
+            "equality F without intercept (iid errors)",
+            &ce.f_without_intercept,
         ),
+        ("paired F on differences (iid errors)", &ce.paired_f),
     ] {
         let _ = writeln!(
             s,
@@ -354,10 +356,30 @@ pub fn summary_markdown(v: &Validation) -> String {
             fmt_p(t.p_value)
         );
     }
+    for (name, t) in [
+        ("with intercept", &ce.robust_with_intercept),
+        ("without intercept", &ce.robust_without_intercept),
+    ] {
+        let _ = writeln!(
+            s,
+            "| cosinor robust equality {name} (AR({}) errors) | GLS F({:.0}, {:.0}) = {:.3}, bootstrap p = {} ({} replicates) |",
+            ce.robust_ar_order,
+            t.f.df_num,
+            t.f.df_den,
+            t.f.f,
+            fmt_p(t.p_value),
+            ce.robust_config.bootstrap
+        );
+    }
     let _ = writeln!(
         s,
-        "| HAC lags; residual lag-1 autocorrelation | {}; {:.3} |",
-        ce.hac_lags, ce.residual_lag1_autocorrelation
+        "| residual lag-1 autocorrelation; REML AR coefficients | {:.3}; {} |",
+        ce.residual_lag1_autocorrelation,
+        ce.robust_ar
+            .iter()
+            .map(|a| format!("{a:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     let _ = writeln!(
         s,
