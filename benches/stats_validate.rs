@@ -31,6 +31,7 @@ fn main() {
         time,
         values,
         column: "lung_volume".into(),
+        source: "simulated curve".into(),
     };
     let spiro = synth_spirometry(
         &VolumeSource::Curve(sim.clone()),

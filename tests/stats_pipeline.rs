@@ -1,7 +1,10 @@
 //! End-to-end tests of the validation pipeline through the library API: breath counts on
-//! synthetic noisy curves, exact lag recovery from a synthetic spirogram, flow input, and
-//! the outputs written by `write_outputs`.
+//! synthetic noisy curves, exact lag recovery from a synthetic spirogram, flow input, the
+//! outputs written by `write_outputs`, and the refusals of records that cannot be compared
+//! (no time overlap, less than two breaths of overlap, a flat series, a lag search beyond
+//! the overlap), each naming the file and the figure.
 
+use breathing_torso::stats::autoreg::ArGlsConfig;
 use breathing_torso::stats::bars::BarsConfig;
 use breathing_torso::stats::breaths::{BreathDetector, segment_breaths};
 use breathing_torso::stats::io::Series;
@@ -109,6 +112,10 @@ fn quick() -> ValidationOptions {
             samples: 300,
             ..BarsConfig::default()
         },
+        robust: ArGlsConfig {
+            bootstrap: 99,
+            ..ArGlsConfig::default()
+        },
         ..ValidationOptions::default()
     }
 }
@@ -184,4 +191,92 @@ fn outputs_are_written() {
     let svg = std::fs::read_to_string(dir.join("bland_altman.svg")).unwrap();
     assert!(svg.contains("Bland-Altman"));
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The message of a validation that must fail.
+fn refusal(sim: &Series, spiro: &Series, opts: &ValidationOptions) -> String {
+    match validate(sim, spiro, SpiroKind::Volume, opts) {
+        Ok(_) => panic!(
+            "validation of {} against {} succeeded",
+            sim.source, spiro.source
+        ),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn named(mut s: Series, source: &str) -> Series {
+    s.source = source.into();
+    s
+}
+
+#[test]
+fn records_without_time_overlap_are_refused() {
+    let (sim, spiro) = sine_pair(0, false, 0.01);
+    let (sim, mut spiro) = (named(sim, "sim.csv"), named(spiro, "spiro.csv"));
+    for t in &mut spiro.time {
+        *t += 1000.0;
+    }
+    let e = refusal(&sim, &spiro, &quick());
+    assert!(
+        e.contains("sim.csv covers 0.000-")
+            && e.contains("spiro.csv covers 1000.000-")
+            && e.contains("do not overlap"),
+        "{e}"
+    );
+}
+
+#[test]
+fn overlap_shorter_than_two_breaths_is_refused() {
+    // 3 s of spirometry against 20 s of simulation at 0.25 Hz: two breaths need 8 s.
+    let (sim, spiro) = sine_pair(0, false, 0.01);
+    let (sim, mut spiro) = (named(sim, "sim.csv"), named(spiro, "spiro.csv"));
+    spiro.time.truncate(300);
+    spiro.values.truncate(300);
+    let e = refusal(&sim, &spiro, &quick());
+    assert!(
+        e.contains("sim.csv and spiro.csv overlap for 2.99 s")
+            && e.contains("shorter than two breaths")
+            && e.contains("(8.00 s)"),
+        "{e}"
+    );
+}
+
+#[test]
+fn flat_series_are_refused() {
+    let (sim, spiro) = sine_pair(0, false, 0.01);
+    let (sim, mut spiro) = (named(sim, "sim.csv"), named(spiro, "spiro.csv"));
+    spiro.values.iter_mut().for_each(|v| *v = 0.7);
+    let e = refusal(&sim, &spiro, &quick());
+    assert!(
+        e.contains("spiro.csv: the spirometry column `volume` is flat") && e.contains("of 0.7"),
+        "{e}"
+    );
+    let (sim, spiro) = sine_pair(0, false, 0.01);
+    let (mut sim, spiro) = (named(sim, "sim.csv"), named(spiro, "spiro.csv"));
+    sim.values.iter_mut().for_each(|v| *v = 3.1);
+    let e = refusal(&sim, &spiro, &quick());
+    assert!(e.contains("sim.csv: the simulation column"), "{e}");
+}
+
+#[test]
+fn lag_search_beyond_the_overlap_is_refused() {
+    let (sim, spiro) = sine_pair(0, false, 0.01);
+    let (sim, spiro) = (named(sim, "sim.csv"), named(spiro, "spiro.csv"));
+    let mut opts = quick();
+    opts.prepare.max_lag = 100_000;
+    let e = refusal(&sim, &spiro, &opts);
+    assert!(
+        e.contains("--max-lag 100000 frames")
+            && e.contains("beyond the overlap of sim.csv and spiro.csv"),
+        "{e}"
+    );
+    // The largest accepted lag is the one the message names.
+    let at_most: usize = e
+        .split("at most ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no limit in {e}"));
+    opts.prepare.max_lag = at_most;
+    validate(&sim, &spiro, SpiroKind::Volume, &opts).expect("the named limit is accepted");
 }

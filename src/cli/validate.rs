@@ -4,7 +4,7 @@
 
 use crate::stats::autoreg::ArGlsConfig;
 use crate::stats::bars::BarsConfig;
-use crate::stats::io::{Series, read_table, write_csv};
+use crate::stats::io::{Series, Table, read_table, write_csv};
 use crate::stats::prepare::{DEFAULT_LUNG_RATIO, PrepareOptions, SpiroKind};
 use crate::stats::synth::{SpiroSynthOptions, VolumeSource, synth_spirometry};
 use crate::stats::validation::{ValidationOptions, summary_markdown, validate, write_outputs};
@@ -24,7 +24,8 @@ pub struct ValidateArgs {
     /// Output directory (created).
     #[arg(long)]
     pub out: PathBuf,
-    /// Value column of the simulation CSV (default: `lung_volume`, else `volume`).
+    /// Value column of the simulation CSV (default: `volume.lung`, else `lung_volume`,
+    /// else `volume`).
     #[arg(long)]
     pub sim_column: Option<String>,
     /// Lung-to-thoracic volume ratio applied to the simulation (implies it is thoracic).
@@ -56,16 +57,41 @@ pub struct ValidateArgs {
     pub detrend: bool,
 }
 
-/// Reads the simulation series: the named column, else `lung_volume`, else `volume`.
+/// Lung-volume columns looked for, in order, when none is named: `volume.lung` (written
+/// by `torso simulate` and by `torso fit` in `<stem>_lung_volume.csv`), then
+/// `lung_volume` and `volume`.
+pub const LUNG_VOLUME_COLUMNS: [&str; 3] = ["volume.lung", "lung_volume", "volume"];
+
+/// The named column, else the first of [`LUNG_VOLUME_COLUMNS`] in the table; an error
+/// naming the file and its columns when there is none.
+fn lung_volume_column(t: &Table, named: Option<&str>) -> Result<String> {
+    if let Some(c) = named {
+        return Ok(c.to_string());
+    }
+    LUNG_VOLUME_COLUMNS
+        .iter()
+        .find(|c| t.column_index(c).is_some())
+        .map(|c| c.to_string())
+        .ok_or_else(|| Error::Parse {
+            path: t.path.clone(),
+            line: t.header_line,
+            column: 1,
+            message: format!(
+                "no lung-volume column: looked for {} (columns: {}); name one with --sim-column",
+                LUNG_VOLUME_COLUMNS
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                t.headers.join(", ")
+            ),
+        })
+}
+
+/// Reads the simulation series (see [`lung_volume_column`]).
 fn read_sim(args: &ValidateArgs) -> Result<Series> {
     let t = read_table(&args.sim)?;
-    let name = match &args.sim_column {
-        Some(c) => c.clone(),
-        None => ["lung_volume", "volume"]
-            .iter()
-            .find(|c| t.column_index(c).is_some())
-            .map_or_else(|| "lung_volume".to_string(), |c| c.to_string()),
-    };
+    let name = lung_volume_column(&t, args.sim_column.as_deref())?;
     t.series(&name, 32)
 }
 
@@ -156,9 +182,10 @@ pub struct SynthSpirometryArgs {
     /// Source lung-volume curve CSV (e.g. a simulation); otherwise a sinusoidal model.
     #[arg(long)]
     pub from: Option<PathBuf>,
-    /// Column of the source curve.
-    #[arg(long, default_value = "lung_volume")]
-    pub column: String,
+    /// Column of the source curve (default: `volume.lung`, else `lung_volume`, else
+    /// `volume`).
+    #[arg(long)]
+    pub column: Option<String>,
     /// Sinusoidal model: breathing frequency [Hz].
     #[arg(long, default_value_t = 0.25)]
     pub frequency: f64,
@@ -200,7 +227,11 @@ pub struct SynthSpirometryArgs {
 /// Runs `torso synth-spirometry`.
 pub fn run_synth(args: &SynthSpirometryArgs) -> Result<()> {
     let source = match &args.from {
-        Some(p) => VolumeSource::Curve(read_table(p)?.series(&args.column, 16)?),
+        Some(p) => {
+            let t = read_table(p)?;
+            let name = lung_volume_column(&t, args.column.as_deref())?;
+            VolumeSource::Curve(t.series(&name, 16)?)
+        }
         None => VolumeSource::Sine {
             frequency_hz: args.frequency,
             tidal_volume_l: args.tidal_volume,

@@ -15,6 +15,8 @@ pub struct Series {
     pub values: Vec<f64>,
     /// Header of the value column as found in the file.
     pub column: String,
+    /// Where the series came from (the file name), used in error messages.
+    pub source: String,
 }
 
 impl Series {
@@ -214,6 +216,7 @@ impl Table {
             time,
             values,
             column: self.headers[vi].clone(),
+            source: self.path.clone(),
         };
         if self.rows.len() < min_rows {
             return Err(parse_err(

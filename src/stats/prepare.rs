@@ -10,18 +10,24 @@
 //!    that the filter's zero padding reaches ([`edge_samples`], 10 at 14/25) are dropped;
 //! 3. the simulated volume is multiplied by the lung ratio when it is a thoracic-cavity
 //!    volume (0.75 by default, thesis 4.2);
-//! 4. the lag in `[-max_lag, max_lag]` frames maximising the normalised cross-correlation
-//!    (Pearson correlation over the overlapping samples of the mean-removed series) is
-//!    found and the pair is cut to the overlap, so that the maximum sits at lag 0. With the
-//!    thesis's +-100 frames at 56 Hz (about half a breath) the search can lock onto a
-//!    neighbouring breath: the correlation at every lag is reported for inspection;
+//! 4. the two time columns are read as one clock: simulation sample `i` at `t_i` meets the
+//!    spirogram at `t_i + lag / fs`, and the lag in `[-max_lag, max_lag]` frames maximising
+//!    the normalised cross-correlation (Pearson correlation over the overlapping samples of
+//!    the mean-removed series) is found; the pair is cut to the overlap. With the thesis's
+//!    +-100 frames at 56 Hz (about half a breath) the search can lock onto a neighbouring
+//!    breath: the correlation at every lag is reported for inspection;
 //! 5. the spirogram, which starts at zero, is offset to the simulation's mean. The thesis
 //!    adds the simulation mean; here the spirogram's own mean is removed first, so the two
 //!    means are equal exactly, which the equality tests assume.
 //!
-//! Positive lags mean the spirogram sample `i + lag` (counted on the resampled spirogram
-//! before its edges are dropped) pairs with simulation sample `i`: a spirometer started
-//! `d` seconds after the simulation's first sample gives a lag of `-d fs`.
+//! Positive lags mean the spirogram's clock is read `lag` frames later than the
+//! simulation's: a spirometer export whose time column starts at 0 s like the
+//! simulation's, but which was started `d` seconds after the simulation's first sample,
+//! gives a lag of `-d fs`.
+//!
+//! Refused with a message naming the file and the figure: a flat series (nothing to
+//! compare), records that do not overlap on the clock, and a `max_lag` that reaches beyond
+//! half the overlap (the lag search compares at least half the records at every lag).
 
 use super::io::Series;
 use super::resample::{rate_ratio, resample_poly};
@@ -175,9 +181,20 @@ pub fn lagged_correlation(a: &[f64], b: &[f64], lag: i64, min_overlap: usize) ->
 
 /// Lag in `[-max_lag, max_lag]` maximising [`lagged_correlation`], with the whole curve.
 pub fn best_lag(a: &[f64], b: &[f64], max_lag: usize) -> Result<(i64, f64, Vec<f64>)> {
+    best_lag_around(a, b, 0, max_lag)
+}
+
+/// Lag `l` in `[-max_lag, max_lag]` maximising the correlation of `a[i]` with
+/// `b[i + center + l]`, with the curve over `l`.
+pub fn best_lag_around(
+    a: &[f64],
+    b: &[f64],
+    center: i64,
+    max_lag: usize,
+) -> Result<(i64, f64, Vec<f64>)> {
     let min_overlap = (a.len().min(b.len()) / 2).max(16);
     let curve: Vec<f64> = (-(max_lag as i64)..=max_lag as i64)
-        .map(|l| lagged_correlation(a, b, l, min_overlap))
+        .map(|l| lagged_correlation(a, b, center + l, min_overlap))
         .collect();
     let (idx, best) = curve
         .iter()
@@ -196,6 +213,61 @@ pub fn best_lag(a: &[f64], b: &[f64], max_lag: usize) -> Result<(i64, f64, Vec<f
     Ok((idx as i64 - max_lag as i64, *best, curve))
 }
 
+/// Range (max - min) below which a series counts as flat: `1e-9 max(1, max |v|)`, i.e.
+/// constant to within rounding of the values as written.
+pub fn flat_tolerance(v: &[f64]) -> f64 {
+    1e-9 * v.iter().fold(1.0f64, |m, x| m.max(x.abs()))
+}
+
+/// Errors when `series` is flat (see [`flat_tolerance`]): nothing to compare. `what`
+/// describes the role ("simulation", "spirometry").
+pub fn check_not_flat(series: &Series, what: &str, kind: Option<SpiroKind>) -> Result<()> {
+    let (lo, hi) = series
+        .values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+    if hi - lo <= flat_tolerance(&series.values) {
+        let unit = if kind == Some(SpiroKind::Flow) {
+            "L/s"
+        } else {
+            "L"
+        };
+        let why = if kind == Some(SpiroKind::Flow) {
+            "a constant flow integrates to a pure drift, which is removed, leaving no breathing"
+        } else {
+            "there is no breathing to compare"
+        };
+        return Err(Error::State(format!(
+            "{}: the {what} column `{}` is flat ({} rows, all within {:.3e} {unit} of {}): {why}",
+            series.source,
+            series.column,
+            series.len(),
+            hi - lo,
+            lo
+        )));
+    }
+    Ok(())
+}
+
+/// The time interval [s] both records cover on their clocks, or an error naming both files
+/// and their spans when they do not overlap.
+pub fn clock_overlap(sim: &Series, spiro: &Series) -> Result<(f64, f64)> {
+    let (s0, s1) = (sim.time[0], sim.time[sim.len() - 1]);
+    let (p0, p1) = (spiro.time[0], spiro.time[spiro.len() - 1]);
+    let (a, b) = (s0.max(p0), s1.min(p1));
+    if b <= a {
+        return Err(Error::State(format!(
+            "{} covers {s0:.3}-{s1:.3} s and {} covers {p0:.3}-{p1:.3} s: the records do not \
+             overlap in time. Both time columns must be on one clock (a spirometer export \
+             starting at 0 s is compared from the simulation's start); shift one of them",
+            sim.source, spiro.source
+        )));
+    }
+    Ok((a, b))
+}
+
 /// Runs steps 1-5 of the module doc on a simulation series and a spirometry series.
 pub fn prepare(
     sim: &Series,
@@ -206,8 +278,26 @@ pub fn prepare(
     if !(opts.lung_ratio > 0.0 && opts.lung_ratio <= 2.0) {
         return Err(Error::invalid("lung ratio", opts.lung_ratio, "(0, 2]"));
     }
+    check_not_flat(sim, "simulation", None)?;
+    check_not_flat(spiro, "spirometry", Some(kind))?;
+    let (o0, o1) = clock_overlap(sim, spiro)?;
     let fs = sim.rate();
     let fs_spiro = spiro.rate();
+    let overlap_frames = ((o1 - o0) * fs).floor() as usize + 1;
+    if 2 * opts.max_lag >= overlap_frames {
+        return Err(Error::State(format!(
+            "--max-lag {} frames ({:.2} s at {:.3} Hz) reaches beyond the overlap of {} and {}: \
+             {overlap_frames} frames ({:.2} s, {o0:.3}-{o1:.3} s). Every lag tried must leave \
+             half the overlap to compare: at most {} frames here",
+            opts.max_lag,
+            opts.max_lag as f64 / fs,
+            fs,
+            sim.source,
+            spiro.source,
+            o1 - o0,
+            (overlap_frames - 1) / 2
+        )));
+    }
     let (mut vol, drift) = match kind {
         SpiroKind::Flow => {
             let v = integrate(&spiro.time, &spiro.values);
@@ -234,12 +324,17 @@ pub fn prepare(
         trimmed = trim as i64;
     }
     let simv: Vec<f64> = sim.values.iter().map(|v| v * opts.lung_ratio).collect();
-    let (lag, max_correlation, curve) = best_lag(&simv, &vol, opts.max_lag)?;
-    let i0 = if lag < 0 { (-lag) as usize } else { 0 };
-    let i1 = ((simv.len() as i64).min(vol.len() as i64 - lag)) as usize;
+    // Index of the (trimmed) spirogram sample on the simulation's clock at lag 0:
+    // simulation sample i pairs with spirogram sample i + clock - trimmed + lag.
+    let clock = ((sim.time[0] - spiro.time[0]) * fs).round() as i64;
+    let center = clock - trimmed;
+    let (lag, max_correlation, curve) = best_lag_around(&simv, &vol, center, opts.max_lag)?;
+    let shift = center + lag;
+    let i0 = if shift < 0 { (-shift) as usize } else { 0 };
+    let i1 = ((simv.len() as i64).min(vol.len() as i64 - shift)) as usize;
     let time = sim.time[i0..i1].to_vec();
     let simv = simv[i0..i1].to_vec();
-    let mut spv: Vec<f64> = (i0..i1).map(|i| vol[(i as i64 + lag) as usize]).collect();
+    let mut spv: Vec<f64> = (i0..i1).map(|i| vol[(i as i64 + shift) as usize]).collect();
     let m_sim = simv.iter().sum::<f64>() / simv.len() as f64;
     let m_sp = spv.iter().sum::<f64>() / spv.len() as f64;
     let offset = m_sim - m_sp;
@@ -251,8 +346,8 @@ pub fn prepare(
         spiro_rate_hz: fs_spiro,
         resample_ratio: (up, down),
         lung_ratio: opts.lung_ratio,
-        lag_frames: lag + trimmed,
-        lag_seconds: (lag + trimmed) as f64 / fs,
+        lag_frames: lag,
+        lag_seconds: lag as f64 / fs,
         max_correlation,
         lag_at_search_limit: lag.unsigned_abs() as usize == opts.max_lag,
         correlation_by_lag: curve,

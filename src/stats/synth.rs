@@ -199,5 +199,6 @@ pub fn synth_spirometry(source: &VolumeSource, opts: &SpiroSynthOptions) -> Resu
         time,
         values,
         column: column.to_string(),
+        source: format!("synthetic {column} spirogram"),
     })
 }

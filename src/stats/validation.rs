@@ -11,7 +11,7 @@ use super::cosinor::{CosinorEquality, CosinorFit, compare_cosinor, fit_cosinor};
 use super::frequency::{FrequencyEstimate, estimate_frequency};
 use super::io::{Series, write_csv};
 use super::plot::{BLUE, Band, DARK, HLine, Mark, ORANGE, Panel, RED, Trace, write_figure};
-use super::prepare::{PrepareOptions, Prepared, SpiroKind, prepare};
+use super::prepare::{PrepareOptions, Prepared, SpiroKind, check_not_flat, clock_overlap, prepare};
 use crate::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -110,6 +110,30 @@ fn ba_opt(a: &[f64], b: &[f64]) -> Option<BlandAltman> {
     bland_altman(a, b).ok()
 }
 
+/// Fewest whole breaths the compared stretch must hold: breaths are segmented and paired,
+/// the frequency is estimated and the cosinor fitted on it, none of which means anything
+/// on less than two cycles.
+pub const MIN_BREATHS: f64 = 2.0;
+
+fn check_two_breaths(
+    sim: &Series,
+    spiro: &Series,
+    overlap_s: f64,
+    frequency_hz: f64,
+    when: &str,
+) -> Result<()> {
+    let need = MIN_BREATHS / frequency_hz;
+    if overlap_s < need {
+        return Err(Error::State(format!(
+            "{} and {} overlap for {overlap_s:.2} s {when}, shorter than two breaths at the \
+             simulation's {frequency_hz:.3} Hz ({need:.2} s): record the spirogram over the \
+             simulated interval",
+            sim.source, spiro.source
+        )));
+    }
+    Ok(())
+}
+
 /// Runs the validation on a simulation series and a spirometry series.
 pub fn validate(
     sim: &Series,
@@ -117,6 +141,12 @@ pub fn validate(
     kind: SpiroKind,
     opts: &ValidationOptions,
 ) -> Result<Validation> {
+    check_not_flat(sim, "simulation", None)?;
+    check_not_flat(spiro, "spirometry", Some(kind))?;
+    let (o0, o1) = clock_overlap(sim, spiro)?;
+    // Two breaths at the simulation's own frequency must fit in the overlap.
+    let f_record = estimate_frequency(&sim.values, sim.rate())?.frequency_hz;
+    check_two_breaths(sim, spiro, o1 - o0, f_record, "on their clocks")?;
     let prep = prepare(sim, spiro, kind, &opts.prepare)?;
     let n = prep.time.len();
     if n < 32 {
@@ -124,6 +154,13 @@ pub fn validate(
     }
     let fs = prep.rate_hz;
     let f_sim = estimate_frequency(&prep.sim, fs)?;
+    check_two_breaths(
+        sim,
+        spiro,
+        n as f64 / fs,
+        f_sim.frequency_hz,
+        &format!("after alignment (lag {} frames)", prep.lag_frames),
+    )?;
     let f_spiro = estimate_frequency(&prep.spiro, fs)?;
     let f0 = f_sim.frequency_hz;
     let period = 1.0 / f0;
