@@ -10,6 +10,14 @@
 //! more extreme one, and an extremum on the first sample (a record starting mid-breath) is
 //! dropped. Extrema are located on a centred moving average over 0.05 breathing periods,
 //! which keeps the noise out of the per-breath volumes. A breath runs trough -> peak -> trough.
+//!
+//! Per breath, the timing indices the SLP validation against pneumotachography compares
+//! (Motamedi-Fakhr et al. 2017, Physiol. Rep. 5(3):e13124): inspiratory time Ti (trough to
+//! peak), expiratory time Te (peak to next trough), total time Ttot = Ti + Te, the duty
+//! cycle Ti/Ttot, and IE50 = TIF50 / TEF50, the inspiratory flow when half the tidal volume
+//! has been inspired over the expiratory flow when half the expired volume has been
+//! expired. Each flow is the slope of the smoothed volume over the sample interval in
+//! which the curve crosses its half-volume level (first crossing in the phase).
 
 use super::frequency::detrend_linear;
 use serde::Serialize;
@@ -33,6 +41,32 @@ pub struct Breath {
     pub ti: f64,
     /// Expiratory time [s].
     pub te: f64,
+    /// Total breath time Ti + Te [s].
+    pub ttot: f64,
+    /// Duty cycle Ti / Ttot.
+    pub ti_ttot: f64,
+    /// TIF50 / TEF50 (see the module doc); NaN when a half-volume crossing is missing.
+    pub ie50: f64,
+}
+
+/// Slope of `v` over the first sample interval in `from..to` where it crosses `level`
+/// (upwards when `rising`), in units of v per second; None without a crossing.
+fn slope_at_level(
+    t: &[f64],
+    v: &[f64],
+    from: usize,
+    to: usize,
+    level: f64,
+    rising: bool,
+) -> Option<f64> {
+    (from..to).find_map(|k| {
+        let crosses = if rising {
+            v[k] < level && v[k + 1] >= level
+        } else {
+            v[k] > level && v[k + 1] <= level
+        };
+        (crosses && t[k + 1] > t[k]).then(|| (v[k + 1] - v[k]) / (t[k + 1] - t[k]))
+    })
 }
 
 /// Settings of [`segment_breaths`].
@@ -203,15 +237,26 @@ pub fn segment_breaths(t: &[f64], v: &[f64], det: &BreathDetector) -> Vec<Breath
     let mut breaths = Vec::new();
     for w in ext.windows(3) {
         if let [(s, Kind::Trough), (p, Kind::Peak), (e, Kind::Trough)] = *w {
+            let (vt, ve) = (v[p] - v[s], v[p] - v[e]);
+            let (ti, te) = (t[p] - t[s], t[e] - t[p]);
+            let tif50 = slope_at_level(t, v, s, p, v[s] + 0.5 * vt, true);
+            let tef50 = slope_at_level(t, v, p, e, v[p] - 0.5 * ve, false);
+            let ie50 = match (tif50, tef50) {
+                (Some(i), Some(x)) if x < 0.0 => i / -x,
+                _ => f64::NAN,
+            };
             breaths.push(Breath {
                 start: s,
                 peak: p,
                 end: e,
                 peak_time: t[p],
-                tidal_volume: v[p] - v[s],
-                expired_volume: v[p] - v[e],
-                ti: t[p] - t[s],
-                te: t[e] - t[p],
+                tidal_volume: vt,
+                expired_volume: ve,
+                ti,
+                te,
+                ttot: ti + te,
+                ti_ttot: ti / (ti + te),
+                ie50,
             });
         }
     }

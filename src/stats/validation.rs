@@ -55,6 +55,12 @@ pub struct BreathAgreement {
     pub ti: Option<BlandAltman>,
     /// Bland-Altman of expiratory times [s].
     pub te: Option<BlandAltman>,
+    /// Bland-Altman of total breath times [s].
+    pub ttot: Option<BlandAltman>,
+    /// Bland-Altman of duty cycles Ti/Ttot.
+    pub ti_ttot: Option<BlandAltman>,
+    /// Bland-Altman of IE50 (pairs where both are defined).
+    pub ie50: Option<BlandAltman>,
 }
 
 /// Cosinor results.
@@ -106,8 +112,15 @@ pub struct Validation {
     pub bars: BarsResults,
 }
 
+/// Bland-Altman of the pairs where both values are finite (None below 2 pairs).
 fn ba_opt(a: &[f64], b: &[f64]) -> Option<BlandAltman> {
-    bland_altman(a, b).ok()
+    let (a, b): (Vec<f64>, Vec<f64>) = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .map(|(x, y)| (*x, *y))
+        .unzip();
+    bland_altman(&a, &b).ok()
 }
 
 /// Fewest whole breaths the compared stretch must hold: breaths are segmented and paired,
@@ -176,10 +189,16 @@ pub fn validate(
     let (vt_a, vt_b) = pick(|b| b.tidal_volume);
     let (ti_a, ti_b) = pick(|b| b.ti);
     let (te_a, te_b) = pick(|b| b.te);
+    let (tt_a, tt_b) = pick(|b| b.ttot);
+    let (dc_a, dc_b) = pick(|b| b.ti_ttot);
+    let (ie_a, ie_b) = pick(|b| b.ie50);
     let breaths = BreathAgreement {
         tidal_volume: ba_opt(&vt_a, &vt_b),
         ti: ba_opt(&ti_a, &ti_b),
         te: ba_opt(&te_a, &te_b),
+        ttot: ba_opt(&tt_a, &tt_b),
+        ti_ttot: ba_opt(&dc_a, &dc_b),
+        ie50: ba_opt(&ie_a, &ie_b),
         sim_breaths: bs,
         spiro_breaths: bp,
         pairs,
@@ -334,6 +353,9 @@ pub fn summary_markdown(v: &Validation) -> String {
         ("tidal volume [L]", &b.tidal_volume),
         ("Ti [s]", &b.ti),
         ("Te [s]", &b.te),
+        ("Ttot [s]", &b.ttot),
+        ("Ti/Ttot", &b.ti_ttot),
+        ("IE50", &b.ie50),
     ] {
         if let Some(x) = x {
             let _ = writeln!(
@@ -588,6 +610,32 @@ fn write_plots(v: &Validation, dir: &Path) -> Result<()> {
             hlines: ba_lines(bt),
             bands: vec![],
         });
+    }
+    // Breath-by-breath timing (Motamedi-Fakhr et al. 2017): one panel per index.
+    let b = &v.breaths;
+    for (name, unit, x, color) in [
+        ("inspiratory time Ti", " [s]", &b.ti, BLUE),
+        ("expiratory time Te", " [s]", &b.te, RED),
+        ("total breath time Ttot", " [s]", &b.ttot, ORANGE),
+        ("duty cycle Ti/Ttot", "", &b.ti_ttot, BLUE),
+        ("IE50 = TIF50 / TEF50", "", &b.ie50, RED),
+    ] {
+        if let Some(x) = x {
+            panels.push(Panel {
+                title: format!("Bland-Altman, {name} per breath ({} breath pairs)", x.n),
+                x_label: format!("mean {name}{unit}"),
+                y_label: format!("difference{unit}"),
+                traces: vec![Trace {
+                    label: "breaths".into(),
+                    x: &x.means,
+                    y: &x.diffs,
+                    color,
+                    mark: Mark::Points,
+                }],
+                hlines: ba_lines(x),
+                bands: vec![],
+            });
+        }
     }
     write_figure(dir, "bland_altman", &panels)?;
     let cz = &v.cosinor;
