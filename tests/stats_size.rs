@@ -11,10 +11,21 @@
 //! for the slow breathing frequencies, so F is inflated about threefold and
 //! P(chi2_9 > 9 x 1.88 / 3) = 0.78), which the test checks too, so that the documented
 //! warning stays true. The robust test must hold its level in all three cases.
+//!
+//! BARS equality costs about 60 ms per pair at N = 500 with its default chains (200 burn-in,
+//! 2000 retained iterations), so it gets 200 replications (binomial standard error 1.5 %)
+//! and iid errors only: it assumes independent errors like the classical F tests. Its
+//! Hotelling T^2 screening p-value is a level-5 % test and must fall in the same window;
+//! `P(H0 | data)` is a posterior probability, not a p-value, so only its upper side is
+//! checked: read as a rejection below 0.05, it must not signal a difference more often than
+//! a 5 % test would (8 %).
 //! Power figures are measured by `cargo run --release --example equality_size` and
 //! reported in docs/validation.md.
 
-use breathing_torso::stats::montecarlo::{RejectionRates, Scenario, rejection_rates};
+use breathing_torso::stats::bars::BarsConfig;
+use breathing_torso::stats::montecarlo::{
+    RejectionRates, Scenario, bars_rejection_rates, rejection_rates,
+};
 
 fn rates(phi: f64, seed: u64) -> RejectionRates {
     let sc = Scenario {
@@ -74,4 +85,21 @@ fn robust_test_holds_its_size_under_ar1_errors() {
             );
         }
     }
+}
+
+#[test]
+fn bars_equality_under_iid_errors() {
+    let sc = Scenario {
+        replications: 200,
+        seed: 14,
+        ..Scenario::default()
+    };
+    let (ph0, t2) = bars_rejection_rates(&sc, &BarsConfig::default(), 0.05).expect("BARS runs");
+    println!("P(H0) < 0.05: {ph0}, T2 p < 0.05: {t2}");
+    in_window("BARS T2 screening", 0.0, t2);
+    assert!(
+        ph0 <= 0.08,
+        "BARS P(H0) < 0.05 in {:.1} % of true nulls",
+        100.0 * ph0
+    );
 }
