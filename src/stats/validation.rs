@@ -461,9 +461,11 @@ pub fn summary_markdown(v: &Validation) -> String {
     );
     let _ = writeln!(
         s,
-        "\nSamples of one breathing record are autocorrelated (lag-1 residual autocorrelation above), so the iid \
-         cosinor p-values overstate the evidence; the HAC row and the breath-level rows are the robust ones. \
-         BARS P(H0) tests exact equality of the two curves and is far more discriminating than the cosinor test \
+        "\nWhich to trust (measured sizes and powers: docs/validation.md): for equality of the two curves, \
+         the robust equality p-value without intercept, which holds its level under autocorrelated errors; the \
+         iid F tests reject most true nulls once the residuals are autocorrelated (lag-1 autocorrelation above) \
+         and are shown for comparison with the thesis. The Bland-Altman rows estimate agreement, per sample and \
+         per breath. BARS P(H0) also assumes independent errors and tests exact equality of the two curves \
          (thesis 4.4.4).\n\nPlots: aligned.png, bland_altman.png, cosinor.png, bars.png (and .svg). All numbers: validation.json."
     );
     s
