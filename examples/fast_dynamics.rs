@@ -23,7 +23,8 @@ struct Run {
 }
 
 fn config(lod: u32, rtol: f64, atol: f64, past: bool) -> Config {
-    // experiments: KEY=FACTOR scales a constant (if, sgaw, toe, zeta, wall, bulk)
+    // experiments: KEY=FACTOR scales a constant (if, sgaw, toe, zeta, wall, bulk);
+    // tilt=F sets the transverse fraction
     let mut params = Params::for_posture(breathing_torso::anatomy::Posture::Standing);
     for a in std::env::args().skip(1) {
         if let Some((k, v)) = a.split_once('=') {
@@ -32,6 +33,7 @@ fn config(lod: u32, rtol: f64, atol: f64, past: bool) -> Config {
                 "if" => params.inertia_frequency *= f,
                 "sgaw" => params.specific_airway_conductance *= f,
                 "toe" => params.tension_toe *= f,
+                "tilt" => params.transverse_fraction = f,
                 "zeta" => params.damping_ratio *= f,
                 "wall" => params.abdominal_wall_compliance *= f,
                 "bulk" => params.bulk_modulus *= f,

@@ -2,6 +2,7 @@
 //! off the periodic breath (`TorsoMarkers::run_periodic`) against plain runs that stop the
 //! solver at every frame.
 
+use breathing_torso::dynamics::Params;
 use breathing_torso::fit::{MarkerSource, TorsoMarkers, Trajectory};
 use breathing_torso::model::{Config, Drive, Quantity, Torso, Wave};
 use nalgebra::Point3;
@@ -217,14 +218,22 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
     // and the periodic run's second-breath frames are those one period later
     assert!(max_distance(&a.markers[..10], &a.markers[140..150]) < 1e-12);
 
-    // the diaphragm passive: its response drifts by about 1 um a breath, never periodic
+    // a lightly damped model (damping ratio 0.02 instead of 1): its response from rest still
+    // rings at the end of the frames, so it is never found periodic
+    let mut light = config();
+    let mut p = Params::for_posture(light.subject.posture);
+    p.damping_ratio = 0.02;
+    light.params = Some(p);
+    let mut lm = TorsoMarkers::new(light.clone()).unwrap();
+    let mut lplain = TorsoMarkers::new(light).unwrap();
+    lplain.set_periodic(false);
     let ribs_only = drive(0.25, 0.3, 0.0);
     let times = frames(4.0, 1009);
-    m.run(&[(0.0, ribs_only)], &times, false, &mut a).unwrap();
-    plain
+    lm.run(&[(0.0, ribs_only)], &times, false, &mut a).unwrap();
+    lplain
         .run(&[(0.0, ribs_only)], &times, false, &mut b)
         .unwrap();
-    let r = m.last_run();
+    let r = lm.last_run();
     println!("{r:?}");
     assert!(!r.periodic && r.simulated_s >= *times.last().unwrap());
     assert!(r.period_mismatch_m > 1e-7);
@@ -236,11 +245,13 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
         .unwrap();
     assert!(!m.last_run().periodic && m.last_run().period_mismatch_m.is_nan());
     assert!((m.last_run().simulated_s - short[199]).abs() < 1e-12);
-    // frames into the fourth breath: the third one, the first to repeat itself, serves them
+    // frames into the fourth breath: the second one, the first to repeat itself (the
+    // transient from rest has decayed below 0.1 um within the first), serves them
     let short = frames(4.0, 560);
     m.run(&[(0.0, drive(0.25, 0.2, 0.25))], &short, false, &mut a)
         .unwrap();
-    assert!(m.last_run().periodic && (m.last_run().simulated_s - 12.0).abs() < 1e-9);
+    println!("{:?}", m.last_run());
+    assert!(m.last_run().periodic && (m.last_run().simulated_s - 8.0).abs() < 1e-9);
 }
 
 /// A drive schedule (breath-to-breath variability) is simulated over every frame, each

@@ -5,7 +5,9 @@
 //!   the group, g the element's regional gain). Muscles only pull (Zajac 1989, thesis 2.1):
 //!   their tension is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps
 //!   ([`super::Params::tension_toe`]) in place of max(0, f), so that the right-hand side is
-//!   smooth where a muscle goes slack.
+//!   smooth where a muscle goes slack. A two-point element also damps its ends' relative
+//!   velocity across it, alpha gamma (v_b - v_a)_perp with alpha
+//!   [`super::Params::transverse_fraction`] (the tilted element of `dynamics::inertia`).
 //! - Zero-length vector springs (cartilage ball joints, wall foundation): F = k d + c d'.
 //! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1) - mu dV/dt; each triangle pushes each of
 //!   its corners with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx. The
@@ -66,6 +68,7 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
         (&el.rest_length[..n], &el.stiffness[..n], &el.damping[..n]);
     let (slot, gain) = (&el.slot[..n], &el.gain[..n]);
     let toe = model.params.tension_toe;
+    let transverse = model.params.transverse_fraction;
     // one length for the three arrays, so that one index check covers them
     let m = data.pos.len();
     let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
@@ -88,7 +91,10 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             if muscle {
                 f = tension(f, toe);
             }
-            let fv = n * f;
+            // the transverse damper (`Params::transverse_fraction`): the ends' relative
+            // velocity across the element
+            let dv = vel[b] - vel[a];
+            let fv = n * f + (dv - n * rate) * (transverse * damping[e]);
             force[a] += fv;
             force[b] -= fv;
             continue;

@@ -30,6 +30,17 @@
 //!   over omega_b^2, and a frequency between omega_b and omega_i; a mode that does not (the rib cage turning as a
 //!   whole, the wall moving on its soft foundation) keeps its true inertia and its own, lower,
 //!   frequency.
+//! - Elements tilt. A two-point element's block gives inertia along its rest direction only;
+//!   when the cavities deform and the element turns by theta, sin^2 theta of its stiffness and
+//!   damping act across that direction, where only the true mass is. At the dome's
+//!   central-tendon pole (stiff tendon edges between light vertices) that alone bounded the
+//!   step at level of detail 1 (real roots near -1,000 /s). Each two-point element therefore
+//!   also adds `transverse_fraction` (alpha, [`super::Params::transverse_fraction`], 0.1 =
+//!   sin^2 18 degrees) of its k / omega_b^2 across its rest direction, and damps its ends'
+//!   relative velocity across it with alpha of its axial damping coefficient
+//!   (`dynamics::forces`), so that the transverse directions are a tilted element's, damped
+//!   with the same ratio zeta. The damper acts on relative velocities only: it resists the
+//!   cavities' shearing, not their motion.
 //! - The cavities' volumes: g_A and g_T are the gradients of the abdomen's and the thorax's
 //!   volumes at rest. I_T is the inertance of the gas in the airways, 0.015 cmH2O s^2/L (Mead
 //!   1956, the mid-point of the 0.01-0.02 of the reference); it is raised, if needed, so that
@@ -165,6 +176,7 @@ fn local_stiffness(model: &Model) -> (Vec<f64>, Vec<Matrix3<f64>>) {
     let mut grad = Gradient::default();
     let pos = &model.rest;
     let el = &model.elements;
+    let transverse = model.params.transverse_fraction;
     for e in 0..el.len() {
         let path = el.path_of(e);
         for w in path.windows(2) {
@@ -182,6 +194,25 @@ fn local_stiffness(model: &Model) -> (Vec<f64>, Vec<Matrix3<f64>>) {
             grad.point(model, w[1], &n);
         }
         add(el.stiffness[e], &grad.take());
+        // a two-point element's transverse directions carry the fraction `transverse` of
+        // its stiffness (the tilt it may take, module doc)
+        if path.len() == 2 && transverse > 0.0 {
+            let d = pos[path[1] as usize] - pos[path[0] as usize];
+            if d.norm() < 1e-12 {
+                continue;
+            }
+            let n = d.normalize();
+            let t1 = n
+                .cross(&Vector3::x())
+                .try_normalize(1e-6)
+                .unwrap_or_else(|| n.cross(&Vector3::y()).normalize());
+            let t2 = n.cross(&t1);
+            for t in [t1, t2] {
+                grad.point(model, path[0], &-t);
+                grad.point(model, path[1], &t);
+                add(transverse * el.stiffness[e], &grad.take());
+            }
+        }
     }
     let s = &model.springs;
     for i in 0..s.a.len() {

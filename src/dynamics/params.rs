@@ -98,6 +98,20 @@ pub const SPECIFIC_AIRWAY_CONDUCTANCE: f64 = 0.2 / 98.0665;
 /// fast_dynamics -- toe`).
 pub const TENSION_TOE: f64 = 0.1;
 
+/// Default [`Params::transverse_fraction`]: 0.1, the sin^2 of an 18 degree tilt. Each
+/// two-point element's added inertia and damping act in its transverse directions with this
+/// fraction of their axial values, so that an element that tilts by up to 18 degrees from its
+/// rest direction as the cavities deform still finds as much inertia as the stiffness it
+/// turns into the new direction. It is a numerical constant, chosen by measurement
+/// (`cargo run --release --example fast_dynamics -- 1 1e-6 tilt=F`, docs/dynamics.md): at
+/// level of detail 1, 0 leaves the step bound by the dome's central-tendon pole (29,090 RHS
+/// evaluations per 1000 frames), 0.1 frees it; it changes the quiet tidal volume by under 1 %.
+pub const TRANSVERSE_FRACTION: f64 = 0.1;
+
+fn default_transverse_fraction() -> f64 {
+    TRANSVERSE_FRACTION
+}
+
 fn default_inertia_frequency() -> f64 {
     INERTIA_FREQUENCY
 }
@@ -135,10 +149,10 @@ pub struct Params {
     /// (2 pi f_inertia) (stiffness-proportional damping, Rayleigh; thesis 2.4 asks for
     /// critically damped elements, zeta = 1).
     pub damping_ratio: f64,
-    /// Frequency [Hz] below which no inertial mode of the model may lie above: the masses and
-    /// inertias of the ribs, the sternum and the cavity vertices are raised where needed
-    /// (selective mass scaling, `dynamics::inertia`) so that no body's Gershgorin bound of
-    /// its stiffness (and damping) over its mass exceeds it. Breathing is quasi-static: the
+    /// Inertia frequency f_i [Hz]: the masses and inertias of the ribs, the sternum and the
+    /// cavity vertices gain the local stiffness over (pi f_i)^2 (selective mass scaling,
+    /// `dynamics::inertia`), so that the modes that stretch stiff elements lie between
+    /// f_i / 2 and about f_i, and the stiffness-proportional damping is tuned to f_i. Breathing is quasi-static: the
     /// respiratory system's inertance (0.01-0.02 cmH2O s^2/L, Mead 1956) makes its inertial
     /// pressure about 0.3 % of the elastic recoil at 0.25 Hz, so the bodies' true masses only
     /// set vibration modes (80-130 Hz for single ribs and dome vertices) that breathing never
@@ -158,6 +172,14 @@ pub struct Params {
     /// [`TENSION_TOE`].
     #[serde(default = "default_tension_toe")]
     pub tension_toe: f64,
+    /// Fraction of each two-point element's added inertia and damping given to its
+    /// transverse directions (`dynamics::inertia`; [`TRANSVERSE_FRACTION`]): the element
+    /// damps the relative velocity of its ends across it with this fraction of its axial
+    /// damping coefficient, and its ends' mass blocks carry the same fraction of its
+    /// stiffness over omega_b^2 across it. Configurations written before it existed read
+    /// [`TRANSVERSE_FRACTION`].
+    #[serde(default = "default_transverse_fraction")]
+    pub transverse_fraction: f64,
     /// Bulk modulus K of the abdominal contents [Pa] (thesis eq. 2.5: P = K (V0/V - 1)).
     pub bulk_modulus: f64,
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the thorax,
@@ -229,6 +251,7 @@ impl Params {
             inertia_frequency: INERTIA_FREQUENCY,
             specific_airway_conductance: SPECIFIC_AIRWAY_CONDUCTANCE,
             tension_toe: TENSION_TOE,
+            transverse_fraction: TRANSVERSE_FRACTION,
             bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
             pleural_barrier_pressure: PLEURAL_BARRIER_PRESSURE,
@@ -279,6 +302,15 @@ impl Params {
             if !(v.is_finite() && v > 0.0) {
                 return Err(crate::Error::invalid(name, v, "finite and > 0"));
             }
+        }
+        if !(self.transverse_fraction.is_finite()
+            && (0.0..=1.0).contains(&self.transverse_fraction))
+        {
+            return Err(crate::Error::invalid(
+                "params.transverse_fraction",
+                self.transverse_fraction,
+                "[0, 1]",
+            ));
         }
         if !(self.pleural_barrier_margin > 0.0 && self.pleural_barrier_margin < 0.5) {
             return Err(crate::Error::invalid(
