@@ -5,7 +5,9 @@
 //! `cargo run --release --example jacobian_dump -- LOD TIME FILE`: the default subject at
 //! level of detail `LOD`, quiet drive, after `TIME` seconds; `FILE` holds the dimension n
 //! (u64, little-endian) then the n x n matrix column by column (f64, little-endian), column j
-//! being (f(y + h e_j) - f(y)) / h with h = 1e-7 max(|y_j|, 0.01).
+//! being (f(y + h e_j) - f(y)) / h with h = 1e-7 max(|y_j|, 0.01). Optional trailing
+//! `rw=R` sets the abdominal wall's resistance [cmH2O s/L] and `tilt=A` the transverse
+//! fraction, to compare spectra with and without them.
 
 use breathing_torso::model::{Drive, Scene};
 use breathing_torso::{Config, Torso};
@@ -13,12 +15,22 @@ use std::io::Write;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    if args.len() != 4 {
-        return Err("usage: jacobian_dump LOD TIME FILE".into());
+    if args.len() < 4 {
+        return Err("usage: jacobian_dump LOD TIME FILE [rw=R] [tilt=A]".into());
+    }
+    let mut params =
+        breathing_torso::dynamics::Params::for_posture(breathing_torso::anatomy::Posture::Standing);
+    for a in &args[4..] {
+        match a.split_once('=') {
+            Some(("rw", v)) => params.abdominal_wall_resistance = v.parse::<f64>()? * 98.0665e3,
+            Some(("tilt", v)) => params.transverse_fraction = v.parse()?,
+            _ => return Err(format!("unknown option {a}").into()),
+        }
     }
     let lod: u32 = args[1].parse()?;
     let t: f64 = args[2].parse()?;
     let config = Config {
+        params: Some(params),
         drive: Drive::quiet(),
         scene: Scene {
             level_of_detail: lod,

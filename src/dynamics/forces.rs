@@ -8,7 +8,9 @@
 //!   smooth where a muscle goes slack. A two-point element also damps its ends' relative
 //!   velocity across it, alpha gamma (v_b - v_a)_perp with alpha
 //!   [`super::Params::transverse_fraction`] (the tilted element of `dynamics::inertia`).
-//! - Zero-length vector springs (cartilage ball joints, wall foundation): F = k d + c d'.
+//! - Zero-length vector springs (cartilage ball joints, wall foundation): F = k d + c d'; the
+//!   wall foundation's c adds the wall's tissue resistance
+//!   ([`super::Params::abdominal_wall_resistance`]) to the stiffness-proportional part.
 //! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1) - mu dV/dt; each triangle pushes each of
 //!   its corners with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx. The
 //!   viscous term mu (`Model::abdomen_viscosity`) damps the cavity's volume mode.

@@ -41,6 +41,9 @@
 //!   (`dynamics::forces`), so that the transverse directions are a tilted element's, damped
 //!   with the same ratio zeta. The damper acts on relative velocities only: it resists the
 //!   cavities' shearing, not their motion.
+//! - A vector spring's damping beyond the stiffness-proportional part (the abdominal wall's
+//!   tissue resistance) adds c / omega_i to its vertex's mass in every direction, so that the
+//!   damper alone relaxes the vertex no faster than omega_i.
 //! - The cavities' volumes: g_A and g_T are the gradients of the abdomen's and the thorax's
 //!   volumes at rest. I_T is the inertance of the gas in the airways, 0.015 cmH2O s^2/L (Mead
 //!   1956, the mid-point of the 0.01-0.02 of the reference); it is raised, if needed, so that
@@ -233,6 +236,27 @@ fn local_stiffness(model: &Model) -> (Vec<f64>, Vec<Matrix3<f64>>) {
     (rigid, vertex)
 }
 
+/// The inertia each free vertex gains from the vector springs' damping beyond the
+/// stiffness-proportional part (the abdominal wall's tissue resistance): c / omega_i, so that
+/// the damper alone relaxes a vertex no faster than omega_i [kg, isotropic].
+fn viscous_vertex_mass(model: &Model, omega: f64) -> Vec<f64> {
+    let rayleigh = 2.0 * model.params.damping_ratio / omega;
+    let mut mass = vec![0.0; model.free_vertices()];
+    let s = &model.springs;
+    for i in 0..s.a.len() {
+        let extra = s.damping[i] - rayleigh * s.stiffness[i];
+        if extra <= 1e-12 * s.damping[i].abs() {
+            continue;
+        }
+        for a in [s.a[i], s.b[i]] {
+            if let Carrier::Vertex(j) = model.carrier[a as usize] {
+                mass[j as usize] += extra / omega;
+            }
+        }
+    }
+    mass
+}
+
 /// The generalised gradient dV/dq of the volume enclosed by `tris` at rest (dV/dp of a
 /// corner is the sum of face / 6 over its triangles, exact on a closed surface).
 pub fn volume_gradient(model: &Model, tris: &[[u32; 3]]) -> Vec<f64> {
@@ -295,7 +319,8 @@ impl MassMatrix {
         let vertex: Vec<Matrix3<f64>> = k_vertex
             .iter()
             .zip(&model.vertex_mass)
-            .map(|(k, m)| Matrix3::identity() * *m + k / w2)
+            .zip(viscous_vertex_mass(model, omega))
+            .map(|((k, m), c)| Matrix3::identity() * (*m + c) + k / w2)
             .collect();
         let vertex_ratio = vertex
             .iter()

@@ -413,11 +413,16 @@ impl Model {
             .collect();
         let wall_area: f64 = wall.iter().map(|&v| vertex_area[v]).sum();
         let kappa = wall_area / params.abdominal_wall_compliance;
+        // the wall's tissue resistance R_w, spread like its compliance: a uniform pressure
+        // P = R_w dV/dt moves the wall at P / (R_w A_wall), so each vertex's damper is
+        // R_w A_wall A_v (`Params::abdominal_wall_resistance`)
+        let eta = params.abdominal_wall_resistance * wall_area;
         let mut ground_anchors = Vec::new();
         for &v in &wall {
             let a = ab.anchor[v];
             let k = kappa * vertex_area[v];
-            ground_anchors.push((a, rest[a as usize], k, rayleigh * k, false));
+            let c = rayleigh * k + eta * vertex_area[v];
+            ground_anchors.push((a, rest[a as usize], k, c, false));
         }
         // Dome support: the dome slides within the rib cage (zone of apposition) and under the
         // lungs; its horizontal motion is held by a foundation of stiffness kappa_h per area.

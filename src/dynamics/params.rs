@@ -108,6 +108,18 @@ pub const TENSION_TOE: f64 = 0.1;
 /// evaluations per 1000 frames), 0.1 frees it; it changes the quiet tidal volume by under 1 %.
 pub const TRANSVERSE_FRACTION: f64 = 0.1;
 
+/// Default [`Params::abdominal_wall_resistance`] [Pa s/m^3]: 1.0 cmH2O s/L. The whole
+/// respiratory system's resistance at breathing frequencies is about 2-3 cmH2O s/L, airways and
+/// tissue together, and the airways' about 0.5-2.5 (West, Respiratory Physiology); the default
+/// man's airway resistance is 1.5 cmH2O s/L ([`SPECIFIC_AIRWAY_CONDUCTANCE`]), which leaves
+/// 0.5-1.5 cmH2O s/L to the tissues, and the model gives the middle of that to the abdominal
+/// wall (the rib cage's joints and the lungs' tissue carry their own damping).
+pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
+
+fn default_abdominal_wall_resistance() -> f64 {
+    ABDOMINAL_WALL_RESISTANCE
+}
+
 fn default_transverse_fraction() -> f64 {
     TRANSVERSE_FRACTION
 }
@@ -217,6 +229,12 @@ pub struct Params {
     /// Compliance of the abdominal wall [m^3/Pa] (elastic support of the wall by its muscles,
     /// fascia and skin), spread over the free wall vertices as a foundation stiffness.
     pub abdominal_wall_compliance: f64,
+    /// Tissue resistance of the abdominal wall [Pa s/m^3]: the viscous counterpart of its
+    /// compliance, spread over the free wall vertices the same way (a uniform pressure P moves
+    /// the wall's volume at P / R_w). Configurations written before it existed read
+    /// [`ABDOMINAL_WALL_RESISTANCE`].
+    #[serde(default = "default_abdominal_wall_resistance")]
+    pub abdominal_wall_resistance: f64,
     /// Gravitational acceleration [m/s^2].
     pub gravity: f64,
 }
@@ -263,6 +281,7 @@ impl Params {
             dome_support: 2.0e5,
             tendon_stiffness: 2000.0,
             abdominal_wall_compliance: 2.0e-6 * compliance_factor,
+            abdominal_wall_resistance: ABDOMINAL_WALL_RESISTANCE,
             gravity: 9.81,
         }
     }
@@ -302,6 +321,13 @@ impl Params {
             if !(v.is_finite() && v > 0.0) {
                 return Err(crate::Error::invalid(name, v, "finite and > 0"));
             }
+        }
+        if !(self.abdominal_wall_resistance.is_finite() && self.abdominal_wall_resistance >= 0.0) {
+            return Err(crate::Error::invalid(
+                "params.abdominal_wall_resistance",
+                self.abdominal_wall_resistance,
+                "finite and >= 0",
+            ));
         }
         if !(self.transverse_fraction.is_finite()
             && (0.0..=1.0).contains(&self.transverse_fraction))
