@@ -20,6 +20,13 @@ target/release/torso fmu build --out fmu/BreathingTorso.fmu
 echo "== cargo test"
 cargo test --release
 
+echo "== the crate is built once for build and test (Cargo.toml: resolver)"
+rebuild=$(cargo build --release -v 2>&1)
+if ! grep -q "Fresh breathing-torso" <<<"$rebuild"; then
+  echo "cargo build --release after cargo test --release rebuilds the crate:" >&2
+  grep -E "Dirty|Compiling" <<<"$rebuild" >&2
+  exit 1
+fi
 
 if [ -d python/tests ] && ls python/tests/test_*.py >/dev/null 2>&1; then
   echo "== python tests"
