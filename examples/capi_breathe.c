@@ -2,8 +2,9 @@
  * markers at each frame, then a snapshot replay that must reproduce the run bit for bit.
  *
  *   cargo build --release
- *   gcc -std=c11 -Iinclude examples/capi_breathe.c -Ltarget/release -lbreathing_torso -lm
- *   LD_LIBRARY_PATH=target/release ./a.out
+ *   gcc -std=c11 -Iinclude examples/capi_breathe.c -Ltarget/release -lbreathing_torso -lm \
+ *       -Wl,-rpath,"$PWD/target/release"
+ *   ./a.out
  */
 #include <math.h>
 #include <stdio.h>

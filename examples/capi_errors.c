@@ -1,7 +1,10 @@
 /* capi_errors.c: how the breathing-torso C ABI reports bad input. Every failure returns a
  * negative BT_ERR_* code and a message naming the culprit; nothing changes on failure.
  *
- *   gcc -std=c11 -Iinclude examples/capi_errors.c -Ltarget/release -lbreathing_torso -lm
+ *   cargo build --release
+ *   gcc -std=c11 -Iinclude examples/capi_errors.c -Ltarget/release -lbreathing_torso -lm \
+ *       -Wl,-rpath,"$PWD/target/release"
+ *   ./a.out
  */
 #include <math.h>
 #include <stdio.h>
