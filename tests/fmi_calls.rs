@@ -276,3 +276,74 @@ fn fmu_state_bytes_round_trip_and_refuse_garbage() {
         .collect();
     assert!(FmuState::from_bytes(&noise).is_err());
 }
+
+/// An initialised instance refuses a state saved with other fixed parameters (fmi2Error, a
+/// log line naming them, nothing changed), as the C ABI's `bt_restore` refuses a snapshot of
+/// another model; after fmi2Reset, when fixed parameters may be set again, it takes it.
+#[test]
+fn fmu_state_of_other_fixed_parameters_is_refused_once_initialised() {
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let start = |stature: f64| {
+        let (mut inst, log) = recording_instance();
+        assert_eq!(
+            inst.set_integer(&[vr("scene.level_of_detail")], &[0]),
+            fmi2OK
+        );
+        assert_eq!(inst.set_real(&[vr("subject.stature")], &[stature]), fmi2OK);
+        inst.setup_experiment(None, 0.0, None);
+        assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+        assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+        (inst, log)
+    };
+    let (mut a, _) = start(1.75);
+    assert_eq!(a.do_step(0.0, 0.1), fmi2OK);
+    let state_a = a.get_fmu_state();
+    let (mut b, log) = start(1.9);
+    assert_eq!(b.do_step(0.0, 0.2), fmi2OK);
+    let lung = |i: &mut Instance| {
+        let mut v = [0.0];
+        assert_eq!(i.get_real(&[vr("volume.lung")], &mut v), fmi2OK);
+        v[0]
+    };
+    let before = lung(&mut b);
+    for state in [
+        state_a.clone(),
+        FmuState::from_bytes(&state_a.to_bytes()).unwrap(),
+    ] {
+        assert_eq!(b.set_fmu_state(&state), fmi2Error);
+        let msg = log.borrow().last().unwrap().clone();
+        assert_eq!(msg.0, fmi2Error);
+        assert!(
+            msg.2.contains("fmi2SetFMUstate")
+                && msg
+                    .2
+                    .contains("`subject.stature` 1.9 here, 1.75 in the state")
+                && !msg.2.contains("scene.level_of_detail"),
+            "{}",
+            msg.2
+        );
+        assert_eq!(
+            (b.phase(), b.time(), b.config().subject.stature),
+            (Phase::StepComplete, 0.2, 1.9)
+        );
+        assert_eq!(lung(&mut b), before);
+    }
+    // Its own states and those of an instance with the same fixed parameters but another
+    // drive are taken.
+    let own = b.get_fmu_state();
+    assert_eq!(b.do_step(0.2, 0.1), fmi2OK);
+    assert_eq!(b.set_fmu_state(&own), fmi2OK);
+    assert_eq!((b.time(), lung(&mut b)), (0.2, before));
+    let (mut c, _) = start(1.9);
+    assert_eq!(c.set_real(&[vr("drive.ribs.amplitude")], &[0.3]), fmi2OK);
+    assert_eq!(c.set_fmu_state(&own), fmi2OK);
+    assert_eq!((c.time(), lung(&mut c)), (0.2, before));
+    // After fmi2Reset the fixed parameters are open again: the state's are taken.
+    assert_eq!(b.reset(), fmi2OK);
+    assert_eq!(b.set_fmu_state(&state_a), fmi2OK);
+    assert_eq!(
+        (b.phase(), b.time(), b.config().subject.stature),
+        (Phase::StepComplete, 0.1, 1.75)
+    );
+}

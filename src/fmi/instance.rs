@@ -321,6 +321,33 @@ fn same_fixed_config(a: &Config, b: &Config) -> bool {
     a == *b
 }
 
+/// The fixed parameters in which `ours` and `theirs` differ, as `name: ours here, theirs in
+/// the state`; settings without an FMI variable (constants of the dynamics) are named as such.
+fn fixed_differences(ours: &Config, theirs: &Config) -> String {
+    let show = |v: Value| match v {
+        Value::Real(x) => format!("{x}"),
+        Value::Integer(i) => format!("{i}"),
+        Value::String(s) => format!("{s:?}"),
+    };
+    let mut out: Vec<String> = table()
+        .variables()
+        .iter()
+        .filter_map(|var| match var.role {
+            Role::Parameter(p) if !p.is_tunable() && p.get(ours) != p.get(theirs) => Some(format!(
+                "`{}` {} here, {} in the state",
+                var.name,
+                show(p.get(ours)),
+                show(p.get(theirs))
+            )),
+            _ => None,
+        })
+        .collect();
+    if out.is_empty() {
+        out.push("the constants of the dynamics".into());
+    }
+    out.join(", ")
+}
+
 fn type_name(t: ScalarType) -> &'static str {
     match t {
         ScalarType::Real => "Real",
@@ -1046,9 +1073,23 @@ impl Instance {
         }
     }
 
-    /// Restores a saved state. The model is rebuilt only when the fixed configuration differs.
+    /// Restores a saved state. Once initialised, an instance refuses (`fmi2Error`, nothing
+    /// changes) a state saved with other fixed parameters, as it refuses setting them: the
+    /// model is the one its parameters built. Before `fmi2ExitInitializationMode`, when fixed
+    /// parameters may still be set, the state's are taken and the model is rebuilt when they
+    /// differ.
     pub fn set_fmu_state(&mut self, state: &FmuState) -> fmi2Status {
         let s = &state.saved;
+        let initialised = !matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
+        if initialised && !same_fixed_config(&self.config, &s.config) {
+            let differences = fixed_differences(&self.config, &s.config);
+            return self.error(&format!(
+                "fmi2SetFMUstate: the state was saved by an instance with other fixed parameters \
+                 ({differences}); fixed parameters cannot change after \
+                 fmi2ExitInitializationMode (fmi2Reset first, or instantiate with the state's \
+                 parameters): the state was not applied"
+            ));
+        }
         let mut rebuilt_fresh = None;
         let torso = match &state.snapshot {
             None => None,
