@@ -83,7 +83,12 @@ int main(void) {
 
     size_t vertices = 0, triangles = 0;
     rc = bt_skin_sizes(torso, &vertices, &triangles);
-    expect(rc == BT_OK || rc == BT_ERR_UNAVAILABLE, "skin sizes answered", bt_last_error(torso));
+    expect(rc == BT_OK && vertices > 0 && triangles > 0, "skin sizes answered", bt_last_error(torso));
+    rc = bt_read_skin(torso, small, 3, NULL, 0);
+    expect(rc == BT_ERR_BUFFER && strstr(bt_last_error(torso), "skin vertex buffer holds 3 doubles"),
+           "skin vertex buffer too small", bt_last_error(torso));
+    rc = bt_read_skin(torso, NULL, 0, NULL, 0);
+    expect(rc == BT_ERR_NULL, "skin read with no buffer at all", bt_last_error(torso));
 
     /* Snapshots: size query, round trip, garbage rejected. */
     size_t size = 0;

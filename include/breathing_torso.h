@@ -31,7 +31,8 @@
 #define BT_ERR_NUMERICAL -3
 
 /**
- * The quantity or feature is not available in this build or scene (e.g. the skin mesh).
+ * Reserved for a quantity or feature a build or scene does not offer; no function of this
+ * release returns it.
  */
 #define BT_ERR_UNAVAILABLE -4
 
@@ -370,8 +371,9 @@ int bt_marker_count(struct BtTorso *h, size_t *count);
 int bt_read_markers(struct BtTorso *h, double *xyz, size_t capacity, size_t *count);
 
 /**
- * Sizes of the whole skin mesh: vertex and triangle counts. `BT_ERR_UNAVAILABLE` until the
- * model carries a skin.
+ * Sizes of the whole skin mesh (the surface the markers sit on): its vertex and triangle
+ * counts, fixed for the handle's life. The first skin or marker call builds the skin model (a
+ * few tenths of a second, shared with the markers). Either output may be NULL.
  *
  * # Safety
  * `h` must be NULL or a live handle; the outputs NULL or writable.
@@ -379,9 +381,14 @@ int bt_read_markers(struct BtTorso *h, double *xyz, size_t capacity, size_t *cou
 int bt_skin_sizes(struct BtTorso *h, size_t *vertices, size_t *triangles);
 
 /**
- * Writes the skin mesh: vertex positions [m] as x, y, z triples (`vertex_capacity` doubles)
- * and triangles as vertex-index triples (`triangle_capacity` indices). `BT_ERR_UNAVAILABLE`
- * until the model carries a skin.
+ * Writes the skin mesh of the current state: vertex positions [m] as x, y, z triples into
+ * `vertices` (`vertex_capacity` doubles, at least 3 x the vertex count of `bt_skin_sizes`),
+ * in the markers' frame (the recording's when the grid is registered, else the model's),
+ * and the triangles as vertex-index triples, counter-clockwise seen from outside, into
+ * `triangles` (`triangle_capacity` indices, at least 3 x the triangle count). Either buffer
+ * may be NULL and is then skipped: the triangles never change, so read them once and the
+ * vertices every frame. Both NULL is `BT_ERR_NULL`; a buffer too small is `BT_ERR_BUFFER`
+ * and nothing is written.
  *
  * # Safety
  * `h` must be NULL or a live handle; buffers NULL or writable for their capacities.

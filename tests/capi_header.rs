@@ -1,7 +1,8 @@
 //! The C side of the crate: `include/breathing_torso.h` is what cbindgen generates from
 //! `src/capi/mod.rs` plus the value-reference block (fails when the committed header is stale;
 //! `UPDATE_GENERATED=1 cargo test --test capi_header` rewrites it), it compiles as C11 and C++
-//! with gcc/g++, and the C examples are compiled and run against the cdylib.
+//! with gcc/g++, and the C examples (errors, a breath with a snapshot replay, the skin mesh)
+//! are compiled and run against the cdylib.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -175,4 +176,11 @@ fn c_example_breathe_runs() {
         out.contains("replay identical") && out.contains("rhs consistent"),
         "{out}"
     );
+}
+
+#[test]
+fn c_example_skin_runs() {
+    let out = build_and_run_example("capi_skin");
+    println!("{out}");
+    assert!(out.contains("all skin checks passed"), "{out}");
 }

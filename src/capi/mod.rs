@@ -33,7 +33,8 @@ pub const BT_ERR_NULL: c_int = -1;
 pub const BT_ERR_INVALID: c_int = -2;
 /// The integrator failed; the model stays at its last good time (see `bt_time`).
 pub const BT_ERR_NUMERICAL: c_int = -3;
-/// The quantity or feature is not available in this build or scene (e.g. the skin mesh).
+/// Reserved for a quantity or feature a build or scene does not offer; no function of this
+/// release returns it.
 pub const BT_ERR_UNAVAILABLE: c_int = -4;
 /// A caller buffer is too small; the needed size was written where the function says.
 pub const BT_ERR_BUFFER: c_int = -5;
@@ -148,6 +149,8 @@ pub struct BtAdvanceStats {
 pub struct BtTorso {
     torso: Torso,
     last_error: CString,
+    /// The deformed skin's vertices of the last `bt_read_skin`, kept to reuse its memory.
+    skin: Vec<nalgebra::Point3<f64>>,
 }
 
 thread_local! {
@@ -178,10 +181,6 @@ impl From<Error> for Failure {
 }
 
 type Outcome = std::result::Result<(), Failure>;
-
-fn unavailable(what: &str) -> Failure {
-    Failure(BT_ERR_UNAVAILABLE, what.to_string())
-}
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     payload
@@ -486,6 +485,7 @@ pub unsafe extern "C" fn bt_create(config: *const BtConfig) -> *mut BtTorso {
         handle = Box::into_raw(Box::new(BtTorso {
             torso,
             last_error: CString::default(),
+            skin: Vec::new(),
         }));
         Ok(())
     });
@@ -740,8 +740,9 @@ pub unsafe extern "C" fn bt_read_markers(
     }
 }
 
-/// Sizes of the whole skin mesh: vertex and triangle counts. `BT_ERR_UNAVAILABLE` until the
-/// model carries a skin.
+/// Sizes of the whole skin mesh (the surface the markers sit on): its vertex and triangle
+/// counts, fixed for the handle's life. The first skin or marker call builds the skin model (a
+/// few tenths of a second, shared with the markers). Either output may be NULL.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; the outputs NULL or writable.
@@ -751,19 +752,29 @@ pub unsafe extern "C" fn bt_skin_sizes(
     vertices: *mut usize,
     triangles: *mut usize,
 ) -> c_int {
-    let _ = (vertices, triangles);
     unsafe {
-        with_handle(h, |_| {
-            Err(unavailable(
-                "the skin mesh is not available in this build of the model",
-            ))
+        with_handle(h, |b| {
+            let model = b.torso.marker_model()?;
+            let skin = model.skin();
+            if !vertices.is_null() {
+                *vertices = skin.vertices.len();
+            }
+            if !triangles.is_null() {
+                *triangles = skin.triangles.len();
+            }
+            Ok(())
         })
     }
 }
 
-/// Writes the skin mesh: vertex positions [m] as x, y, z triples (`vertex_capacity` doubles)
-/// and triangles as vertex-index triples (`triangle_capacity` indices). `BT_ERR_UNAVAILABLE`
-/// until the model carries a skin.
+/// Writes the skin mesh of the current state: vertex positions [m] as x, y, z triples into
+/// `vertices` (`vertex_capacity` doubles, at least 3 x the vertex count of `bt_skin_sizes`),
+/// in the markers' frame (the recording's when the grid is registered, else the model's),
+/// and the triangles as vertex-index triples, counter-clockwise seen from outside, into
+/// `triangles` (`triangle_capacity` indices, at least 3 x the triangle count). Either buffer
+/// may be NULL and is then skipped: the triangles never change, so read them once and the
+/// vertices every frame. Both NULL is `BT_ERR_NULL`; a buffer too small is `BT_ERR_BUFFER`
+/// and nothing is written.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; buffers NULL or writable for their capacities.
@@ -775,12 +786,43 @@ pub unsafe extern "C" fn bt_read_skin(
     triangles: *mut u32,
     triangle_capacity: usize,
 ) -> c_int {
-    let _ = (vertices, vertex_capacity, triangles, triangle_capacity);
     unsafe {
-        with_handle(h, |_| {
-            Err(unavailable(
-                "the skin mesh is not available in this build of the model",
-            ))
+        with_handle(h, |b| {
+            if vertices.is_null() && triangles.is_null() {
+                return Err(Failure(
+                    BT_ERR_NULL,
+                    "arguments `vertices` and `triangles` are both NULL".into(),
+                ));
+            }
+            let model = b.torso.marker_model()?;
+            let skin = model.skin();
+            let (nv, nt) = (3 * skin.vertices.len(), 3 * skin.triangles.len());
+            if !vertices.is_null() && vertex_capacity < nv {
+                return Err(Failure(
+                    BT_ERR_BUFFER,
+                    format!("skin vertex buffer holds {vertex_capacity} doubles, {nv} needed"),
+                ));
+            }
+            if !triangles.is_null() && triangle_capacity < nt {
+                return Err(Failure(
+                    BT_ERR_BUFFER,
+                    format!("skin triangle buffer holds {triangle_capacity} indices, {nt} needed"),
+                ));
+            }
+            if !vertices.is_null() {
+                b.torso.skin_vertices(&mut b.skin)?;
+                let out = std::slice::from_raw_parts_mut(vertices, nv);
+                for (o, p) in out.chunks_exact_mut(3).zip(&b.skin) {
+                    o.copy_from_slice(&[p.x, p.y, p.z]);
+                }
+            }
+            if !triangles.is_null() {
+                let out = std::slice::from_raw_parts_mut(triangles, nt);
+                for (o, t) in out.chunks_exact_mut(3).zip(&skin.triangles) {
+                    o.copy_from_slice(t);
+                }
+            }
+            Ok(())
         })
     }
 }
