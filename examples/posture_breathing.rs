@@ -23,10 +23,12 @@ fn drive(name: &str) -> Drive {
         "quiet" => Drive::quiet(),
         "forced" => Drive::forced(),
         "ribs 0.2" => Drive {
+            enabled: true,
             ribs: wave(0.2),
             ..Drive::default()
         },
         "diaphragm 0.25" => Drive {
+            enabled: true,
             diaphragm: wave(0.25),
             ..Drive::default()
         },

@@ -137,6 +137,11 @@ typedef struct BtDrive {
    * Abdominal wall muscles.
    */
   struct BtWave abdominals;
+  /**
+   * 1: the drive runs; 0: off, the muscles follow the activation inputs alone (FMI
+   * `drive.enabled`).
+   */
+  int enabled;
 } BtDrive;
 
 /**
@@ -241,7 +246,8 @@ const char *bt_creation_error(void);
 
 /**
  * Fills `config` with the defaults (male, 30 y, 1.75 m, 75 kg, standing, level of detail 1,
- * 10 x 6 markers, Dormand-Prince 5(4) at rtol 1e-6, no drive).
+ * 10 x 6 markers, Dormand-Prince 5(4) at rtol 1e-6, the quiet drive): the FMU's start
+ * values. `config->drive.enabled = 0` turns the built-in drive off.
  *
  * # Safety
  * `config` must be NULL or writable.
@@ -250,7 +256,8 @@ int bt_config_default(struct BtConfig *config);
 
 /**
  * Sets one configuration field by its FMI parameter name (`"subject.age"`, `"grid.rows"`,
- * `"drive.ribs.amplitude"`, ...); Integer parameters take integral values. The value is
+ * `"drive.ribs.amplitude"`, ...); Integer parameters take integral values, Boolean ones
+ * (`drive.enabled`) 0 or 1. The value is
  * range-checked (message in `bt_creation_error`). The String parameters `slp.reference` and
  * `subject.mesh_dir` are set through the struct's pointers.
  *
@@ -475,7 +482,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{4a32bd39-da6e-b787-f357-b836457cac3e}"
+#define BT_FMI_GUID "{0ec09ad1-d858-62da-bdae-a33063ce249b}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -492,6 +499,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_SUBJECT_MASS 102u
 #define BT_VR_SUBJECT_BREAST_SIZE 103u
 #define BT_VR_POSTURE 201u
+#define BT_VR_DRIVE_ENABLED 400u
 #define BT_VR_DRIVE_FREQUENCY 110u
 #define BT_VR_DRIVE_RIBS_AMPLITUDE 111u
 #define BT_VR_DRIVE_RIBS_PHASE 112u

@@ -111,6 +111,7 @@ fn grid_model() -> LaggedGrid {
 
 fn drive(f: f64, ar: f64, ad: f64, dphi: f64) -> Drive {
     Drive {
+        enabled: true,
         frequency: f,
         ribs: Wave {
             amplitude: ar,

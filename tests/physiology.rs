@@ -29,18 +29,21 @@ fn only(group: &str, amplitude: f64) -> Drive {
     let z = Wave::default();
     match group {
         "ribs" => Drive {
+            enabled: true,
             frequency: 0.25,
             ribs: w,
             diaphragm: z,
             abdominals: z,
         },
         "diaphragm" => Drive {
+            enabled: true,
             frequency: 0.25,
             ribs: z,
             diaphragm: w,
             abdominals: z,
         },
         _ => Drive {
+            enabled: true,
             frequency: 0.25,
             ribs: z,
             diaphragm: z,

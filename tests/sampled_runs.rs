@@ -15,6 +15,7 @@ fn config() -> Config {
 
 fn drive(f: f64, ribs: f64, diaphragm: f64) -> Drive {
     Drive {
+        enabled: true,
         frequency: f,
         ribs: Wave {
             amplitude: ribs,
@@ -192,6 +193,7 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
     let mut plain = TorsoMarkers::new(config()).unwrap();
     plain.set_periodic(false);
     let d = Drive {
+        enabled: true,
         frequency: 0.4,
         ribs: Wave {
             amplitude: 0.8,

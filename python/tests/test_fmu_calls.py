@@ -79,7 +79,9 @@ class Host:
         f.setupExperiment(startTime=start)
         f.enterInitializationMode()
         for name, value in (start_values or {}).items():
-            if isinstance(value, int):
+            if isinstance(value, bool):
+                f.setBoolean([self.vr[name]], [value])
+            elif isinstance(value, int):
                 f.setInteger([self.vr[name]], [value])
             else:
                 f.setReal([self.vr[name]], [value])

@@ -50,11 +50,50 @@ def test_simulate_with_input_arrays():
     signals = np.array(list(zip(t, a, 0.5 * a)),
                        dtype=[("time", np.float64), ("activation.diaphragm", np.float64),
                               ("activation.external_intercostals", np.float64)])
-    driven = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, input=signals, output=["volume.lung"])
-    rest = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, output=["volume.lung"])
+    off = {"drive.enabled": False}  # the inputs alone drive the muscles
+    driven = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, input=signals, start_values=off,
+                          output=["volume.lung"])
+    rest = simulate_fmu(fmu_path(), stop_time=8.0, output_interval=0.02, start_values=off, output=["volume.lung"])
     assert np.all(np.isfinite(driven["volume.lung"]))
+    # With the drive off and no input the model stays at rest.
+    assert np.ptp(rest["volume.lung"]) < 1e-6, np.ptp(rest["volume.lung"])
     # Inspiratory activation raises the lung volume above the resting run.
     assert (driven["volume.lung"] - rest["volume.lung"]).max() > 0.02
+
+
+def test_default_fmu_breathes_the_quiet_scenario():
+    from fmpy import read_model_description
+    md = read_model_description(fmu_path())
+    start = {v.name: v.start for v in md.modelVariables}
+    # Drive::quiet (src/model/drive.rs): 0.25 Hz, ribs 0.12, diaphragm 0.30 0.1 rad ahead.
+    assert start["drive.enabled"] == "true"
+    assert [float(start[n]) for n in ["drive.frequency", "drive.ribs.amplitude", "drive.diaphragm.amplitude",
+                                      "drive.diaphragm.phase", "drive.abdominals.amplitude"]] == [
+        0.25, 0.12, 0.30, 0.1, 0.0]
+    r = simulate_fmu(fmu_path(), stop_time=20.0, output_interval=1 / 56, output=["volume.lung"])
+    # The quiet breath of the README's table (0.50 L, tests/physiology.rs), here over five
+    # breaths from rest.
+    assert abs(np.ptp(r["volume.lung"]) - 0.50) < 0.01, np.ptp(r["volume.lung"])
+
+
+def test_drive_enabled_switches_the_drive_between_steps():
+    h = Host()
+    try:
+        f = h.initialize({"scene.level_of_detail": 0})
+        vr = h.vr["drive.enabled"]
+        assert f.getBoolean([vr]) == [True]
+        lung = [v[0] for v in run(h, f, 0.0, 2.0, 0.1)]
+        assert np.ptp(lung) > 0.1, np.ptp(lung)
+        f.setBoolean([vr], [False])
+        assert f.getBoolean([vr]) == [False]
+        # Off: no activation, so the lungs return to rest and stay there.
+        lung = [v[0] for v in run(h, f, 2.0, 12.0, 0.1)]
+        assert np.ptp(lung[-20:]) < 1e-5, np.ptp(lung[-20:])
+        f.setBoolean([vr], [True])
+        lung = [v[0] for v in run(h, f, 12.0, 14.0, 0.1)]
+        assert np.ptp(lung) > 0.1
+    finally:
+        h.close()
 
 
 def test_fmu_state_replay_is_bit_identical():

@@ -394,6 +394,7 @@ pub fn random_scene(rng: &mut Pcg64, lod: u32) -> Result<Config> {
         phase: draw(rng, phase),
     };
     let drive = Drive {
+        enabled: true,
         frequency: draw(rng, (0.05, 2.0)),
         ribs: wave(rng),
         diaphragm: wave(rng),

@@ -92,6 +92,9 @@ pub struct BtDrive {
     pub diaphragm: BtWave,
     /// Abdominal wall muscles.
     pub abdominals: BtWave,
+    /// 1: the drive runs; 0: off, the muscles follow the activation inputs alone (FMI
+    /// `drive.enabled`).
+    pub enabled: c_int,
 }
 
 /// Everything needed to build a model. Fill it with `bt_config_default`, then change fields
@@ -267,6 +270,7 @@ fn drive_to_c(d: &Drive) -> BtDrive {
         ribs: w(d.ribs),
         diaphragm: w(d.diaphragm),
         abdominals: w(d.abdominals),
+        enabled: c_int::from(d.enabled),
     }
 }
 
@@ -276,6 +280,7 @@ fn drive_from_c(d: &BtDrive) -> Drive {
         phase: w.phase,
     };
     Drive {
+        enabled: d.enabled != 0,
         frequency: d.frequency,
         ribs: w(d.ribs),
         diaphragm: w(d.diaphragm),
@@ -398,7 +403,8 @@ pub extern "C" fn bt_creation_error() -> *const c_char {
 }
 
 /// Fills `config` with the defaults (male, 30 y, 1.75 m, 75 kg, standing, level of detail 1,
-/// 10 x 6 markers, Dormand-Prince 5(4) at rtol 1e-6, no drive).
+/// 10 x 6 markers, Dormand-Prince 5(4) at rtol 1e-6, the quiet drive): the FMU's start
+/// values. `config->drive.enabled = 0` turns the built-in drive off.
 ///
 /// # Safety
 /// `config` must be NULL or writable.
@@ -407,14 +413,19 @@ pub unsafe extern "C" fn bt_config_default(config: *mut BtConfig) -> c_int {
     without_handle(|| unsafe {
         put(
             config,
-            config_to_c(&Config::default(), std::ptr::null(), std::ptr::null()),
+            config_to_c(
+                &crate::fmi::variables::start_config(),
+                std::ptr::null(),
+                std::ptr::null(),
+            ),
             "config",
         )
     })
 }
 
 /// Sets one configuration field by its FMI parameter name (`"subject.age"`, `"grid.rows"`,
-/// `"drive.ribs.amplitude"`, ...); Integer parameters take integral values. The value is
+/// `"drive.ribs.amplitude"`, ...); Integer parameters take integral values, Boolean ones
+/// (`drive.enabled`) 0 or 1. The value is
 /// range-checked (message in `bt_creation_error`). The String parameters `slp.reference` and
 /// `subject.mesh_dir` are set through the struct's pointers.
 ///
@@ -445,6 +456,15 @@ pub unsafe extern "C" fn bt_config_set(
             crate::fmi::variables::ScalarType::Real => crate::fmi::variables::Value::Real(value),
             crate::fmi::variables::ScalarType::Integer if value.fract() == 0.0 => {
                 crate::fmi::variables::Value::Integer(value as i32)
+            }
+            crate::fmi::variables::ScalarType::Boolean if value == 0.0 || value == 1.0 => {
+                crate::fmi::variables::Value::Boolean(value == 1.0)
+            }
+            crate::fmi::variables::ScalarType::Boolean => {
+                return Err(Failure(
+                    BT_ERR_INVALID,
+                    format!("`{name}` is Boolean: it takes 0 (false) or 1 (true), not {value}"),
+                ));
             }
             crate::fmi::variables::ScalarType::String => {
                 return Err(Failure(
@@ -632,6 +652,7 @@ fn read_variable(b: &mut BtTorso, var: &crate::fmi::variables::Variable) -> Resu
         Role::Parameter(p) => match p.get(b.torso.config()) {
             crate::fmi::variables::Value::Real(x) => Ok(x),
             crate::fmi::variables::Value::Integer(i) => Ok(f64::from(i)),
+            crate::fmi::variables::Value::Boolean(b) => Ok(f64::from(u8::from(b))),
             crate::fmi::variables::Value::String(_) => {
                 Err(Error::invalid(&var.name, "(string)", "a numeric variable"))
             }

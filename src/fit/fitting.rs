@@ -303,6 +303,7 @@ fn linearised_start(
             phase: psi,
         };
         let drive = Drive {
+            enabled: true,
             frequency: f,
             ribs: wave(family == 0),
             diaphragm: wave(family == 1),
@@ -511,6 +512,7 @@ pub fn fit_recording(
     let model_times: Vec<f64> = times.iter().map(|t| settle + t).collect();
     let (alo, ahi) = AMPLITUDE_RANGE;
     let drive_of = |x: &[f64]| Drive {
+        enabled: true,
         frequency: f,
         ribs: Wave {
             amplitude: x[0],

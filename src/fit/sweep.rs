@@ -95,6 +95,7 @@ pub fn case_drive(forced: bool) -> Drive {
         (0.25, 0.2, 0.25, 0.1)
     };
     Drive {
+        enabled: true,
         frequency,
         ribs: Wave {
             amplitude: ribs,

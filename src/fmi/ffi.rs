@@ -452,7 +452,7 @@ pub unsafe extern "C" fn fmi2GetString(
     unsafe { get_values(c, "fmi2GetString", vr, nvr, value, Instance::get_string) }
 }
 
-/// `fmi2GetBoolean` (no Boolean variables: any value reference is an error).
+/// `fmi2GetBoolean` (`drive.enabled`).
 ///
 /// # Safety
 /// FMI 2.0 calling conventions.
@@ -463,17 +463,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    unsafe {
-        with_instance(c, "fmi2GetBoolean", mask::GET_VALUES, |inst| {
-            let Some(vrs) = slice(vr, nvr) else {
-                return null_argument(inst, "fmi2GetBoolean", "vr[]");
-            };
-            if slice_mut(value, nvr).is_none() {
-                return null_argument(inst, "fmi2GetBoolean", "value[]");
-            }
-            inst.get_boolean(vrs)
-        })
-    }
+    unsafe { get_values(c, "fmi2GetBoolean", vr, nvr, value, Instance::get_boolean) }
 }
 
 /// Shared body of the typed setters.
@@ -531,7 +521,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     unsafe { set_values(c, "fmi2SetInteger", vr, nvr, value, Instance::set_integer) }
 }
 
-/// `fmi2SetBoolean` (no Boolean variables).
+/// `fmi2SetBoolean` (`drive.enabled`, tunable).
 ///
 /// # Safety
 /// FMI 2.0 calling conventions.
@@ -542,17 +532,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    unsafe {
-        with_instance(c, "fmi2SetBoolean", mask::SET_VALUES, |inst| {
-            let Some(vrs) = slice(vr, nvr) else {
-                return null_argument(inst, "fmi2SetBoolean", "vr[]");
-            };
-            if slice(value, nvr).is_none() {
-                return null_argument(inst, "fmi2SetBoolean", "value[]");
-            }
-            inst.set_boolean(vrs)
-        })
-    }
+    unsafe { set_values(c, "fmi2SetBoolean", vr, nvr, value, Instance::set_boolean) }
 }
 
 /// `fmi2SetString`: the strings are copied.

@@ -327,6 +327,7 @@ fn fixed_differences(ours: &Config, theirs: &Config) -> String {
     let show = |v: Value| match v {
         Value::Real(x) => format!("{x}"),
         Value::Integer(i) => format!("{i}"),
+        Value::Boolean(b) => format!("{b}"),
         Value::String(s) => format!("{s:?}"),
     };
     let mut out: Vec<String> = table()
@@ -382,7 +383,7 @@ impl Instance {
                 ERRORS_ONLY
             },
             phase: Phase::Instantiated,
-            config: Config::default(),
+            config: super::variables::start_config(),
             rtol_explicit: false,
             stiffness_logged: false,
             step_start: Checkpoint::default(),
@@ -706,15 +707,16 @@ impl Instance {
         fmi2OK
     }
 
-    /// `fmi2GetBoolean`: the model has no Boolean variables.
-    pub fn get_boolean(&mut self, vrs: &[u32]) -> fmi2Status {
-        match vrs.first() {
-            None => fmi2OK,
-            Some(&vr) => self
-                .variable("fmi2GetBoolean", vr, ScalarType::Boolean)
-                .map(|_| fmi2OK)
-                .unwrap_or_else(|s| s),
+    /// `fmi2GetBoolean` (`fmi2Boolean` values: 1 true, 0 false).
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> fmi2Status {
+        for (vr, o) in vrs.iter().zip(out.iter_mut()) {
+            match self.get_value("fmi2GetBoolean", *vr, ScalarType::Boolean) {
+                Ok(Value::Boolean(x)) => *o = i32::from(x),
+                Ok(_) => return self.error("fmi2GetBoolean: internal type mismatch"),
+                Err(s) => return s,
+            }
         }
+        fmi2OK
     }
 
     /// `fmi2GetString`: the returned pointers stay valid until the next call on this instance
@@ -753,7 +755,7 @@ impl Instance {
         let numeric = match &value {
             Value::Real(x) => Some(*x),
             Value::Integer(i) => Some(f64::from(*i)),
-            Value::String(_) => None,
+            Value::Boolean(_) | Value::String(_) => None,
         };
         if let Some(x) = numeric
             && let Err(e) = var.check(x)
@@ -878,9 +880,11 @@ impl Instance {
         )
     }
 
-    /// `fmi2SetBoolean`: the model has no Boolean variables.
-    pub fn set_boolean(&mut self, vrs: &[u32]) -> fmi2Status {
-        self.get_boolean(vrs)
+    /// `fmi2SetBoolean` (any non-zero `fmi2Boolean` is true).
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> fmi2Status {
+        self.set_values("fmi2SetBoolean", ScalarType::Boolean, vrs, values, |v| {
+            Value::Boolean(v != 0)
+        })
     }
 
     /// `fmi2SetString` (the strings are copied).

@@ -42,7 +42,7 @@ pub enum ScalarType {
     Real,
     /// `fmi2Integer`.
     Integer,
-    /// `fmi2Boolean` (none in this model yet).
+    /// `fmi2Boolean`.
     Boolean,
     /// `fmi2String`.
     String,
@@ -92,6 +92,8 @@ pub enum Start {
     Real(f64),
     /// An Integer start value.
     Integer(i32),
+    /// A Boolean start value.
+    Boolean(bool),
     /// A String start value.
     String(String),
 }
@@ -152,6 +154,8 @@ pub enum Parameter {
     BreastSize,
     /// `posture` (Integer: 0 standing, 1 sitting, 2 supine).
     Posture,
+    /// `drive.enabled` (Boolean): the built-in drive runs.
+    DriveEnabled,
     /// `drive.frequency` [Hz].
     DriveFrequency,
     /// `drive.<family>.amplitude`.
@@ -191,6 +195,8 @@ pub enum Value {
     Real(f64),
     /// Integer.
     Integer(i32),
+    /// Boolean.
+    Boolean(bool),
     /// String.
     String(String),
 }
@@ -200,7 +206,10 @@ impl Parameter {
     pub fn is_tunable(self) -> bool {
         matches!(
             self,
-            Parameter::DriveFrequency | Parameter::DriveAmplitude(_) | Parameter::DrivePhase(_)
+            Parameter::DriveEnabled
+                | Parameter::DriveFrequency
+                | Parameter::DriveAmplitude(_)
+                | Parameter::DrivePhase(_)
         )
     }
 
@@ -215,6 +224,7 @@ impl Parameter {
             Mass => Value::Real(s.mass),
             BreastSize => Value::Real(s.breast_size),
             Posture => Value::Integer(s.posture.code()),
+            DriveEnabled => Value::Boolean(config.drive.enabled),
             DriveFrequency => Value::Real(config.drive.frequency),
             DriveAmplitude(f) => Value::Real(f.wave(config).amplitude),
             DrivePhase(f) => Value::Real(f.wave(config).phase),
@@ -261,6 +271,7 @@ impl Parameter {
             (Posture, Value::Integer(v)) => {
                 s.posture = crate::anatomy::Posture::from_code(v.into())?
             }
+            (DriveEnabled, Value::Boolean(v)) => config.drive.enabled = v,
             (DriveFrequency, Value::Real(v)) => config.drive.frequency = v,
             (DriveAmplitude(f), Value::Real(v)) => f.wave_mut(config).amplitude = v,
             (DrivePhase(f), Value::Real(v)) => f.wave_mut(config).phase = v,
@@ -530,6 +541,17 @@ pub fn marker_vr(index: u16, axis: u8) -> u32 {
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
+/// The configuration an instance starts from, whose values are the parameters' start
+/// values: the default subject (male, 30 y, 1.75 m, 75 kg, standing, level of detail 1)
+/// breathing the quiet scenario ([`crate::model::Drive::quiet`]), as `torso simulate` does;
+/// `drive.enabled = false` turns the built-in drive off for input-driven use.
+pub fn start_config() -> Config {
+    Config {
+        drive: crate::model::Drive::quiet(),
+        ..Config::default()
+    }
+}
+
 /// A compact builder for table rows.
 struct Row(Variable);
 
@@ -598,6 +620,7 @@ impl Row {
         self.0.start = match p.get(defaults) {
             Value::Real(v) => Start::Real(v),
             Value::Integer(v) => Start::Integer(v),
+            Value::Boolean(v) => Start::Boolean(v),
             Value::String(v) => Start::String(v),
         };
         self
@@ -606,8 +629,8 @@ impl Row {
 
 fn build() -> Vec<Variable> {
     use Parameter as P;
-    use ScalarType::{Integer, Real, String as Str};
-    let d = Config::default();
+    use ScalarType::{Boolean, Integer, Real, String as Str};
+    let d = start_config();
     let mut rows: Vec<Variable> = Vec::with_capacity(900);
 
     rows.push(Variable {
@@ -686,6 +709,13 @@ fn build() -> Vec<Variable> {
             "Posture: 0 standing, 1 sitting, 2 supine",
         )
         .range(0.0, 2.0),
+        par(
+            "drive.enabled",
+            400,
+            Boolean,
+            P::DriveEnabled,
+            "The built-in drive (drive.*, thesis eq. 2.4) runs; false: the muscles follow the activation inputs alone",
+        ),
         par(
             "drive.frequency",
             110,

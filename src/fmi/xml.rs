@@ -99,6 +99,7 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
             Start::None => None,
             Start::Real(x) => Some(num(*x)),
             Start::Integer(x) => Some(x.to_string()),
+            Start::Boolean(x) => Some(x.to_string()),
             Start::String(x) => Some(x.clone()),
         };
         if let Some(s) = &start {
@@ -278,6 +279,7 @@ pub fn documentation_html() -> String {
             Start::None => String::new(),
             Start::Real(x) => num(*x),
             Start::Integer(x) => x.to_string(),
+            Start::Boolean(x) => x.to_string(),
             Start::String(x) => format!("\"{x}\""),
         };
         let _ = writeln!(

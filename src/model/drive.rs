@@ -26,6 +26,10 @@ pub struct Wave {
 /// four abdominal wall muscles, in antiphase with inspiration: they help expiration).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Drive {
+    /// Whether the drive runs (FMI `drive.enabled`); off, the muscles follow the activation
+    /// inputs alone whatever the amplitudes. Saved states without the field had it on.
+    #[serde(default = "drive_on")]
+    pub enabled: bool,
     /// Breathing frequency f_b [Hz], in [0.05, 2].
     pub frequency: f64,
     /// Rib-cage family.
@@ -36,9 +40,15 @@ pub struct Drive {
     pub abdominals: Wave,
 }
 
+fn drive_on() -> bool {
+    true
+}
+
+/// No drive: every amplitude 0 (the `rest` scenario).
 impl Default for Drive {
     fn default() -> Self {
         Drive {
+            enabled: true,
             frequency: 0.25,
             ribs: Wave::default(),
             diaphragm: Wave::default(),
@@ -62,6 +72,7 @@ impl Drive {
     /// belong to its model and are, as it notes in 4.3.2, simulation-dependent.
     pub fn quiet() -> Self {
         Drive {
+            enabled: true,
             frequency: 0.25,
             ribs: Wave {
                 amplitude: 0.12,
@@ -82,6 +93,7 @@ impl Drive {
     /// 4.3, forced: A_ribs 0.12-0.38, A_diaphragm 0.23-0.51).
     pub fn forced() -> Self {
         Drive {
+            enabled: true,
             frequency: 0.2,
             ribs: Wave {
                 amplitude: 0.35,
@@ -128,7 +140,7 @@ impl Drive {
 
     /// Drive activation of `group` at time `t`: A/2 (sin(2 pi f t + phi) + 1) for the family's
     /// wave, in antiphase (phi + pi) for the expiratory groups (internal intercostals,
-    /// abdominal wall muscles).
+    /// abdominal wall muscles); 0 when the drive is off.
     pub fn activation(&self, group: MuscleGroup, t: f64) -> f64 {
         let (wave, antiphase) = match group {
             MuscleGroup::ExternalIntercostals | MuscleGroup::Scalenes => (self.ribs, false),
@@ -139,7 +151,7 @@ impl Drive {
             | MuscleGroup::ExternalObliques
             | MuscleGroup::InternalObliques => (self.abdominals, true),
         };
-        if wave.amplitude == 0.0 {
+        if !self.enabled || wave.amplitude == 0.0 {
             return 0.0;
         }
         let shift = if antiphase { PI } else { 0.0 };
