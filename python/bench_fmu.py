@@ -24,25 +24,8 @@ VOLUMES = ["volume.lung", "volume.thorax", "volume.abdomen", "volume.trunk"]
 MARKERS = [f"marker[{i}].{a}" for i in range(1, 61) for a in "xyz"]
 
 
-class Wave(ctypes.Structure):
-    _fields_ = [("amplitude", ctypes.c_double), ("phase", ctypes.c_double)]
-
-
-class Drive(ctypes.Structure):
-    _fields_ = [("frequency", ctypes.c_double), ("ribs", Wave), ("diaphragm", Wave), ("abdominals", Wave)]
-
-
-class Subject(ctypes.Structure):
-    _fields_ = [("sex", ctypes.c_int), ("age", ctypes.c_double), ("stature", ctypes.c_double),
-                ("mass", ctypes.c_double), ("breast_size", ctypes.c_double), ("posture", ctypes.c_int)]
-
-
-class Config(ctypes.Structure):
-    _fields_ = [("subject", Subject), ("level_of_detail", ctypes.c_int), ("grid_rows", ctypes.c_int),
-                ("grid_cols", ctypes.c_int), ("slp_reference", ctypes.c_char_p), ("solver_method", ctypes.c_int),
-                ("solver_rtol", ctypes.c_double), ("solver_atol", ctypes.c_double),
-                ("solver_max_step", ctypes.c_double), ("drive", Drive), ("lung_ratio", ctypes.c_double),
-                ("gain_left", ctypes.c_double), ("gain_right", ctypes.c_double)]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from bench_scipy import Config  # noqa: E402  (`BtConfig` of include/breathing_torso.h)
 
 
 def markers_available(lib):

@@ -59,7 +59,8 @@ class Wave(ctypes.Structure):
 
 
 class Drive(ctypes.Structure):
-    _fields_ = [("frequency", ctypes.c_double), ("ribs", Wave), ("diaphragm", Wave), ("abdominals", Wave)]
+    _fields_ = [("frequency", ctypes.c_double), ("ribs", Wave), ("diaphragm", Wave), ("abdominals", Wave),
+                ("enabled", ctypes.c_int)]
 
 
 class Subject(ctypes.Structure):
@@ -73,7 +74,8 @@ class Config(ctypes.Structure):
                 ("grid_cols", ctypes.c_int), ("slp_reference", ctypes.c_char_p), ("solver_method", ctypes.c_int),
                 ("solver_rtol", ctypes.c_double), ("solver_atol", ctypes.c_double),
                 ("solver_max_step", ctypes.c_double), ("drive", Drive), ("lung_ratio", ctypes.c_double),
-                ("gain_left", ctypes.c_double), ("gain_right", ctypes.c_double)]
+                ("gain_left", ctypes.c_double), ("gain_right", ctypes.c_double),
+                ("subject_mesh_dir", ctypes.c_char_p)]
 
 
 def load_library(path=LIB):

@@ -1,35 +1,76 @@
 #!/usr/bin/env bash
 # Runs every test of the project: formatting, lints, Rust tests, C and Python tests.
 # Installs what it needs itself (Rust crates through cargo, a Python venv with fmpy).
-set -euo pipefail
+# Ends with one line over all stages: `N passed, N failed` (each test of cargo test and
+# pytest counts once, every other stage once); the exit status is 1 when anything failed.
+set -uo pipefail
 cd "$(dirname "$0")/.."
 
-echo "== cargo fmt --check"
-cargo fmt --all -- --check
+passed=0
+failed=0
+failures=()
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
 
-echo "== cargo clippy"
-cargo clippy --all-targets --release -- -D warnings
+summary() {
+  local IFS=';'
+  echo "== summary: $passed passed, $failed failed${failures[*]:+ (failed stages: ${failures[*]})}"
+}
 
-echo "== python venv (fmpy also supplies the official FMI 2.0 headers for the Rust tests)"
-bash scripts/python-env.sh
+# stage NAME required|optional COMMAND...: runs COMMAND, counts its tests (cargo test's
+# `test result:` lines, pytest's closing line) or the stage itself as one check. A required
+# stage that fails stops the run (what follows needs it).
+stage() {
+  local name=$1 need=$2
+  shift 2
+  echo "== $name"
+  "$@" 2>&1 | tee "$log"
+  local status=${PIPESTATUS[0]} p=0 f=0 line
+  while read -r line; do
+    p=$((p + $(grep -oE '[0-9]+ passed' <<<"$line" | grep -oE '[0-9]+' || echo 0)))
+    f=$((f + $(grep -oE '[0-9]+ failed' <<<"$line" | grep -oE '[0-9]+' || echo 0)))
+    f=$((f + $(grep -oE '[0-9]+ errors?' <<<"$line" | grep -oE '[0-9]+' || echo 0)))
+  done < <(grep -E '^test result: |[0-9]+ (passed|failed|errors?).* in [0-9.]+s' "$log")
+  if [ $((p + f)) -eq 0 ]; then
+    if [ "$status" -eq 0 ]; then p=1; else f=1; fi
+  elif [ "$status" -ne 0 ] && [ "$f" -eq 0 ]; then
+    f=1 # the stage failed outside any test (a test binary that did not compile)
+  fi
+  passed=$((passed + p))
+  failed=$((failed + f))
+  if [ "$status" -ne 0 ]; then
+    failures+=("$name")
+    if [ "$need" = required ]; then
+      summary
+      exit 1
+    fi
+  fi
+}
 
-echo "== release library and FMU (the C tests link the cdylib)"
-cargo build --release
-target/release/torso fmu build --out fmu/BreathingTorso.fmu
+stage "cargo fmt --check" optional cargo fmt --all -- --check
+stage "cargo clippy" optional cargo clippy --all-targets --release -- -D warnings
+# fmpy also supplies the official FMI 2.0 headers for the Rust tests.
+stage "python venv" required bash scripts/python-env.sh
+# The C tests link the cdylib; the Python tests load the FMU.
+stage "release library" required cargo build --release
+stage "FMU" required target/release/torso fmu build --out fmu/BreathingTorso.fmu
+stage "cargo test" optional cargo test --release --no-fail-fast
 
-echo "== cargo test"
-cargo test --release
-
-echo "== the crate is built once for build and test (Cargo.toml: resolver)"
-rebuild=$(cargo build --release -v 2>&1)
-if ! grep -q "Fresh breathing-torso" <<<"$rebuild"; then
-  echo "cargo build --release after cargo test --release rebuilds the crate:" >&2
-  grep -E "Dirty|Compiling" <<<"$rebuild" >&2
-  exit 1
-fi
+built_once() {
+  local rebuild
+  rebuild=$(cargo build --release -v 2>&1)
+  if ! grep -q "Fresh breathing-torso" <<<"$rebuild"; then
+    echo "cargo build --release after cargo test --release rebuilds the crate:"
+    grep -E "Dirty|Compiling" <<<"$rebuild"
+    return 1
+  fi
+  echo "the crate was built once for build and test"
+}
+stage "the crate is built once for build and test (Cargo.toml: resolver)" optional built_once
 
 if [ -d python/tests ] && ls python/tests/test_*.py >/dev/null 2>&1; then
-  echo "== python tests"
-  bash scripts/python-env.sh
-  .venv/bin/python -m pytest -q python/tests
+  stage "python tests" optional .venv/bin/python -m pytest -q python/tests
 fi
+
+summary
+[ "$failed" -eq 0 ]

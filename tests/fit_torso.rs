@@ -2,15 +2,12 @@
 //! parameters (0.5 mm noise, random camera pose) fitted back. Two short fits run in CI; the
 //! six-recording sweep of the issue (quiet and forced x three postures, two subjects, 18 s)
 //! is `cargo test --release --test fit_torso -- --ignored`.
-//!
-//! The torso's marker outputs come from the skin-and-markers work; until this build has
-//! them, each test prints why it is skipped and returns.
 
+use breathing_torso::Config;
 use breathing_torso::anatomy::{Posture, Sex, Subject};
 use breathing_torso::fit::fitting::wrap_angle;
 use breathing_torso::fit::{FitOptions, SynthOptions, TorsoMarkers, fit_recording, synthesize};
 use breathing_torso::model::Drive;
-use breathing_torso::{Config, Error, Quantity, Torso};
 
 fn config(subject: Subject) -> Config {
     let mut c = Config {
@@ -24,18 +21,6 @@ fn config(subject: Subject) -> Config {
 }
 
 /// False (with the reason printed) while the torso has no marker outputs.
-fn markers_available() -> bool {
-    let mut torso = Torso::new(config(Subject::default())).unwrap();
-    match torso.read(Quantity::Marker { index: 0, axis: 0 }) {
-        Ok(_) => true,
-        Err(Error::State(reason)) if reason.contains("no skin model") => {
-            eprintln!("skipped: the torso has no marker outputs in this build ({reason})");
-            false
-        }
-        Err(e) => panic!("reading a marker failed: {e}"),
-    }
-}
-
 fn subject_b() -> Subject {
     Subject {
         sex: Sex::Female,
@@ -102,23 +87,16 @@ fn accept(subject: Subject, posture: Posture, forced: bool, duration: f64, seed:
 
 #[test]
 fn quiet_standing_is_recovered() {
-    if markers_available() {
-        accept(Subject::default(), Posture::Standing, false, 10.0, 31);
-    }
+    accept(Subject::default(), Posture::Standing, false, 10.0, 31);
 }
 
 #[test]
 fn forced_supine_is_recovered() {
-    if markers_available() {
-        accept(subject_b(), Posture::Supine, true, 10.0, 32);
-    }
+    accept(subject_b(), Posture::Supine, true, 10.0, 32);
 }
 
 #[test]
 fn a_recording_of_another_grid_is_rejected_naming_both_sizes() {
-    if !markers_available() {
-        return;
-    }
     let mut c = config(Subject::default());
     c.scene.grid_rows = 8;
     let mut source = TorsoMarkers::new(c).unwrap();
@@ -148,9 +126,6 @@ fn a_recording_of_another_grid_is_rejected_naming_both_sizes() {
 #[test]
 #[ignore = "six 18 s fits: several minutes; run with --ignored"]
 fn six_recording_sweep() {
-    if !markers_available() {
-        return;
-    }
     let cases = [
         (Subject::default(), Posture::Standing, false),
         (subject_b(), Posture::Standing, true),
@@ -170,9 +145,6 @@ fn six_recording_sweep() {
 /// an offset of about 2.5 mm the drive cannot remove), within the evaluation budget.
 #[test]
 fn skin_fit_at_the_implied_rest_pose_keeps_the_noise_floor() {
-    if !markers_available() {
-        return;
-    }
     let mut source = TorsoMarkers::new(config(Subject::default())).unwrap();
     let s = synthesize(
         &mut source,
@@ -217,9 +189,6 @@ fn skin_fit_at_the_implied_rest_pose_keeps_the_noise_floor() {
 /// one thread, bit for bit, with the same evaluation count.
 #[test]
 fn two_threads_fit_as_one() {
-    if !markers_available() {
-        return;
-    }
     let mut source = TorsoMarkers::new(config(Subject::default())).unwrap();
     let s = synthesize(
         &mut source,
