@@ -42,8 +42,11 @@ pub struct Joint {
 /// caudally and dorsally).
 pub const OBLIQUITY: f64 = 0.2;
 
-/// Maximal active tension of an intercostal layer per metre of interspace [N/m]: 29 N/cm^2
-/// over a 3 mm layer (De Troyer 1998), about 9 N per cm of interspace.
+/// Maximal active tension of an intercostal layer per metre of interspace [N/m]. 29 N/cm^2
+/// over a 3 mm layer (De Troyer 1998) gives 870 N/m; the 1200 N/m in use (1.4x that) is the
+/// value of the model's first calibration, with which the drive amplitudes of
+/// [`crate::model::Drive::quiet`] and every documented figure were calibrated, so changing it
+/// is a recalibration, not a correction.
 pub const INTERCOSTAL_TENSION: f64 = 1200.0;
 /// Maximal force of the scalenes on one side [N]: anterior 139 + medius 101 + posterior 77
 /// (Mortensen 2014).
@@ -121,7 +124,7 @@ pub fn muscles(
 /// External and internal intercostals between ribs k and k+1 (k = 1..11) on both sides.
 /// External fibres run from the upper rib down and forward (lower attachment more ventral),
 /// internal fibres down and backward; 250 elements per layer at full detail (thesis 2.2.1).
-/// Gains: external 1 at the head fading to 0.2 at the ventral end, internal mirrored.
+/// Gains: external 1 at the head fading to 0.4 at the ventral end, internal mirrored.
 fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<MuscleElement>) {
     for group in [
         MuscleGroup::ExternalIntercostals,
@@ -148,7 +151,7 @@ fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<M
                 let force = INTERCOSTAL_TENSION * length / per_space as f64;
                 for e in 0..per_space {
                     let s = (e as f64 + 0.5) / per_space as f64;
-                    // Fibre obliquity: about 0.08 of the rib length between attachments.
+                    // Fibre obliquity: OBLIQUITY (0.2) of the rib's length between attachments.
                     let (su, sl) = if external {
                         ((1.0 - OBLIQUITY) * s, (1.0 - OBLIQUITY) * s + OBLIQUITY)
                     } else {
