@@ -38,9 +38,21 @@ fn demo_fits_the_bundled_recording() {
             p.display()
         );
     }
-    if text.contains("wrote fmu/BreathingTorso.fmu") {
-        assert!(dir.join("fmu/BreathingTorso.fmu").exists());
+    // The FMU goes under --out with the rest, nothing into the working directory's fmu/.
+    if text.contains("wrote out/BreathingTorso.fmu") {
+        assert!(dir.join("out/BreathingTorso.fmu").exists());
     }
+    assert!(!dir.join("fmu").exists(), "the demo wrote outside --out");
+    // The help names no build-time path as a default.
+    let help = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["demo", "--help"])
+        .output()
+        .expect("run torso demo --help");
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        !help.contains(env!("CARGO_MANIFEST_DIR")),
+        "torso demo --help shows a build-time path:\n{help}"
+    );
     let read = |p: PathBuf| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap()
     };

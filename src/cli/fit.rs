@@ -247,18 +247,41 @@ pub fn default_threads() -> usize {
 /// Options of `torso demo`.
 #[derive(Args, Debug)]
 pub struct DemoArgs {
-    /// Output directory.
+    /// Output directory (the FMU, the simulation, the fit and its report).
     #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
-    /// The recording to fit (default: the bundled synthetic one).
-    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/data/recordings/demo_quiet.csv"))]
-    pub recording: PathBuf,
+    /// The recording to fit [default: the bundled data/recordings/demo_quiet.csv, looked up
+    /// from the working directory, then from the executable's folder upwards, then in the
+    /// source tree the executable was built from].
+    #[arg(long)]
+    pub recording: Option<PathBuf>,
 }
 
-/// Packages `fmu/BreathingTorso.fmu` from the shared library beside this executable (as
+/// The bundled demo recording's path relative to a repository's root.
+const DEMO_RECORDING: &str = "data/recordings/demo_quiet.csv";
+
+/// Finds the bundled demo recording: in the working directory, in the executable's folder or
+/// any folder above it (a `target/release/torso` of a clone), or in the source tree the
+/// executable was built from; the error lists where it looked.
+fn bundled_recording() -> Result<PathBuf> {
+    let mut places = vec![PathBuf::from(DEMO_RECORDING)];
+    if let Ok(exe) = std::env::current_exe() {
+        places.extend(exe.ancestors().skip(1).map(|d| d.join(DEMO_RECORDING)));
+    }
+    places.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(DEMO_RECORDING));
+    places.iter().find(|p| p.is_file()).cloned().ok_or_else(|| {
+        let looked: Vec<String> = places.iter().map(|p| p.display().to_string()).collect();
+        Error::State(format!(
+            "the bundled recording {DEMO_RECORDING} was not found (looked at {}); pass one with --recording",
+            looked.join(", ")
+        ))
+    })
+}
+
+/// Packages `<out>/BreathingTorso.fmu` from the shared library beside this executable (as
 /// `torso fmu build` does). A missing library is reported and skipped, not fatal: the rest
 /// of the demo does not need the FMU.
-fn package_fmu() -> Result<Option<PathBuf>> {
+fn package_fmu(out: &Path) -> Result<Option<PathBuf>> {
     let lib = crate::fmi::package::default_library()?;
     if !lib.exists() {
         println!(
@@ -267,7 +290,7 @@ fn package_fmu() -> Result<Option<PathBuf>> {
         );
         return Ok(None);
     }
-    let p = crate::fmi::package::build_fmu(&lib, None, Path::new("fmu/BreathingTorso.fmu"))?;
+    let p = crate::fmi::package::build_fmu(&lib, None, &out.join("BreathingTorso.fmu"))?;
     Ok(Some(p.path))
 }
 
@@ -276,11 +299,15 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
     let start = std::time::Instant::now();
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     println!("== 1. FMU");
-    if let Some(fmu) = package_fmu()? {
+    if let Some(fmu) = package_fmu(&args.out)? {
         println!("wrote {}", fmu.display());
     }
 
-    println!("== 2. simulate the default subject (quiet breathing, 20 s)");
+    println!(
+        "== 2. simulate the default subject (quiet breathing, 20 s) at level of detail 0 and \
+         rtol 1e-4, the settings of the bundled recording (the README's figures are level of \
+         detail 1: a 0.50 L tidal volume)"
+    );
     let model = ModelArgs {
         sex: "male".into(),
         age: 30.0,
@@ -308,17 +335,21 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         sim.display()
     );
 
-    println!("== 3. fit {}", args.recording.display());
-    if !args.recording.exists() {
+    let recording = match &args.recording {
+        Some(r) => r.clone(),
+        None => bundled_recording()?,
+    };
+    println!("== 3. fit {}", recording.display());
+    if !recording.exists() {
         return Err(Error::State(format!(
             "{} is missing: generate it with `torso synth --lod 0 --rtol 1e-4 --duration 8 --seed 7 --out {} --truth {}`",
-            args.recording.display(),
-            args.recording.display(),
-            args.recording.with_extension("truth.json").display()
+            recording.display(),
+            recording.display(),
+            recording.with_extension("truth.json").display()
         )));
     }
     let fit = fit_file(
-        &args.recording,
+        &recording,
         &model,
         &args.out.join("fit.json"),
         &FitOptions {
@@ -327,7 +358,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         },
         false,
     )?;
-    let truth_path = args.recording.with_extension("truth.json");
+    let truth_path = recording.with_extension("truth.json");
     if let Ok(text) = std::fs::read_to_string(&truth_path)
         && let Ok(truth) = serde_json::from_str::<serde_json::Value>(&text)
     {
