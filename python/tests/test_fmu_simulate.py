@@ -112,12 +112,15 @@ def test_drive_enabled_switches_the_drive_between_steps():
         vr = h.vr["drive.enabled"]
         assert f.getBoolean([vr]) == [True]
         lung = [v[0] for v in run(h, f, 0.0, 2.0, 0.1)]
-        assert np.ptp(lung) > 0.1, np.ptp(lung)
+        driven = np.ptp(lung)
+        assert driven > 0.1, driven
         f.setBoolean([vr], [False])
         assert f.getBoolean([vr]) == [False]
-        # Off: no activation, so the lungs return to rest and stay there.
+        # Off: no activation, so no breath: over the last 2 s of 10 s off the lungs move by
+        # less than a thousandth of the driven half-breath (the passive return to rest has a
+        # slow tail of about 2e-5 L there, docs/dynamics.md).
         lung = [v[0] for v in run(h, f, 2.0, 12.0, 0.1)]
-        assert np.ptp(lung[-20:]) < 1e-5, np.ptp(lung[-20:])
+        assert np.ptp(lung[-20:]) < 1e-3 * driven, np.ptp(lung[-20:])
         f.setBoolean([vr], [True])
         lung = [v[0] for v in run(h, f, 12.0, 14.0, 0.1)]
         assert np.ptp(lung) > 0.1
