@@ -468,7 +468,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{4a32bd39-da6e-b787-f357-b836457cac3e}"
+#define BT_FMI_GUID "{6457d7f3-c7b5-23da-b099-4fcc74a27e86}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
