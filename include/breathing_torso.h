@@ -482,7 +482,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{0ec09ad1-d858-62da-bdae-a33063ce249b}"
+#define BT_FMI_GUID "{7a13ce02-0433-b26a-d8f2-a250ceb84e63}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test of the project: formatting, lints, Rust tests, C and Python tests.
-# Installs what it needs itself (Rust crates through cargo, a Python venv with fmpy).
+# Installs what it needs itself (Rust crates through cargo, a Python venv with fmpy, zig and
+# cargo-zigbuild; as root, mingw-w64 and wine from apt for the win64 binary and its test).
 # Ends with one line over all stages: `N passed, N failed` (each test of cargo test and
 # pytest counts once, every other stage once); the exit status is 1 when anything failed.
 set -uo pipefail
@@ -68,8 +69,19 @@ built_once() {
 }
 stage "the crate is built once for build and test (Cargo.toml: resolver)" optional built_once
 
+# The distributable FMU replaces the development one for the Python tests.
+stage "distributable FMU: stripped linux64 (glibc 2.17) and win64 binaries, checked (scripts/deploy.sh)" \
+  optional bash scripts/deploy.sh --out fmu/BreathingTorso.fmu
+
+if ! command -v wine >/dev/null && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+  echo "== wine (runs the win64 binary against linux64 in python/tests/test_fmu_win64.py)"
+  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends wine wine64) \
+    >/dev/null 2>&1 || echo "wine could not be installed: the win64 test will say it is skipped" >&2
+fi
+
 if [ -d python/tests ] && ls python/tests/test_*.py >/dev/null 2>&1; then
-  stage "python tests" optional .venv/bin/python -m pytest -q python/tests
+  # -rs prints why a test is skipped
+  stage "python tests" optional .venv/bin/python -m pytest -q -rs python/tests
 fi
 
 summary

@@ -1,6 +1,6 @@
 //! `torso fmu`: packages the FMI 2.0 co-simulation FMU and writes its model description.
 
-use crate::fmi::package::{build_fmu, default_library};
+use crate::fmi::package::{Binary, build_fmu_for, default_library, has_debug_info};
 use crate::fmi::xml::model_description;
 use crate::{Error, Result};
 use clap::{Args, Subcommand};
@@ -27,6 +27,11 @@ pub enum FmuCommand {
         /// `cargo run` and `cargo test`).
         #[arg(long)]
         lib: Option<PathBuf>,
+        /// A library for another platform, as PLATFORM=PATH (linux64, win64, ...); may be
+        /// repeated. Without --lib, only these are packaged. `scripts/deploy.sh` packages the
+        /// stripped linux64 (glibc 2.17) and win64 builds this way.
+        #[arg(long = "binary", value_name = "PLATFORM=PATH")]
+        binaries: Vec<String>,
         /// A folder copied into the FMU's resources/.
         #[arg(long)]
         resources: Option<PathBuf>,
@@ -45,13 +50,31 @@ pub fn run(args: FmuArgs) -> Result<()> {
         FmuCommand::Build {
             out,
             lib,
+            binaries,
             resources,
         } => {
-            let lib = match lib {
-                Some(l) => l,
-                None => default_library()?,
-            };
-            let p = build_fmu(&lib, resources.as_deref(), &out)?;
+            let mut packaged = Vec::new();
+            match lib {
+                Some(l) => packaged.push(Binary::host(&l)),
+                None if binaries.is_empty() => packaged.push(Binary::host(&default_library()?)),
+                None => {}
+            }
+            for b in &binaries {
+                packaged.push(Binary::parse(b)?);
+            }
+            for b in &packaged {
+                // A missing file is reported by the packager, with how to build it.
+                if let Ok(bytes) = std::fs::read(&b.path)
+                    && has_debug_info(&bytes) == Some(true)
+                {
+                    println!(
+                        "note: {} carries debug information ({} bytes); `bash scripts/deploy.sh` packages stripped builds",
+                        b.path.display(),
+                        bytes.len()
+                    );
+                }
+            }
+            let p = build_fmu_for(&packaged, resources.as_deref(), &out)?;
             println!(
                 "wrote {} ({} bytes): {}",
                 p.path.display(),

@@ -28,7 +28,9 @@ fn panic_message(payload: &(dyn Any + Send)) -> String {
 }
 
 /// Runs `body` on the instance behind `c` if `function` is allowed in its state; panics are
-/// caught and reported.
+/// caught and reported. Every call is first logged under `logCalls` (when that category is
+/// on) as `function(args)`, the arguments formatted by `args` only then, also when the call
+/// is then refused.
 ///
 /// # Safety
 /// `c` must be null or a pointer returned by [`fmi2Instantiate`] and not yet freed.
@@ -36,6 +38,7 @@ unsafe fn with_instance(
     c: fmi2Component,
     function: &str,
     mask: u8,
+    args: impl FnOnce() -> String,
     body: impl FnOnce(&mut Instance) -> fmi2Status,
 ) -> fmi2Status {
     if c.is_null() {
@@ -44,6 +47,7 @@ unsafe fn with_instance(
     // SAFETY: the caller passes an instance created by fmi2Instantiate.
     let inst = unsafe { &mut *(c as *mut Instance) };
     let result = catch_unwind(AssertUnwindSafe(|| {
+        inst.trace(|| format!("{function}({})", args()));
         if inst.allowed(function, mask) {
             body(inst)
         } else {
@@ -108,6 +112,37 @@ unsafe fn string(p: *const c_char) -> Option<String> {
         .map(str::to_string)
 }
 
+/// `[a, b, ...]` of a C array for `logCalls`, or `NULL`.
+///
+/// # Safety
+/// As for [`slice`].
+unsafe fn show<T: std::fmt::Debug>(p: *const T, n: usize) -> String {
+    match unsafe { slice(p, n) } {
+        Some(values) => format!("{values:?}"),
+        None => "NULL".into(),
+    }
+}
+
+/// A C string array for `logCalls`: each string quoted, or `NULL`.
+///
+/// # Safety
+/// As for [`slice`] and [`string`].
+unsafe fn show_strings(p: *const fmi2String, n: usize) -> String {
+    match unsafe { slice(p, n) } {
+        Some(ptrs) => {
+            let shown: Vec<String> = ptrs
+                .iter()
+                .map(|&s| match unsafe { string(s) } {
+                    Some(s) => format!("{s:?}"),
+                    None => "NULL".into(),
+                })
+                .collect();
+            format!("[{}]", shown.join(", "))
+        }
+        None => "NULL".into(),
+    }
+}
+
 fn null_argument(inst: &mut Instance, function: &str, argument: &str) -> fmi2Status {
     inst.error(&format!("{function}: argument {argument} must not be NULL"))
 }
@@ -139,22 +174,35 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const fmi2String,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2SetDebugLogging", mask::SET_DEBUG_LOGGING, |inst| {
-            let Some(ptrs) = slice(categories, nCategories) else {
-                return null_argument(inst, "fmi2SetDebugLogging", "categories[]");
-            };
-            let mut names = Vec::with_capacity(ptrs.len());
-            for &p in ptrs {
-                match string(p) {
-                    Some(s) => names.push(s),
-                    None => {
-                        return inst.error("fmi2SetDebugLogging: a category is NULL or not UTF-8");
+        let args = || {
+            format!(
+                "loggingOn={loggingOn}, nCategories={nCategories}, categories={}",
+                show_strings(categories, nCategories)
+            )
+        };
+        with_instance(
+            c,
+            "fmi2SetDebugLogging",
+            mask::SET_DEBUG_LOGGING,
+            args,
+            |inst| {
+                let Some(ptrs) = slice(categories, nCategories) else {
+                    return null_argument(inst, "fmi2SetDebugLogging", "categories[]");
+                };
+                let mut names = Vec::with_capacity(ptrs.len());
+                for &p in ptrs {
+                    match string(p) {
+                        Some(s) => names.push(s),
+                        None => {
+                            return inst
+                                .error("fmi2SetDebugLogging: a category is NULL or not UTF-8");
+                        }
                     }
                 }
-            }
-            let refs: Vec<&str> = names.iter().map(String::as_str).collect();
-            inst.set_debug_logging(loggingOn != fmi2False, &refs)
-        })
+                let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+                inst.set_debug_logging(loggingOn != fmi2False, &refs)
+            },
+        )
     }
 }
 
@@ -226,7 +274,6 @@ pub unsafe extern "C" fn fmi2Instantiate(
     visible: fmi2Boolean,
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
-    let _ = visible;
     let result = catch_unwind(AssertUnwindSafe(|| unsafe {
         let name = string(instanceName).unwrap_or_default();
         let fail = |message: String| {
@@ -253,24 +300,30 @@ pub unsafe extern "C" fn fmi2Instantiate(
             ));
         }
         let sink = make_sink(&*functions, &name);
-        let mut warnings = Vec::new();
+        let mut notes = Vec::new();
         let resources = match string(fmuResourceLocation) {
             None => None,
             Some(uri) => match file_uri_to_path(&uri) {
                 Ok(p) => Some(p),
                 Err(e) => {
-                    warnings.push(format!("fmi2Instantiate: resources unavailable: {e}"));
+                    notes.push(format!("fmi2Instantiate: resources unavailable: {e}"));
                     None
                 }
             },
         };
         let mut inst = Instance::new(&name, resources, sink, loggingOn != fmi2False);
-        for w in warnings {
-            inst.log(
-                fmi2Status::fmi2Warning,
-                super::instance::Category::Warning,
-                &w,
-            );
+        inst.trace(|| {
+            format!(
+                "fmi2Instantiate(instanceName={name:?}, fmuType={fmuType}, fmuGUID={:?}, fmuResourceLocation={:?}, visible={visible}, loggingOn={loggingOn})",
+                guid.as_deref().unwrap_or_default(),
+                string(fmuResourceLocation)
+            )
+        });
+        // fmi2Instantiate returns no status, so these are logged as events, not as warnings
+        // (a warning belongs to a call that returns fmi2Warning); a relative `slp.reference`
+        // that needed the resources is refused later with an error saying so.
+        for w in notes {
+            inst.log(fmi2OK, super::instance::Category::Events, &w);
         }
         Box::into_raw(Box::new(inst)) as fmi2Component
     }));
@@ -297,6 +350,7 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     let _ = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: created by Box::into_raw in fmi2Instantiate.
         let mut inst = unsafe { Box::from_raw(c as *mut Instance) };
+        inst.trace(|| "fmi2FreeInstance()".into());
         free_states(&mut inst);
     }));
 }
@@ -318,16 +372,22 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stopTime: fmi2Real,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2SetupExperiment", mask::SETUP_EXPERIMENT, |inst| {
-            inst.trace(|| {
-                format!(
-                    "fmi2SetupExperiment(tolerance={tolerance}, start={startTime}, stop={stopTime})"
-                )
-            });
-            let tol = (toleranceDefined != fmi2False).then_some(tolerance);
-            let stop = (stopTimeDefined != fmi2False).then_some(stopTime);
-            inst.setup_experiment(tol, startTime, stop)
-        })
+        let args = || {
+            format!(
+                "toleranceDefined={toleranceDefined}, tolerance={tolerance}, startTime={startTime}, stopTimeDefined={stopTimeDefined}, stopTime={stopTime}"
+            )
+        };
+        with_instance(
+            c,
+            "fmi2SetupExperiment",
+            mask::SETUP_EXPERIMENT,
+            args,
+            |inst| {
+                let tol = (toleranceDefined != fmi2False).then_some(tolerance);
+                let stop = (stopTimeDefined != fmi2False).then_some(stopTime);
+                inst.setup_experiment(tol, startTime, stop)
+            },
+        )
     }
 }
 
@@ -342,6 +402,7 @@ pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2St
             c,
             "fmi2EnterInitializationMode",
             mask::ENTER_INITIALIZATION_MODE,
+            String::new,
             Instance::enter_initialization_mode,
         )
     }
@@ -358,6 +419,7 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
             c,
             "fmi2ExitInitializationMode",
             mask::EXIT_INITIALIZATION_MODE,
+            String::new,
             Instance::exit_initialization_mode,
         )
     }
@@ -369,7 +431,15 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
 /// FMI 2.0 calling conventions.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    unsafe { with_instance(c, "fmi2Terminate", mask::TERMINATE, Instance::terminate) }
+    unsafe {
+        with_instance(
+            c,
+            "fmi2Terminate",
+            mask::TERMINATE,
+            String::new,
+            Instance::terminate,
+        )
+    }
 }
 
 /// `fmi2Reset`: back to the freshly instantiated state.
@@ -378,7 +448,7 @@ pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
 /// FMI 2.0 calling conventions.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    unsafe { with_instance(c, "fmi2Reset", mask::RESET, Instance::reset) }
+    unsafe { with_instance(c, "fmi2Reset", mask::RESET, String::new, Instance::reset) }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -397,7 +467,8 @@ unsafe fn get_values<T>(
     get: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> fmi2Status,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, function, mask::GET_VALUES, |inst| {
+        let args = || format!("vr={}, nvr={nvr}", show(vr, nvr));
+        with_instance(c, function, mask::GET_VALUES, args, |inst| {
             let Some(vrs) = slice(vr, nvr) else {
                 return null_argument(inst, function, "vr[]");
             };
@@ -479,14 +550,20 @@ unsafe fn set_values<T: std::fmt::Debug>(
     set: impl FnOnce(&mut Instance, &[u32], &[T]) -> fmi2Status,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, function, mask::SET_VALUES, |inst| {
+        let args = || {
+            format!(
+                "vr={}, nvr={nvr}, value={}",
+                show(vr, nvr),
+                show(value, nvr)
+            )
+        };
+        with_instance(c, function, mask::SET_VALUES, args, |inst| {
             let Some(vrs) = slice(vr, nvr) else {
                 return null_argument(inst, function, "vr[]");
             };
             let Some(values) = slice(value, nvr) else {
                 return null_argument(inst, function, "value[]");
             };
-            inst.trace(|| format!("{function}(vr={vrs:?}, value={values:?})"));
             set(inst, vrs, values)
         })
     }
@@ -547,7 +624,14 @@ pub unsafe extern "C" fn fmi2SetString(
     value: *const fmi2String,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2SetString", mask::SET_VALUES, |inst| {
+        let args = || {
+            format!(
+                "vr={}, nvr={nvr}, value={}",
+                show(vr, nvr),
+                show_strings(value, nvr)
+            )
+        };
+        with_instance(c, "fmi2SetString", mask::SET_VALUES, args, |inst| {
             let Some(vrs) = slice(vr, nvr) else {
                 return null_argument(inst, "fmi2SetString", "vr[]");
             };
@@ -614,7 +698,8 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2GetFMUstate", mask::GET_FMU_STATE, |inst| {
+        let args = || format!("FMUstate={FMUstate:?}");
+        with_instance(c, "fmi2GetFMUstate", mask::GET_FMU_STATE, args, |inst| {
             if FMUstate.is_null() {
                 return null_argument(inst, "fmi2GetFMUstate", "FMUstate");
             }
@@ -631,7 +716,8 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2SetFMUstate", mask::SET_FMU_STATE, |inst| {
+        let args = || format!("FMUstate={FMUstate:?}");
+        with_instance(c, "fmi2SetFMUstate", mask::SET_FMU_STATE, args, |inst| {
             if !known(inst, FMUstate) {
                 return inst.error("fmi2SetFMUstate: FMUstate is not a state of this instance");
             }
@@ -652,21 +738,29 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2FreeFMUstate", mask::FMU_STATE_MEMORY, |inst| {
-            if FMUstate.is_null() {
-                return null_argument(inst, "fmi2FreeFMUstate", "FMUstate");
-            }
-            let p = *FMUstate;
-            if p.is_null() {
-                return fmi2OK;
-            }
-            if !inst.fmu_states.remove(&(p as usize)) {
-                return inst.error("fmi2FreeFMUstate: *FMUstate is not a state of this instance");
-            }
-            drop(Box::from_raw(p as *mut FmuState));
-            *FMUstate = std::ptr::null_mut();
-            fmi2OK
-        })
+        let args = || format!("FMUstate={FMUstate:?}");
+        with_instance(
+            c,
+            "fmi2FreeFMUstate",
+            mask::FMU_STATE_MEMORY,
+            args,
+            |inst| {
+                if FMUstate.is_null() {
+                    return null_argument(inst, "fmi2FreeFMUstate", "FMUstate");
+                }
+                let p = *FMUstate;
+                if p.is_null() {
+                    return fmi2OK;
+                }
+                if !inst.fmu_states.remove(&(p as usize)) {
+                    return inst
+                        .error("fmi2FreeFMUstate: *FMUstate is not a state of this instance");
+                }
+                drop(Box::from_raw(p as *mut FmuState));
+                *FMUstate = std::ptr::null_mut();
+                fmi2OK
+            },
+        )
     }
 }
 
@@ -685,6 +779,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
             c,
             "fmi2SerializedFMUstateSize",
             mask::FMU_STATE_MEMORY,
+            || format!("FMUstate={FMUstate:?}"),
             |inst| {
                 if size.is_null() {
                     return null_argument(inst, "fmi2SerializedFMUstateSize", "size");
@@ -713,24 +808,31 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: usize,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, "fmi2SerializeFMUstate", mask::FMU_STATE_MEMORY, |inst| {
-            if !known(inst, FMUstate) {
-                return inst
-                    .error("fmi2SerializeFMUstate: FMUstate is not a state of this instance");
-            }
-            let bytes = (*(FMUstate as *const FmuState)).to_bytes();
-            if size < bytes.len() {
-                return inst.error(&format!(
-                    "fmi2SerializeFMUstate: buffer of {size} bytes, {} needed",
-                    bytes.len()
-                ));
-            }
-            let Some(out) = slice_mut(serializedState as *mut u8, bytes.len()) else {
-                return null_argument(inst, "fmi2SerializeFMUstate", "serializedState");
-            };
-            out.copy_from_slice(&bytes);
-            fmi2OK
-        })
+        let args = || format!("FMUstate={FMUstate:?}, size={size}");
+        with_instance(
+            c,
+            "fmi2SerializeFMUstate",
+            mask::FMU_STATE_MEMORY,
+            args,
+            |inst| {
+                if !known(inst, FMUstate) {
+                    return inst
+                        .error("fmi2SerializeFMUstate: FMUstate is not a state of this instance");
+                }
+                let bytes = (*(FMUstate as *const FmuState)).to_bytes();
+                if size < bytes.len() {
+                    return inst.error(&format!(
+                        "fmi2SerializeFMUstate: buffer of {size} bytes, {} needed",
+                        bytes.len()
+                    ));
+                }
+                let Some(out) = slice_mut(serializedState as *mut u8, bytes.len()) else {
+                    return null_argument(inst, "fmi2SerializeFMUstate", "serializedState");
+                };
+                out.copy_from_slice(&bytes);
+                fmi2OK
+            },
+        )
     }
 }
 
@@ -750,6 +852,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
             c,
             "fmi2DeSerializeFMUstate",
             mask::FMU_STATE_MEMORY,
+            || format!("size={size}"),
             |inst| {
                 if FMUstate.is_null() {
                     return null_argument(inst, "fmi2DeSerializeFMUstate", "FMUstate");
@@ -793,6 +896,7 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
             c,
             "fmi2GetDirectionalDerivative",
             mask::GET_DIRECTIONAL_DERIVATIVE,
+            || format!("nUnknown={nUnknown}, nKnown={nKnown}"),
             |inst| {
                 inst.error("fmi2GetDirectionalDerivative: not provided by this FMU (providesDirectionalDerivative=false)")
             },
@@ -821,6 +925,7 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
             c,
             "fmi2SetRealInputDerivatives",
             mask::SET_REAL_INPUT_DERIVATIVES,
+            || format!("vr={}, nvr={nvr}", show(vr, nvr)),
             |inst| {
                 inst.error("fmi2SetRealInputDerivatives: inputs are held constant over a step (canInterpolateInputs=false)")
             },
@@ -846,6 +951,7 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
             c,
             "fmi2GetRealOutputDerivatives",
             mask::GET_REAL_OUTPUT_DERIVATIVES,
+            || format!("vr={}, nvr={nvr}", show(vr, nvr)),
             |inst| {
                 inst.error("fmi2GetRealOutputDerivatives: output derivatives are not provided (maxOutputDerivativeOrder=0)")
             },
@@ -867,10 +973,12 @@ pub unsafe extern "C" fn fmi2DoStep(
 ) -> fmi2Status {
     let _ = noSetFMUStatePriorToCurrentPoint;
     unsafe {
-        with_instance(c, "fmi2DoStep", mask::DO_STEP, |inst| {
-            inst.trace(|| {
-                format!("fmi2DoStep(t={currentCommunicationPoint}, h={communicationStepSize})")
-            });
+        let args = || {
+            format!(
+                "currentCommunicationPoint={currentCommunicationPoint}, communicationStepSize={communicationStepSize}, noSetFMUStatePriorToCurrentPoint={noSetFMUStatePriorToCurrentPoint}"
+            )
+        };
+        with_instance(c, "fmi2DoStep", mask::DO_STEP, args, |inst| {
             inst.do_step(currentCommunicationPoint, communicationStepSize)
         })
     }
@@ -882,7 +990,11 @@ pub unsafe extern "C" fn fmi2DoStep(
 /// FMI 2.0 calling conventions.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    unsafe { with_instance(c, "fmi2CancelStep", mask::CANCEL_STEP, |_| fmi2OK) }
+    unsafe {
+        with_instance(c, "fmi2CancelStep", mask::CANCEL_STEP, String::new, |_| {
+            fmi2OK
+        })
+    }
 }
 
 /// Shared body of the status getters.
@@ -892,11 +1004,13 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
 unsafe fn status_value<T>(
     c: fmi2Component,
     function: &str,
+    kind: fmi2StatusKind,
     value: *mut T,
     get: impl FnOnce(&mut Instance) -> Result<T, fmi2Status>,
 ) -> fmi2Status {
     unsafe {
-        with_instance(c, function, mask::GET_STATUS, |inst| {
+        let args = || format!("s={kind}");
+        with_instance(c, function, mask::GET_STATUS, args, |inst| {
             if value.is_null() {
                 return null_argument(inst, function, "value");
             }
@@ -921,7 +1035,7 @@ pub unsafe extern "C" fn fmi2GetStatus(
     s: fmi2StatusKind,
     value: *mut fmi2Status,
 ) -> fmi2Status {
-    unsafe { status_value(c, "fmi2GetStatus", value, |inst| inst.get_status(s)) }
+    unsafe { status_value(c, "fmi2GetStatus", s, value, |inst| inst.get_status(s)) }
 }
 
 /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime`.
@@ -935,7 +1049,7 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     unsafe {
-        status_value(c, "fmi2GetRealStatus", value, |inst| {
+        status_value(c, "fmi2GetRealStatus", s, value, |inst| {
             inst.get_real_status(s)
         })
     }
@@ -952,7 +1066,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     unsafe {
-        status_value(c, "fmi2GetBooleanStatus", value, |inst| {
+        status_value(c, "fmi2GetBooleanStatus", s, value, |inst| {
             inst.get_boolean_status(s)
                 .map(|b| if b { fmi2True } else { fmi2False })
         })
@@ -971,7 +1085,8 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
 ) -> fmi2Status {
     let _ = value;
     unsafe {
-        with_instance(c, "fmi2GetIntegerStatus", mask::GET_STATUS, |inst| {
+        let args = || format!("s={s}");
+        with_instance(c, "fmi2GetIntegerStatus", mask::GET_STATUS, args, |inst| {
             inst.error(&format!(
                 "fmi2GetIntegerStatus: status kind {s} has no Integer value"
             ))
@@ -991,7 +1106,8 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 ) -> fmi2Status {
     let _ = value;
     unsafe {
-        with_instance(c, "fmi2GetStringStatus", mask::GET_STATUS, |inst| {
+        let args = || format!("s={s}");
+        with_instance(c, "fmi2GetStringStatus", mask::GET_STATUS, args, |inst| {
             inst.error(&format!(
                 "fmi2GetStringStatus: status kind {s}: no asynchronous step is ever pending"
             ))

@@ -150,10 +150,14 @@ impl Category {
 /// The receiver of log messages: (status, category name, message).
 pub type LogSink = Box<dyn FnMut(fmi2Status, &str, &str)>;
 
-/// Categories enabled when the master instantiates with `loggingOn = fmi2False`: errors and
-/// discarded steps (a master must always be able to learn why a step was refused).
-const ERRORS_ONLY: u32 =
-    (1 << Category::Error as u32) | (1 << Category::Fatal as u32) | (1 << Category::Discard as u32);
+/// Categories enabled when the master instantiates with `loggingOn = fmi2False`: the messages
+/// of every call that returns a status other than `fmi2OK` (warnings, discarded steps,
+/// errors), so that a master always learns why; `fmi2SetDebugLogging` may still switch them
+/// off.
+const STATUS_ONLY: u32 = (1 << Category::Warning as u32)
+    | (1 << Category::Error as u32)
+    | (1 << Category::Fatal as u32)
+    | (1 << Category::Discard as u32);
 const ALL_CATEGORIES: u32 = (1 << 6) - 1;
 
 /// Seconds of relative tolerance when comparing the master's communication point with the
@@ -366,7 +370,8 @@ enum Change {
 
 impl Instance {
     /// A fresh instance. `resources` is the decoded `fmuResourceLocation`; `logging_on`
-    /// enables every log category (otherwise only errors are reported).
+    /// enables every log category (otherwise only the messages of calls that return a status
+    /// other than `fmi2OK`).
     pub fn new(
         name: &str,
         resources: Option<PathBuf>,
@@ -380,7 +385,7 @@ impl Instance {
             categories: if logging_on {
                 ALL_CATEGORIES
             } else {
-                ERRORS_ONLY
+                STATUS_ONLY
             },
             phase: Phase::Instantiated,
             config: super::variables::start_config(),
@@ -598,11 +603,13 @@ impl Instance {
             _ => path.to_path_buf(),
         };
         if !candidate.is_file() {
-            let where_ = self
-                .resources
-                .as_ref()
-                .map(|r| format!(" (also looked in {})", r.display()))
-                .unwrap_or_default();
+            let where_ = match (&self.resources, path.is_relative()) {
+                (Some(r), _) => format!(" (also looked in {})", r.display()),
+                (None, true) => {
+                    " (not looked for in the FMU's resources/: fmi2Instantiate was given no usable resource location)".to_string()
+                }
+                (None, false) => String::new(),
+            };
             return Err(Error::invalid(
                 "slp.reference",
                 value,
@@ -943,8 +950,12 @@ impl Instance {
             }
         };
         torso.checkpoint(&mut step_start);
+        // `t` may lie up to the tolerance before the instance's time, and a tiny step may then
+        // end before the model's time: the model stays where it is (it cannot step back), the
+        // instance's time becomes `t + h`.
+        let model_target = (target - start).max(torso.time());
         let advanced = torso
-            .advance_to(target - start)
+            .advance_to(model_target)
             .and_then(|_| physiology_violation(torso, &rest));
         let stiff = torso.stiffness_detected();
         let restored = match &advanced {
@@ -954,9 +965,10 @@ impl Instance {
         self.step_start = step_start;
         if stiff && !self.stiffness_logged {
             self.stiffness_logged = true;
+            // A hint, not a warning: the step succeeded and returns fmi2OK.
             self.log(
-                fmi2Warning,
-                Category::Warning,
+                fmi2OK,
+                Category::Events,
                 &format!(
                     "fmi2DoStep: the explicit solver detected stiffness near t = {target}; a stiff \
                      method is available (parameter solver.method = {}, Rosenbrock-W with a sparse \

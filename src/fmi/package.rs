@@ -1,8 +1,9 @@
-//! Packaging of `BreathingTorso.fmu`: a zip with `modelDescription.xml` at its root, the
-//! shared library as `binaries/<platform>/BreathingTorso.<ext>` (no `lib` prefix),
-//! `resources/` (files the model reads at run time, if any) and `documentation/index.html`.
-//! Entries are written in a fixed order with a fixed timestamp, so the same inputs give the
-//! same archive.
+//! Packaging of `BreathingTorso.fmu`: a zip with `modelDescription.xml` at its root, one
+//! shared library per platform as `binaries/<platform>/BreathingTorso.<ext>` (no `lib`
+//! prefix), `resources/` (files the model reads at run time, if any) and
+//! `documentation/index.html`. Entries are written in a fixed order with a fixed timestamp, so
+//! the same inputs give the same archive. Each library is checked to be a binary of its
+//! platform's format (ELF, PE or Mach-O) before it is packaged.
 
 use super::variables::MODEL_IDENTIFIER;
 use super::xml::{documentation_html, model_description};
@@ -80,18 +81,211 @@ pub struct Packaged {
     pub bytes: u64,
 }
 
-/// Writes the FMU to `out` from the shared library `library` and the optional folder
-/// `resources` (copied into `resources/`, recursively).
+/// FMI platform folders this packager knows, with their library extension and the
+/// executable format their binaries must have.
+pub const PLATFORMS: [(&str, &str, BinaryFormat); 5] = [
+    ("linux64", "so", BinaryFormat::Elf64),
+    ("linux32", "so", BinaryFormat::Elf32),
+    ("win64", "dll", BinaryFormat::Pe),
+    ("win32", "dll", BinaryFormat::Pe),
+    ("darwin64", "dylib", BinaryFormat::MachO),
+];
+
+/// Executable file formats, told apart by their first bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinaryFormat {
+    /// 64-bit ELF (Linux).
+    Elf64,
+    /// 32-bit ELF (Linux).
+    Elf32,
+    /// PE/COFF (Windows; 32 or 64 bit).
+    Pe,
+    /// Mach-O (macOS; 64-bit or universal).
+    MachO,
+}
+
+impl BinaryFormat {
+    /// The format of `bytes`, if it is one of these.
+    pub fn of(bytes: &[u8]) -> Option<BinaryFormat> {
+        match bytes {
+            [0x7f, b'E', b'L', b'F', 2, ..] => Some(BinaryFormat::Elf64),
+            [0x7f, b'E', b'L', b'F', 1, ..] => Some(BinaryFormat::Elf32),
+            [b'M', b'Z', ..] => Some(BinaryFormat::Pe),
+            [0xcf, 0xfa, 0xed, 0xfe, ..] | [0xca, 0xfe, 0xba, 0xbe, ..] => {
+                Some(BinaryFormat::MachO)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// One shared library to package: the FMI platform folder it goes to and the file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Binary {
+    /// FMI platform folder (`linux64`, `win64`, ...).
+    pub platform: String,
+    /// The library file.
+    pub path: PathBuf,
+}
+
+impl Binary {
+    /// The library built for the platform this crate runs on.
+    pub fn host(path: &Path) -> Binary {
+        Binary {
+            platform: platform().0.to_string(),
+            path: path.to_path_buf(),
+        }
+    }
+
+    /// Parses `PLATFORM=PATH` (the `torso fmu build --binary` syntax).
+    pub fn parse(text: &str) -> Result<Binary> {
+        let (platform, path) = text.split_once('=').ok_or_else(|| {
+            Error::invalid(
+                "--binary",
+                text,
+                "PLATFORM=PATH, e.g. win64=breathing_torso.dll",
+            )
+        })?;
+        if !PLATFORMS.iter().any(|p| p.0 == platform) {
+            let known: Vec<&str> = PLATFORMS.iter().map(|p| p.0).collect();
+            return Err(Error::invalid(
+                "--binary",
+                text,
+                format!("a platform among {}", known.join(", ")),
+            ));
+        }
+        Ok(Binary {
+            platform: platform.to_string(),
+            path: PathBuf::from(path),
+        })
+    }
+}
+
+/// Whether a shared library still carries debug information: a section whose name starts
+/// with `.debug` or `.zdebug` (DWARF, in ELF and in mingw's PE files). `None` when the file is
+/// neither a 64-bit ELF nor a PE file, or its section table cannot be read.
+pub fn has_debug_info(bytes: &[u8]) -> Option<bool> {
+    let names = match BinaryFormat::of(bytes)? {
+        BinaryFormat::Elf64 => elf64_section_names(bytes)?,
+        BinaryFormat::Pe => pe_section_names(bytes)?,
+        _ => return None,
+    };
+    Some(
+        names
+            .iter()
+            .any(|n| n.starts_with(".debug") || n.starts_with(".zdebug")),
+    )
+}
+
+fn u16_at(b: &[u8], at: usize) -> Option<usize> {
+    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?).into())
+}
+
+fn u32_at(b: &[u8], at: usize) -> Option<usize> {
+    usize::try_from(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?)).ok()
+}
+
+fn u64_at(b: &[u8], at: usize) -> Option<usize> {
+    usize::try_from(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?)).ok()
+}
+
+/// A NUL-terminated name at `at`.
+fn c_name(b: &[u8], at: usize) -> Option<String> {
+    let rest = b.get(at..)?;
+    let end = rest.iter().position(|&c| c == 0)?;
+    Some(String::from_utf8_lossy(&rest[..end]).into_owned())
+}
+
+/// Section names of a little-endian 64-bit ELF file (System V ABI section header table).
+fn elf64_section_names(b: &[u8]) -> Option<Vec<String>> {
+    if b.get(5) != Some(&1) {
+        return None; // big-endian
+    }
+    let (shoff, shentsize) = (u64_at(b, 0x28)?, u16_at(b, 0x3a)?);
+    let (shnum, shstrndx) = (u16_at(b, 0x3c)?, u16_at(b, 0x3e)?);
+    let header = |i: usize| shoff.checked_add(i.checked_mul(shentsize)?);
+    let strtab = u64_at(b, header(shstrndx)? + 0x18)?;
+    (0..shnum)
+        .map(|i| c_name(b, strtab.checked_add(u32_at(b, header(i)?)?)?))
+        .collect()
+}
+
+/// Section names of a PE file: 8-byte names, or `/offset` into the COFF string table for
+/// longer ones (as mingw writes `.debug_info`).
+fn pe_section_names(b: &[u8]) -> Option<Vec<String>> {
+    let pe = u32_at(b, 0x3c)?;
+    if b.get(pe..pe + 4)? != b"PE\0\0" {
+        return None;
+    }
+    let coff = pe + 4;
+    let sections = u16_at(b, coff + 2)?;
+    let strings = u32_at(b, coff + 8)?.checked_add(u32_at(b, coff + 12)?.checked_mul(18)?)?;
+    let table = coff + 20 + u16_at(b, coff + 16)?;
+    (0..sections)
+        .map(|i| {
+            let raw = b.get(table + 40 * i..table + 40 * i + 8)?;
+            let short = String::from_utf8_lossy(raw)
+                .trim_end_matches('\0')
+                .to_string();
+            match short.strip_prefix('/') {
+                Some(offset) => c_name(b, strings.checked_add(offset.parse().ok()?)?),
+                None => Some(short),
+            }
+        })
+        .collect()
+}
+
+/// Writes the FMU to `out` from the shared library `library` (built for the platform this
+/// crate runs on) and the optional folder `resources` (copied into `resources/`,
+/// recursively).
 pub fn build_fmu(library: &Path, resources: Option<&Path>, out: &Path) -> Result<Packaged> {
-    let lib = fs::read(library).map_err(|e| {
-        Error::io(
-            library,
-            std::io::Error::new(
-                e.kind(),
-                format!("{e} (build it first: cargo build --release --lib)"),
-            ),
-        )
-    })?;
+    build_fmu_for(&[Binary::host(library)], resources, out)
+}
+
+/// Writes the FMU to `out` with one shared library per platform (at least one, each platform
+/// once, each file of its platform's format) and the optional folder `resources`.
+pub fn build_fmu_for(
+    binaries: &[Binary],
+    resources: Option<&Path>,
+    out: &Path,
+) -> Result<Packaged> {
+    if binaries.is_empty() {
+        return Err(Error::State("an FMU needs at least one binary".into()));
+    }
+    let mut libraries = Vec::with_capacity(binaries.len());
+    for (i, b) in binaries.iter().enumerate() {
+        let Some(&(platform, ext, format)) = PLATFORMS.iter().find(|p| p.0 == b.platform) else {
+            let known: Vec<&str> = PLATFORMS.iter().map(|p| p.0).collect();
+            return Err(Error::invalid(
+                "platform",
+                &b.platform,
+                format!("one of {}", known.join(", ")),
+            ));
+        };
+        if binaries[..i].iter().any(|o| o.platform == b.platform) {
+            return Err(Error::State(format!(
+                "platform {platform} is given twice; an FMU has one binary per platform"
+            )));
+        }
+        let lib = fs::read(&b.path).map_err(|e| {
+            Error::io(
+                &b.path,
+                std::io::Error::new(
+                    e.kind(),
+                    format!("{e} (build it first: cargo build --release --lib)"),
+                ),
+            )
+        })?;
+        let found = BinaryFormat::of(&lib);
+        if found != Some(format) {
+            return Err(Error::State(format!(
+                "{} is {}, not a {platform} shared library ({format:?})",
+                b.path.display(),
+                found.map_or("no executable format".to_string(), |f| format!("{f:?}"))
+            )));
+        }
+        libraries.push((format!("binaries/{platform}/{MODEL_IDENTIFIER}.{ext}"), lib));
+    }
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
@@ -123,14 +317,9 @@ pub fn build_fmu(library: &Path, resources: Option<&Path>, out: &Path) -> Result
         model_description().as_bytes(),
         0o644,
     )?;
-    let (platform, ext) = platform();
-    add(
-        &mut zip,
-        &mut entries,
-        format!("binaries/{platform}/{MODEL_IDENTIFIER}.{ext}"),
-        &lib,
-        0o755,
-    )?;
+    for (name, lib) in &libraries {
+        add(&mut zip, &mut entries, name.clone(), lib, 0o755)?;
+    }
     add(
         &mut zip,
         &mut entries,
@@ -208,6 +397,90 @@ mod tests {
         assert_eq!(newest_library(&dir), beside, "beside is newer");
         touch(&deps, t0 + Duration::from_secs(120));
         assert_eq!(newest_library(&dir), deps, "deps/ is newer");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A minimal 64-bit ELF file whose sections are named `names` (plus `.shstrtab`).
+    fn elf_with_sections(names: &[&str]) -> Vec<u8> {
+        let mut strtab = vec![0u8];
+        let mut offsets = Vec::new();
+        for n in names.iter().chain([&".shstrtab"]) {
+            offsets.push(strtab.len() as u32);
+            strtab.extend_from_slice(n.as_bytes());
+            strtab.push(0);
+        }
+        let shoff = 64 + strtab.len();
+        let mut b = vec![0u8; 64];
+        b[..6].copy_from_slice(b"\x7fELF\x02\x01");
+        b[0x28..0x30].copy_from_slice(&(shoff as u64).to_le_bytes());
+        b[0x3a..0x3c].copy_from_slice(&64u16.to_le_bytes());
+        b[0x3c..0x3e].copy_from_slice(&(offsets.len() as u16).to_le_bytes());
+        b[0x3e..0x40].copy_from_slice(&(names.len() as u16).to_le_bytes());
+        b.extend_from_slice(&strtab);
+        for o in offsets {
+            let mut h = [0u8; 64];
+            h[..4].copy_from_slice(&o.to_le_bytes());
+            h[0x18..0x20].copy_from_slice(&64u64.to_le_bytes());
+            b.extend_from_slice(&h);
+        }
+        b
+    }
+
+    #[test]
+    fn debug_sections_are_found_by_name() {
+        let debug = elf_with_sections(&[".text", ".debug_info", ".debug_line"]);
+        assert_eq!(has_debug_info(&debug), Some(true));
+        // The name alone in the data (as std's backtrace code holds it) is not a section.
+        let mut stripped = elf_with_sections(&[".text", ".rodata"]);
+        stripped.extend_from_slice(b".debug_info\0");
+        assert_eq!(has_debug_info(&stripped), Some(false));
+        // The library this test links: built with the release profile's debug info, if any.
+        if let Ok(lib) = fs::read(default_library().unwrap()) {
+            let names = elf64_section_names(&lib).unwrap_or_default();
+            assert!(names.iter().any(|n| n == ".text"), "{names:?}");
+        }
+    }
+
+    #[test]
+    fn binaries_are_checked_against_their_platform() {
+        assert_eq!(
+            Binary::parse("win64=a/b.dll").unwrap(),
+            Binary {
+                platform: "win64".into(),
+                path: "a/b.dll".into()
+            }
+        );
+        for bad in ["win64", "win65=a.dll"] {
+            let e = Binary::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("--binary") && e.contains(bad), "{e}");
+        }
+        let dir = std::env::temp_dir().join(format!("bt_binaries_{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let elf = dir.join("lib.so");
+        fs::write(&elf, b"\x7fELF\x02\x01\x01rest").unwrap();
+        let pe = dir.join("lib.dll");
+        fs::write(&pe, b"MZ\x90\x00rest").unwrap();
+        let out = dir.join("t.fmu");
+        let b = |p: &str, f: &Path| Binary {
+            platform: p.into(),
+            path: f.to_path_buf(),
+        };
+        let p = build_fmu_for(&[b("linux64", &elf), b("win64", &pe)], None, &out).unwrap();
+        assert!(
+            p.entries
+                .contains(&"binaries/linux64/BreathingTorso.so".to_string())
+        );
+        assert!(
+            p.entries
+                .contains(&"binaries/win64/BreathingTorso.dll".to_string())
+        );
+        let e = build_fmu_for(&[b("win64", &elf)], None, &out).unwrap_err();
+        assert!(e.to_string().contains("not a win64 shared library"), "{e}");
+        let e = build_fmu_for(&[b("linux64", &elf), b("linux64", &elf)], None, &out);
+        assert!(e.unwrap_err().to_string().contains("twice"));
+        assert!(build_fmu_for(&[], None, &out).is_err());
+        assert_eq!(has_debug_info(&fs::read(&elf).unwrap()), None, "truncated");
+        assert_eq!(has_debug_info(b"..\0.debug_info\0.."), None, "not a binary");
         fs::remove_dir_all(&dir).unwrap();
     }
 }

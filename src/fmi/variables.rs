@@ -359,6 +359,13 @@ pub struct Variable {
     pub description: String,
     /// What the variable maps to.
     pub role: Role,
+    /// For outputs, the inputs (value references, ascending) the output depends on directly:
+    /// those whose new value changes the output at the same communication point, without a
+    /// step. Empty for an output read off the model's state, which every output of this model
+    /// is (activations act on the state through the dynamics, not on the outputs; measured by
+    /// `python/tests/test_fmu_structure.py` and `tests/fmi_structure.rs`). `None` for the
+    /// other causalities. Written as the `dependencies` of `<ModelStructure>`.
+    pub input_dependencies: Option<Vec<u32>>,
 }
 
 impl Variable {
@@ -577,6 +584,7 @@ impl Row {
             start: Start::None,
             description: description.into(),
             role,
+            input_dependencies: None,
         })
     }
     fn unit(mut self, unit: &'static str) -> Row {
@@ -603,6 +611,8 @@ impl Row {
         self.0.causality = Causality::Output;
         self.0.variability = variability;
         self.0.initial = Some(Initial::Calculated);
+        // Read off the state: no direct feedthrough from any input.
+        self.0.input_dependencies = Some(Vec::new());
         self
     }
     /// A parameter whose start value is read from the default configuration.
@@ -924,7 +934,7 @@ fn build() -> Vec<Variable> {
 
 /// The part of the model description that makes up the interface: identifier, capability
 /// flags, units, and every variable's name, reference, type, causality, variability, initial,
-/// unit, range and start (descriptions excluded).
+/// unit, range, start and input dependencies (descriptions excluded).
 fn interface_text(variables: &[Variable]) -> String {
     use std::fmt::Write;
     let mut s = format!(
@@ -941,7 +951,7 @@ fn interface_text(variables: &[Variable]) -> String {
     for v in variables {
         let _ = writeln!(
             s,
-            "{}|{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+            "{}|{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
             v.name,
             v.vr,
             v.ty,
@@ -952,7 +962,8 @@ fn interface_text(variables: &[Variable]) -> String {
             v.display_unit,
             v.min,
             v.max,
-            v.start
+            v.start,
+            v.input_dependencies
         );
     }
     s

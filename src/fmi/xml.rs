@@ -147,21 +147,61 @@ fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     Ok(())
 }
 
+/// One `<Unknown>` of `<ModelStructure>`: its 1-based index and the 1-based indices of the
+/// knowns it depends on (written as `dependencies`, an empty list meaning "none").
+struct Unknown {
+    index: usize,
+    dependencies: Vec<usize>,
+}
+
+/// The `<ModelStructure>` unknowns, from the table: `(outputs, initial unknowns)`.
+///
+/// An output depends at a communication point on the inputs listed in its
+/// [`Variable::input_dependencies`] (none: every output is read off the state). During
+/// initialization the outputs with `initial="calculated"` are computed from the parameters
+/// (every parameter is listed, a superset: the standard's "depends on all knowns" would also
+/// name the inputs, which they do not depend on) and from the same inputs.
+fn structure(t: &Table) -> (Vec<Unknown>, Vec<Unknown>) {
+    let index_of = |vr: u32| t.index_of(vr).unwrap_or_default();
+    let parameters: Vec<usize> = t
+        .variables()
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.causality == Causality::Parameter && v.initial == Some(Initial::Exact))
+        .map(|(i, _)| i + 1)
+        .collect();
+    let mut outputs = Vec::new();
+    let mut initial_unknowns = Vec::new();
+    for (i, v) in t.variables().iter().enumerate() {
+        if v.causality != Causality::Output {
+            continue;
+        }
+        let mut inputs: Vec<usize> = v
+            .input_dependencies
+            .iter()
+            .flatten()
+            .map(|&vr| index_of(vr))
+            .collect();
+        inputs.sort_unstable();
+        if v.initial == Some(Initial::Calculated) {
+            let mut all: Vec<usize> = parameters.iter().copied().chain(inputs.clone()).collect();
+            all.sort_unstable();
+            all.dedup();
+            initial_unknowns.push(Unknown {
+                index: i + 1,
+                dependencies: all,
+            });
+        }
+        outputs.push(Unknown {
+            index: i + 1,
+            dependencies: inputs,
+        });
+    }
+    (outputs, initial_unknowns)
+}
+
 fn write_structure(w: &mut Writer<Vec<u8>>, t: &Table) -> io::Result<()> {
-    let outputs: Vec<String> = t
-        .variables()
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| v.causality == Causality::Output)
-        .map(|(i, _)| (i + 1).to_string())
-        .collect();
-    let initial_unknowns: Vec<String> = t
-        .variables()
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| v.causality == Causality::Output && v.initial == Some(Initial::Calculated))
-        .map(|(i, _)| (i + 1).to_string())
-        .collect();
+    let (outputs, initial_unknowns) = structure(t);
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
             for (tag, list) in [
@@ -169,9 +209,14 @@ fn write_structure(w: &mut Writer<Vec<u8>>, t: &Table) -> io::Result<()> {
                 ("InitialUnknowns", &initial_unknowns),
             ] {
                 w.create_element(tag).write_inner_content(|w| {
-                    for i in list.iter() {
+                    for u in list.iter() {
+                        let index = u.index.to_string();
+                        let dependencies: Vec<String> =
+                            u.dependencies.iter().map(usize::to_string).collect();
+                        let dependencies = dependencies.join(" ");
                         w.create_element("Unknown")
-                            .with_attribute(("index", i.as_str()))
+                            .with_attribute(("index", index.as_str()))
+                            .with_attribute(("dependencies", dependencies.as_str()))
                             .write_empty()?;
                     }
                     Ok(())

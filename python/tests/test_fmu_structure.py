@@ -1,0 +1,96 @@
+"""The packaged FMU's <ModelStructure> against its behaviour, through fmpy: every output
+declares its input dependencies, and the ones declared empty are measured: setting every input
+to 1 at a communication point, without a step, leaves those outputs unchanged (in
+initialization mode and after breathing steps), while the next step responds to the inputs.
+
+Needs fmu/BreathingTorso.fmu (scripts/test.sh builds it).
+"""
+
+import pathlib
+import shutil
+import tempfile
+
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+FMU = ROOT / "fmu" / "BreathingTorso.fmu"
+
+
+@pytest.fixture(scope="module")
+def md():
+    assert FMU.is_file(), f"{FMU} missing: build it with `bash scripts/deploy.sh` (scripts/test.sh does)"
+    return read_model_description(str(FMU))
+
+
+@pytest.fixture
+def slave(md):
+    directory = extract(str(FMU), tempfile.mkdtemp(prefix="bt_structure_"))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory,
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="structure")
+    fmu.instantiate()
+    yield fmu
+    fmu.freeInstance()
+    shutil.rmtree(directory, ignore_errors=True)
+
+
+def read_outputs(fmu, md):
+    """Every output as {name: value}, Reals and Integers."""
+    values = {}
+    for kind, get in (("Real", fmu.getReal), ("Integer", fmu.getInteger)):
+        outs = [u.variable for u in md.outputs if u.variable.type == kind]
+        for v, x in zip(outs, get([v.valueReference for v in outs])):
+            values[v.name] = x
+    return values
+
+
+def false_claims(md, before, after):
+    """Outputs declared free of the inputs whose value changed."""
+    free = {u.variable.name for u in md.outputs if u.dependencies == []}
+    return sorted(n for n in free if before[n] != after[n])
+
+
+def test_every_output_declares_its_dependencies(md):
+    inputs = {v.name for v in md.modelVariables if v.causality == "input"}
+    outputs = [v for v in md.modelVariables if v.causality == "output"]
+    assert len(md.outputs) == len(outputs) == 782
+    for u in md.outputs:
+        assert u.dependencies is not None, f"{u.variable.name} would depend on all knowns"
+        assert u.dependencies == [], f"{u.variable.name} is read off the state"
+    for u in md.initialUnknowns:
+        assert u.dependencies, u.variable.name
+        assert all(d.causality == "parameter" for d in u.dependencies), u.variable.name
+        assert not inputs & {d.name for d in u.dependencies}
+
+
+def test_setting_every_input_without_a_step_changes_no_output(md, slave):
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    inputs = [v.valueReference for v in md.modelVariables if v.causality == "input"]
+    assert len(inputs) == 8
+    slave.setupExperiment(startTime=0.0)
+    slave.setReal([vr["drive.ribs.amplitude"], vr["drive.diaphragm.amplitude"]], [0.12, 0.30])
+    slave.enterInitializationMode()
+    before = read_outputs(slave, md)
+    slave.setReal(inputs, [1.0] * 8)
+    assert false_claims(md, before, read_outputs(slave, md)) == []
+    slave.setReal(inputs, [0.0] * 8)
+    slave.exitInitializationMode()
+
+    t, h = 0.0, 0.05
+    for _ in range(3):
+        for _ in range(4):
+            slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            t += h
+        state = slave.getFMUstate()
+        before = read_outputs(slave, md)
+        slave.setReal(inputs, [1.0] * 8)
+        assert false_claims(md, before, read_outputs(slave, md)) == [], f"t = {t}"
+        slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        driven = read_outputs(slave, md)["volume.lung"]
+        slave.setFMUstate(state)
+        slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        held = read_outputs(slave, md)["volume.lung"]
+        assert driven != held, "the inputs reach the state within a step"
+        slave.setFMUstate(state)
+        slave.freeFMUstate(state)

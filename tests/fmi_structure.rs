@@ -1,0 +1,175 @@
+//! `<ModelStructure>` tells the truth: the dependencies the model description declares are
+//! generated from the variable table, and the feedthrough they claim is measured on the
+//! instance. Setting every input to 1 at a communication point, without a step, must leave
+//! every output whose declared input dependencies are empty bit for bit unchanged (in
+//! initialization mode and after breathing steps), while the next step does respond to the
+//! inputs (so that the measurement can see a change).
+
+use breathing_torso::fmi::instance::Instance;
+use breathing_torso::fmi::table;
+use breathing_torso::fmi::types::fmi2Status::fmi2OK;
+use breathing_torso::fmi::variables::{Causality, Role, ScalarType, Variable};
+use breathing_torso::fmi::xml::model_description;
+
+fn outputs() -> Vec<&'static Variable> {
+    table()
+        .variables()
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+        .collect()
+}
+
+fn inputs() -> Vec<u32> {
+    table()
+        .variables()
+        .iter()
+        .filter(|v| v.causality == Causality::Input)
+        .map(|v| v.vr)
+        .collect()
+}
+
+/// Every output, as its bits (Real) or value (Integer), in table order.
+fn read_outputs(inst: &mut Instance) -> Vec<u64> {
+    outputs()
+        .iter()
+        .map(|v| match v.ty {
+            ScalarType::Real => {
+                let mut x = [f64::NAN];
+                assert_eq!(inst.get_real(&[v.vr], &mut x), fmi2OK, "{}", v.name);
+                x[0].to_bits()
+            }
+            ScalarType::Integer => {
+                let mut x = [0];
+                assert_eq!(inst.get_integer(&[v.vr], &mut x), fmi2OK, "{}", v.name);
+                x[0] as u64
+            }
+            _ => unreachable!("{} has no readable output type", v.name),
+        })
+        .collect()
+}
+
+/// The outputs whose values differ between `a` and `b` and that declare no dependency on the
+/// inputs: each is a false claim of the model description.
+fn false_claims(a: &[u64], b: &[u64]) -> Vec<String> {
+    outputs()
+        .iter()
+        .zip(a.iter().zip(b))
+        .filter(|(v, (x, y))| x != y && v.input_dependencies.as_deref() == Some(&[]))
+        .map(|(v, _)| v.name.clone())
+        .collect()
+}
+
+#[test]
+fn every_output_declares_its_input_dependencies() {
+    let md = model_description();
+    let outputs = outputs();
+    assert_eq!(
+        outputs.len(),
+        8 + 3 + 3 * 256 + 3,
+        "volumes, sternum, markers, solver"
+    );
+    for v in &outputs {
+        assert_eq!(
+            v.input_dependencies.as_deref(),
+            Some(&[][..]),
+            "{} is read off the state",
+            v.name
+        );
+        assert!(matches!(v.role, Role::Output(_)));
+        let index = table().index_of(v.vr).unwrap();
+        let line = format!("<Unknown index=\"{index}\" dependencies=\"\"/>");
+        assert!(md.contains(&line), "{} ({line}) not in <Outputs>", v.name);
+    }
+    // The initial unknowns depend on the parameters only, never on an input or on time.
+    let start = md.find("<InitialUnknowns>").unwrap();
+    let inputs: Vec<String> = inputs()
+        .iter()
+        .map(|&vr| table().index_of(vr).unwrap().to_string())
+        .collect();
+    let time = table().index_of(0).unwrap().to_string();
+    for line in md[start..].lines().filter(|l| l.contains("<Unknown ")) {
+        let deps = line.split("dependencies=\"").nth(1).unwrap();
+        let deps: Vec<&str> = deps[..deps.find('"').unwrap()].split(' ').collect();
+        assert!(!deps.is_empty() && deps.iter().all(|d| !inputs.iter().any(|i| i == d)));
+        assert!(!deps.contains(&time.as_str()), "{line}");
+        let mut sorted: Vec<usize> = deps.iter().map(|d| d.parse().unwrap()).collect();
+        sorted.sort_unstable();
+        assert_eq!(
+            sorted.iter().map(usize::to_string).collect::<Vec<_>>(),
+            deps,
+            "ascending"
+        );
+    }
+}
+
+#[test]
+fn setting_every_input_without_a_step_changes_no_output() {
+    let table = table();
+    let vr = |n: &str| table.by_name(n).unwrap().vr;
+    let inputs = inputs();
+    let ones = vec![1.0; inputs.len()];
+    assert_eq!(inputs.len(), 8);
+
+    let mut inst = Instance::new("feedthrough", None, None, false);
+    // Breathing, so that velocities and activations are not zero when the inputs change.
+    let drive = [
+        (vr("drive.ribs.amplitude"), 0.12),
+        (vr("drive.diaphragm.amplitude"), 0.3),
+    ];
+    for (r, x) in drive {
+        assert_eq!(inst.set_real(&[r], &[x]), fmi2OK);
+    }
+    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+
+    // In initialization mode.
+    let before = read_outputs(&mut inst);
+    assert_eq!(inst.set_real(&inputs, &ones), fmi2OK);
+    let after = read_outputs(&mut inst);
+    assert_eq!(false_claims(&before, &after), Vec::<String>::new());
+    assert_eq!(inst.set_real(&inputs, &[0.0; 8]), fmi2OK);
+    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+
+    // After breathing steps, at several communication points.
+    let h = 0.05;
+    let mut t = 0.0;
+    for _ in 0..3 {
+        for _ in 0..4 {
+            assert_eq!(inst.do_step(t, h), fmi2OK);
+            t += h;
+        }
+        let state = inst.get_fmu_state();
+        let before = read_outputs(&mut inst);
+        assert_eq!(inst.set_real(&inputs, &ones), fmi2OK);
+        let after = read_outputs(&mut inst);
+        assert_eq!(
+            false_claims(&before, &after),
+            Vec::<String>::new(),
+            "t = {t}"
+        );
+        // The inputs do act, through the state: the next step differs from one without them.
+        assert_eq!(inst.do_step(t, h), fmi2OK);
+        let driven = read_outputs(&mut inst);
+        assert_eq!(inst.set_fmu_state(&state), fmi2OK);
+        assert_eq!(inst.do_step(t, h), fmi2OK);
+        let held = read_outputs(&mut inst);
+        let lung = outputs()
+            .iter()
+            .position(|v| v.name == "volume.lung")
+            .unwrap();
+        assert_ne!(driven[lung], held[lung], "the inputs reach the state");
+        assert_eq!(inst.set_fmu_state(&state), fmi2OK);
+    }
+
+    // A fresh read after the inputs changed (no value computed before) agrees too.
+    let mut fresh = Instance::new("fresh", None, None, false);
+    assert_eq!(fresh.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(fresh.enter_initialization_mode(), fmi2OK);
+    assert_eq!(fresh.set_real(&inputs, &ones), fmi2OK);
+    let with_inputs = read_outputs(&mut fresh);
+    let mut plain = Instance::new("plain", None, None, false);
+    assert_eq!(plain.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(plain.enter_initialization_mode(), fmi2OK);
+    let without = read_outputs(&mut plain);
+    assert_eq!(false_claims(&with_inputs, &without), Vec::<String>::new());
+}
