@@ -206,6 +206,10 @@ fn statuses_and_messages_agree_with_and_without_logging() {
         set_real(&mut fmu, "drive.ribs.amplitude", 0.12);
         set_real(&mut fmu, "drive.diaphragm.amplitude", 0.3);
         set_real(&mut fmu, "activation.diaphragm", 0.1);
+        // a loose tolerance: the step then grows to the stability limit, where Dormand-Prince's
+        // stiffness detection (Hairer & Wanner) fires (`torso bench work-precision`: dopri5 at
+        // rtol 1e-4 raises the flag on quiet breathing)
+        set_real(&mut fmu, "solver.rtol", 1e-4);
         let s = CString::new("recording.csv").unwrap();
         let p = [s.as_ptr()];
         let r = [vr("slp.reference")];
@@ -227,7 +231,7 @@ fn statuses_and_messages_agree_with_and_without_logging() {
             }),
             fmi2OK
         );
-        let t = breathe(&mut fmu, 14);
+        let t = breathe(&mut fmu, 224);
         assert_eq!(set_real(&mut fmu, "activation.scalenes", 2.0), fmi2Error);
         assert_eq!(
             fmu.call("fmi2DoStep", |c| unsafe { fmi2DoStep(c, t + 1.0, 0.1, 1) }),
