@@ -468,22 +468,7 @@ impl Integrator {
             return Ok(());
         }
         self.ensure_fsal(ode, *t, y)?;
-        if self.h_next <= 0.0 || !self.h_next.is_finite() {
-            self.h_next = match self.options.h_init {
-                Some(h) => h,
-                None => self.initial_step(ode, *t, y, t_end),
-            };
-        }
-        let tab = self.tableau();
-        let opts = self.options;
-        let ctl = Controller {
-            safety: SAFETY,
-            fac_min: FAC_MIN,
-            fac_max: FAC_MAX,
-            alpha: tab.pi_alpha,
-            beta: tab.pi_beta,
-            hold_ratio: 1.0,
-        };
+        let (opts, ctl) = self.start_explicit(ode, *t, y, t_end);
         let mut chain = Chain::new(self.h_next);
         while *t < t_end {
             let p = chain.plan(&mut self.h_next, *t, f64::INFINITY, &opts)?;
@@ -503,7 +488,7 @@ impl Integrator {
                         a.have_step = true;
                     }
                     if opts.stiffness_check {
-                        self.stiffness_test(h, tab);
+                        self.stiffness_test(h, self.tableau());
                     }
                     self.h_next = chain.accept(&ctl, err, &mut self.err_old, p);
                     self.stats.steps += 1;
@@ -589,6 +574,34 @@ impl Integrator {
     }
 
     /// Makes `fsal_k` = f(t, y), reusing it when it was computed at exactly this point.
+    /// The set-up shared by the explicit stepping loops: a first step size when none is
+    /// carried over (the options' or [`Integrator::initial_step`]'s), the options and the
+    /// step-size controller of the method's tableau.
+    fn start_explicit<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: f64,
+        y: &[f64],
+        t_end: f64,
+    ) -> (Options, Controller) {
+        if self.h_next <= 0.0 || !self.h_next.is_finite() {
+            self.h_next = match self.options.h_init {
+                Some(h) => h,
+                None => self.initial_step(ode, t, y, t_end),
+            };
+        }
+        let tab = self.tableau();
+        let ctl = Controller {
+            safety: SAFETY,
+            fac_min: FAC_MIN,
+            fac_max: FAC_MAX,
+            alpha: tab.pi_alpha,
+            beta: tab.pi_beta,
+            hold_ratio: 1.0,
+        };
+        (self.options, ctl)
+    }
+
     fn ensure_fsal<O: Ode + ?Sized>(
         &mut self,
         ode: &mut O,
@@ -638,22 +651,7 @@ impl Integrator {
         self.ensure_workspace();
         self.ensure_fsal(ode, *t, y)?;
         let mut next_out = output_times.partition_point(|&v| v <= *t);
-        if self.h_next <= 0.0 || !self.h_next.is_finite() {
-            self.h_next = match self.options.h_init {
-                Some(h) => h,
-                None => self.initial_step(ode, *t, y, t_end),
-            };
-        }
-        let tab = self.tableau();
-        let opts = self.options;
-        let ctl = Controller {
-            safety: SAFETY,
-            fac_min: FAC_MIN,
-            fac_max: FAC_MAX,
-            alpha: tab.pi_alpha,
-            beta: tab.pi_beta,
-            hold_ratio: 1.0,
-        };
+        let (opts, ctl) = self.start_explicit(ode, *t, y, t_end);
         let mut chain = Chain::new(self.h_next);
         while *t < t_end {
             let p = chain.plan(&mut self.h_next, *t, t_end, &opts)?;
@@ -677,7 +675,7 @@ impl Integrator {
                         }
                     }
                     if opts.stiffness_check {
-                        self.stiffness_test(h, tab);
+                        self.stiffness_test(h, self.tableau());
                     }
                     self.h_next = chain.accept(&ctl, err, &mut self.err_old, p);
                     self.stats.steps += 1;
