@@ -170,12 +170,17 @@ pub fn fit_file(
     bar.finish();
     let outputs = write_fit(&fit, out, recording_path, &subject)?;
     println!("{}", summary(&fit));
-    println!(
-        "wrote {}, {} and {}",
-        outputs.json.display(),
-        outputs.volume_csv.display(),
-        outputs.png.display()
-    );
+    let svg = outputs.png.with_extension("svg");
+    let mut files = vec![
+        outputs.json.display().to_string(),
+        outputs.volume_csv.display().to_string(),
+        outputs.png.display().to_string(),
+    ];
+    if svg.is_file() {
+        files.push(svg.display().to_string());
+    }
+    let last = files.pop().unwrap_or_default();
+    println!("wrote {} and {last}", files.join(", "));
     Ok(fit)
 }
 
@@ -251,6 +256,19 @@ fn package_fmu(out: &Path) -> Result<Option<PathBuf>> {
     Ok(Some(p.path))
 }
 
+/// What the figures of a fit mean, one line each, printed by `torso demo` under the fit.
+pub const FIT_NOTES: [&str; 4] = [
+    "registration: the recording's first frame (end-expiration) rigidly moved onto the \
+     model's rest markers; mean and rms are the distances left, rotation is the camera's \
+     turn relative to the model",
+    "cost: the mean distance between the model's markers and the recorded points over every \
+     frame and point (thesis eq. 3.1), after one rigid correction over all frames",
+    "noise floor: the mean length of the noise in the recording, the cost a perfect fit \
+     reaches (a synthetic recording's truth file states it)",
+    "phases: of each muscle family's sine, activation A/2 (sin(2 pi f t + phase) + 1), at the \
+     recording's first frame, in (-pi, pi]; delta phase > 0: the diaphragm leads the rib cage",
+];
+
 /// Runs `torso demo`.
 pub fn demo(args: &DemoArgs) -> Result<()> {
     let start = std::time::Instant::now();
@@ -319,12 +337,23 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         },
         false,
     )?;
+    println!("what these figures mean:");
+    for note in FIT_NOTES {
+        println!("  {note}");
+    }
     let truth_path = recording.with_extension("truth.json");
     if let Ok(text) = std::fs::read_to_string(&truth_path)
         && let Ok(truth) = serde_json::from_str::<serde_json::Value>(&text)
     {
         let got = crate::fit::report::drive_fmi(&fit.drive);
-        println!("== fitted vs truth ({})", truth_path.display());
+        println!(
+            "== 4. fitted against the truth the recording was synthesised with ({})",
+            truth_path.display()
+        );
+        println!(
+            "{:<26} {:>9} {:>9} {:>9}",
+            "parameter", "fitted", "truth", "error"
+        );
         for key in [
             "drive.frequency",
             "drive.ribs.amplitude",
@@ -332,17 +361,23 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             "drive.ribs.phase",
             "drive.diaphragm.phase",
         ] {
-            println!(
-                "{key:<26} {:>9.4} {:>9.4}",
+            let (f, t) = (
                 got[key].as_f64().unwrap_or(f64::NAN),
-                truth[key].as_f64().unwrap_or(f64::NAN)
+                truth[key].as_f64().unwrap_or(f64::NAN),
             );
+            let error = if key.ends_with("phase") {
+                crate::fit::fitting::wrap_angle(f - t)
+            } else {
+                f - t
+            };
+            println!("{key:<26} {f:>9.4} {t:>9.4} {error:>+9.4}");
         }
+        let floor = truth["noise_floor_m"].as_f64().unwrap_or(f64::NAN);
         println!(
-            "{:<26} {:>9.3} {:>9.3}  (cost vs noise floor, mm)",
-            "cost",
+            "cost {:.3} mm against the recording's noise floor {:.3} mm ({:.2} x the floor)",
             fit.cost_m * 1e3,
-            truth["noise_floor_m"].as_f64().unwrap_or(f64::NAN) * 1e3
+            floor * 1e3,
+            fit.cost_m / floor
         );
     }
     println!("demo done in {:.1} s", start.elapsed().as_secs_f64());
