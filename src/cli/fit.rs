@@ -147,10 +147,19 @@ pub fn fit_file(
     let recording = Recording::read(recording_path)?;
     prepare_output_file(out)?;
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
-    crate::fit::fitting::check_grid(
-        recording.grid,
-        (config.scene.grid_rows, config.scene.grid_cols),
-    )?;
+    let grid = (config.scene.grid_rows, config.scene.grid_cols);
+    if recording.grid != grid {
+        let (r, c) = recording.grid;
+        return Err(Error::State(format!(
+            "{} has a {r}x{c} grid ({} points), the model's marker grid is {}x{} ({} points); \
+             pass --grid {r}x{c}",
+            recording_path.display(),
+            r * c,
+            grid.0,
+            grid.1,
+            grid.0 * grid.1
+        )));
+    }
     let subject = config.subject.clone();
     let mut bar = Progress::new(options.max_evals);
     let fit = if skin_fit {
