@@ -199,6 +199,21 @@ fn outputs_create_folders_only_below_the_working_directory() {
     let (code, out, err) = torso_in(&cwd, &args);
     assert_eq!(code, 0, "{out}{err}");
     assert!(absolute.is_file());
+    // an output folder named outright is made when its parent exists, as mkdir would
+    let other = scratch("out_elsewhere");
+    let named = other.join("gen");
+    let (code, out, err) = torso_in(&dir, &["export-obj", "--lod", "0", named.to_str().unwrap()]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(named.join("skin.obj").is_file());
+    let deep = format!("{missing}/gen");
+    let (code, _, err) = torso_in(&dir, &["export-obj", "--lod", "0", &deep]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("output folder {missing} does not exist")),
+        "{err}"
+    );
+    assert!(!Path::new(&missing).exists(), "{missing} was created");
+    let _ = std::fs::remove_dir_all(&other);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

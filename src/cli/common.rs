@@ -167,32 +167,53 @@ pub fn parse_grid_flag(flag: &str, s: &str) -> Result<(usize, usize)> {
 /// a mistyped absolute path does not leave folders at the filesystem root.
 pub fn prepare_output_file(path: &Path) -> Result<()> {
     match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) => prepare_output_dir(dir),
-        None => Ok(()),
+        Some(dir) if !dir.is_dir() => {
+            if !below_working_directory(dir) {
+                return Err(missing_folder(dir));
+            }
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+        }
+        _ => Ok(()),
     }
 }
 
-/// Makes sure the output folder `dir` exists, creating it only below the working directory
-/// (see [`prepare_output_file`]).
+/// Makes sure the output folder `dir` exists: it is created when its parent exists (as
+/// `mkdir` would), with any missing parents only below the working directory (see
+/// [`prepare_output_file`]).
 pub fn prepare_output_dir(dir: &Path) -> Result<()> {
     if dir.is_dir() {
         return Ok(());
     }
-    let no_parent = dir.components().all(|c| !matches!(c, Component::ParentDir));
-    let below_cwd = no_parent
-        && (dir.is_relative()
-            || std::env::current_dir()
-                .ok()
-                .and_then(|cwd| std::fs::canonicalize(cwd).ok())
-                .is_some_and(|cwd| dir.starts_with(&cwd) && dir != cwd));
-    if !below_cwd {
-        return Err(Error::State(format!(
-            "output folder {} does not exist; create it first (torso creates missing folders \
-             only below the working directory)",
-            dir.display()
-        )));
+    if below_working_directory(dir) {
+        return std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e));
     }
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+    match dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(parent) if parent.is_dir() => std::fs::create_dir(dir).map_err(|e| Error::io(dir, e)),
+        Some(parent) => Err(missing_folder(parent)),
+        None => Err(missing_folder(dir)),
+    }
+}
+
+/// Whether `dir` lies below the working directory: relative without `..`, or absolute under
+/// the (canonical) working directory.
+fn below_working_directory(dir: &Path) -> bool {
+    if dir.components().any(|c| matches!(c, Component::ParentDir)) {
+        return false;
+    }
+    dir.is_relative()
+        || std::env::current_dir()
+            .ok()
+            .and_then(|cwd| std::fs::canonicalize(cwd).ok())
+            .is_some_and(|cwd| dir.starts_with(&cwd) && dir != cwd)
+}
+
+/// The error for an output folder that is missing and outside the working directory.
+fn missing_folder(dir: &Path) -> Error {
+    Error::State(format!(
+        "output folder {} does not exist; create it first (torso creates missing folders \
+         only below the working directory)",
+        dir.display()
+    ))
 }
 
 /// The sinusoidal drive: a named scenario, with optional overrides (thesis eq. 2.4).
