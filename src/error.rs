@@ -74,3 +74,13 @@ impl Error {
         }
     }
 }
+
+/// The message of a caught panic's payload (`&str` or `String`; "panic" for anything else),
+/// for the C layers that turn a panic into an error code and a log line.
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "panic".to_string())
+}

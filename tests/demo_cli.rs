@@ -43,6 +43,27 @@ fn demo_fits_the_bundled_recording() {
         assert!(dir.join("out/BreathingTorso.fmu").exists());
     }
     assert!(!dir.join("fmu").exists(), "the demo wrote outside --out");
+    // The output explains itself: what registration, cost, noise floor and the phases are,
+    // a headed fitted-against-truth table, and every file written, the SVG report included.
+    for line in [
+        "  registration: the recording's first frame (end-expiration) rigidly moved",
+        "  cost: the mean distance between the model's markers and the recorded points",
+        "  noise floor: the mean length of the noise in the recording",
+        "  phases: of each muscle family's sine",
+        "parameter                     fitted     truth     error",
+        "fit_report.png and out/fit_report.svg",
+    ] {
+        assert!(
+            text.contains(line),
+            "the demo's output lacks `{line}`:\n{text}"
+        );
+    }
+    assert!(dir.join("out/fit_report.svg").is_file());
+    let cost_line = text
+        .lines()
+        .find(|l| l.starts_with("cost ") && l.contains("against the recording's noise floor"))
+        .unwrap_or_else(|| panic!("no cost against noise floor line in\n{text}"));
+    assert!(cost_line.ends_with("x the floor)"), "{cost_line}");
     // The help names no build-time path as a default.
     let help = Command::new(env!("CARGO_BIN_EXE_torso"))
         .args(["demo", "--help"])

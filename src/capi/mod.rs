@@ -185,14 +185,6 @@ impl From<Error> for Failure {
 
 type Outcome = std::result::Result<(), Failure>;
 
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "panic".into())
-}
-
 /// Runs `body` on the handle, records a failure's message on it, catches panics.
 ///
 /// # Safety
@@ -213,7 +205,10 @@ unsafe fn with_handle(h: *mut BtTorso, body: impl FnOnce(&mut BtTorso) -> Outcom
             code
         }
         Err(p) => {
-            handle.last_error = c_message(&format!("internal error: {}", panic_text(p.as_ref())));
+            handle.last_error = c_message(&format!(
+                "internal error: {}",
+                crate::error::panic_message(p.as_ref())
+            ));
             BT_ERR_PANIC
         }
     }
@@ -226,7 +221,10 @@ fn without_handle(body: impl FnOnce() -> Outcome) -> c_int {
         Ok(Err(Failure(code, message))) => (code, message),
         Err(p) => (
             BT_ERR_PANIC,
-            format!("internal error: {}", panic_text(p.as_ref())),
+            format!(
+                "internal error: {}",
+                crate::error::panic_message(p.as_ref())
+            ),
         ),
     };
     CREATION_ERROR.with(|e| *e.borrow_mut() = c_message(&message));

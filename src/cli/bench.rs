@@ -54,8 +54,9 @@ pub struct CoreArgs {
     /// Right-hand-side calls per timed batch.
     #[arg(long, default_value_t = 2000)]
     pub rhs_calls: usize,
-    /// Solver method of the frame loops: dopri5, bs3, high-order or rosenbrock.
-    #[arg(long, default_value = "dopri5")]
+    /// ODE solver of the frame loops: dopri5, bs3, high-order or rosenbrock (also taken as
+    /// its former name, --method).
+    #[arg(long = "solver", alias = "method", default_value = "dopri5")]
     pub method: String,
     /// Also write the figures as JSON.
     #[arg(long)]
@@ -184,7 +185,7 @@ fn core(args: &CoreArgs) -> Result<()> {
     config.scene.level_of_detail = args.lod;
     config.solver.method = Method::from_name(&args.method).ok_or_else(|| {
         Error::invalid(
-            "--method",
+            "--solver",
             &args.method,
             "dopri5, bs3, high-order or rosenbrock",
         )

@@ -1,12 +1,14 @@
-//! Options shared by several subcommands: the subject, the scene and the drive.
+//! Options shared by several subcommands: the subject, the solver and the drive, the names
+//! of their flags in errors, the marker grid option, and where output folders may be created.
 
 use crate::anatomy::{Posture, Sex, Subject};
 use crate::model::{Config, Drive};
 use crate::solver::Method;
 use crate::{Error, Result};
 use clap::Args;
+use std::path::{Component, Path};
 
-/// Who the model is built for.
+/// Who the model is built for, and the level of detail it is built at.
 #[derive(Args, Debug, Clone)]
 pub struct SubjectArgs {
     /// Sex: male or female.
@@ -30,16 +32,10 @@ pub struct SubjectArgs {
     /// Level of detail 0, 1 or 2.
     #[arg(long, default_value_t = 1)]
     pub lod: u32,
-    /// Solver method: dopri5, bs3, high-order or rosenbrock (stiff scenes).
-    #[arg(long, default_value = "dopri5")]
-    pub method: String,
-    /// Relative tolerance.
-    #[arg(long, default_value_t = 1e-6)]
-    pub rtol: f64,
 }
 
 impl SubjectArgs {
-    /// The subject described by the options.
+    /// The subject described by the options; an error names the flag.
     pub fn subject(&self) -> Result<Subject> {
         let sex = match self.sex.as_str() {
             "male" | "m" | "M" => Sex::Male,
@@ -52,31 +48,172 @@ impl SubjectArgs {
             stature: self.stature,
             mass: self.mass,
             breast_size: self.breast_size,
-            posture: Posture::from_name(&self.posture)?,
+            posture: Posture::from_name(&self.posture).map_err(flag_error)?,
         };
-        s.validate()?;
+        s.validate().map_err(flag_error)?;
         Ok(s)
     }
 
-    /// A configuration for this subject with `drive`.
-    pub fn config(&self, drive: Drive) -> Result<Config> {
+    /// A configuration for this subject with `drive` and the solver of `solver`; an error
+    /// names the flag.
+    pub fn config(&self, solver: &SolverArgs, drive: Drive) -> Result<Config> {
         let mut c = Config {
             subject: self.subject()?,
             drive,
             ..Config::default()
         };
         c.scene.level_of_detail = self.lod;
-        c.solver.method = Method::from_name(&self.method).ok_or_else(|| {
+        c.solver.method = Method::from_name(&solver.solver).ok_or_else(|| {
             Error::invalid(
-                "--method",
-                &self.method,
+                "--solver",
+                &solver.solver,
                 "dopri5, bs3, high-order or rosenbrock",
             )
         })?;
-        c.solver.rtol = self.rtol;
-        c.validate()?;
+        c.solver.rtol = solver.rtol;
+        c.validate().map_err(flag_error)?;
         Ok(c)
     }
+}
+
+/// The ODE solver of a run (FMI `solver.method`, `solver.rtol`). The option is `--solver` in
+/// every subcommand; `simulate` and `render-skin` also take their former `--method`
+/// (hidden, see [`MethodAlias`]). `fit` and `fit-sweep` keep `--method` for the search method.
+#[derive(Args, Debug, Clone)]
+pub struct SolverArgs {
+    /// ODE solver: dopri5, bs3, high-order or rosenbrock (stiff scenes).
+    #[arg(long, default_value = "dopri5")]
+    pub solver: String,
+    /// Relative tolerance of the ODE solver.
+    #[arg(long, default_value_t = 1e-6)]
+    pub rtol: f64,
+}
+
+/// The former name of `--solver` in `simulate` and `render-skin`, kept hidden so that old
+/// scripts still run.
+#[derive(Args, Debug, Clone)]
+pub struct MethodAlias {
+    /// Former name of --solver.
+    #[arg(long = "method", hide = true, conflicts_with = "solver")]
+    pub method: Option<String>,
+}
+
+impl SolverArgs {
+    /// These options with `--solver` replaced by the former `--method` when that was given.
+    pub fn with_alias(&self, alias: &MethodAlias) -> SolverArgs {
+        SolverArgs {
+            solver: alias.method.clone().unwrap_or_else(|| self.solver.clone()),
+            rtol: self.rtol,
+        }
+    }
+}
+
+/// The command-line flag standing for a model or FMI parameter name (`subject.stature` ->
+/// `--stature`), for the parameters the shared options set; `None` for others.
+pub fn flag_for(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "subject.sex" => "--sex",
+        "subject.age" => "--age",
+        "subject.stature" => "--stature",
+        "subject.mass" => "--mass",
+        "subject.breast_size" => "--breast-size",
+        "posture" | "subject.posture" => "--posture",
+        "scene.level_of_detail" => "--lod",
+        "grid.rows" | "grid.cols" => "--grid",
+        "solver.method" => "--solver",
+        "solver.rtol" => "--rtol",
+        "scenario" => "--scenario",
+        "drive.frequency" => "--frequency",
+        "drive.ribs.amplitude" => "--ribs-amplitude",
+        "drive.ribs.phase" => "--ribs-phase",
+        "drive.diaphragm.amplitude" => "--diaphragm-amplitude",
+        "drive.diaphragm.phase" => "--diaphragm-phase",
+        "drive.abdominals.amplitude" => "--abdominals-amplitude",
+        "drive.abdominals.phase" => "--abdominals-phase",
+        _ => return None,
+    })
+}
+
+/// `e` with the parameter it names replaced by the flag the user typed (see [`flag_for`]).
+pub fn flag_error(e: Error) -> Error {
+    match e {
+        Error::InvalidParameter { name, value, range } => Error::InvalidParameter {
+            name: flag_for(&name).map_or(name, String::from),
+            value,
+            range,
+        },
+        other => other,
+    }
+}
+
+/// Parses a marker grid `ROWSxCOLS` given as `flag` (1..16 each, as the FMU's and the C
+/// ABI's `grid.rows` and `grid.cols`).
+pub fn parse_grid_flag(flag: &str, s: &str) -> Result<(usize, usize)> {
+    crate::fit::recording::parse_grid(s).ok_or_else(|| {
+        Error::invalid(
+            flag,
+            s,
+            format!(
+                "ROWSxCOLS with 1..{} each, e.g. 10x6",
+                crate::fit::recording::MAX_GRID_SIDE
+            ),
+        )
+    })
+}
+
+/// Makes sure the folder of the output file `path` exists. A missing folder is created only
+/// when it lies below the working directory (a relative path without `..`, or an absolute one
+/// under the working directory); anywhere else the error asks the user to create it, so that
+/// a mistyped absolute path does not leave folders at the filesystem root.
+pub fn prepare_output_file(path: &Path) -> Result<()> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => {
+            if !below_working_directory(dir) {
+                return Err(missing_folder(dir));
+            }
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Makes sure the output folder `dir` exists: it is created when its parent exists (as
+/// `mkdir` would), with any missing parents only below the working directory (see
+/// [`prepare_output_file`]).
+pub fn prepare_output_dir(dir: &Path) -> Result<()> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    if below_working_directory(dir) {
+        return std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e));
+    }
+    match dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(parent) if parent.is_dir() => std::fs::create_dir(dir).map_err(|e| Error::io(dir, e)),
+        Some(parent) => Err(missing_folder(parent)),
+        None => Err(missing_folder(dir)),
+    }
+}
+
+/// Whether `dir` lies below the working directory: relative without `..`, or absolute under
+/// the (canonical) working directory.
+fn below_working_directory(dir: &Path) -> bool {
+    if dir.components().any(|c| matches!(c, Component::ParentDir)) {
+        return false;
+    }
+    dir.is_relative()
+        || std::env::current_dir()
+            .ok()
+            .and_then(|cwd| std::fs::canonicalize(cwd).ok())
+            .is_some_and(|cwd| dir.starts_with(&cwd) && dir != cwd)
+}
+
+/// The error for an output folder that is missing and outside the working directory.
+fn missing_folder(dir: &Path) -> Error {
+    Error::State(format!(
+        "output folder {} does not exist; create it first (torso creates missing folders \
+         only below the working directory)",
+        dir.display()
+    ))
 }
 
 /// The sinusoidal drive: a named scenario, with optional overrides (thesis eq. 2.4).
@@ -111,7 +248,7 @@ pub struct DriveArgs {
 impl DriveArgs {
     /// The drive described by the options.
     pub fn drive(&self) -> Result<Drive> {
-        let mut d = Drive::scenario(&self.scenario)?;
+        let mut d = Drive::scenario(&self.scenario).map_err(flag_error)?;
         if let Some(v) = self.frequency {
             d.frequency = v;
         }
@@ -126,7 +263,7 @@ impl DriveArgs {
         set(&mut d.diaphragm.phase, self.diaphragm_phase);
         set(&mut d.abdominals.amplitude, self.abdominals_amplitude);
         set(&mut d.abdominals.phase, self.abdominals_phase);
-        d.validate()?;
+        d.validate().map_err(flag_error)?;
         Ok(d)
     }
 }

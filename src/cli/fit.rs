@@ -1,7 +1,9 @@
 //! `torso fit` (fit the model to an SLP recording) and `torso demo` (package the FMU,
 //! simulate the default subject, fit the bundled synthetic recording, print the report).
 
-use super::common::SubjectArgs;
+use super::common::{
+    SolverArgs, SubjectArgs, flag_error, parse_grid_flag, prepare_output_dir, prepare_output_file,
+};
 use crate::fit::fitting::fit_with_skin;
 use crate::fit::report::{summary, write_fit};
 use crate::fit::{FitOptions, Method, Recording, TorsoMarkers, fit_recording};
@@ -14,82 +16,36 @@ use std::path::{Path, PathBuf};
 /// The subject and the model built for a fit or a synthetic recording.
 #[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
-    /// Sex: male or female.
-    #[arg(long, default_value = "male")]
-    pub sex: String,
-    /// Age [years].
-    #[arg(long, default_value_t = 30.0)]
-    pub age: f64,
-    /// Stature [m].
-    #[arg(long, default_value_t = 1.75)]
-    pub stature: f64,
-    /// Body mass [kg].
-    #[arg(long, default_value_t = 75.0)]
-    pub mass: f64,
-    /// Breast size, 0-1.
-    #[arg(long, default_value_t = 0.0)]
-    pub breast_size: f64,
-    /// Posture: standing, sitting or supine.
-    #[arg(long, default_value = "standing")]
-    pub posture: String,
-    /// Level of detail 0, 1 or 2.
-    #[arg(long, default_value_t = 1)]
-    pub lod: u32,
-    /// ODE solver: dopri5, bs3 or high-order.
-    #[arg(long, default_value = "dopri5")]
-    pub solver: String,
-    /// Relative tolerance of the solver. At the default 1e-6 the step is held by stability
-    /// at level of detail 0, so looser tolerances save nothing (1e-4 took as many
-    /// evaluations with 12 x the rejected steps: `cargo run --release --example
-    /// fast_dynamics -- 0 1e-4`), and the markers of a fit's periodic run agree with an
-    /// rtol 1e-9 run within 0.1 um (tests/sampled_runs.rs).
-    #[arg(long, default_value_t = 1e-6)]
-    pub rtol: f64,
-    /// Marker grid of the model, ROWSxCOLS.
+    /// The subject and the level of detail.
+    #[command(flatten)]
+    pub subject: SubjectArgs,
+    /// The ODE solver. At the default rtol 1e-6 the step is held by stability at level of
+    /// detail 0, so looser tolerances save nothing (1e-4 took as many evaluations with 12 x
+    /// the rejected steps: `cargo run --release --example fast_dynamics -- 0 1e-4`), and the
+    /// markers of a fit's periodic run agree with an rtol 1e-9 run within 0.1 um
+    /// (tests/sampled_runs.rs).
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// Marker grid of the model, ROWSxCOLS (1..16 each).
     #[arg(long, default_value = "10x6")]
     pub grid: String,
 }
 
 impl ModelArgs {
-    /// The shared subject options these stand for.
-    pub fn subject_args(&self) -> SubjectArgs {
-        SubjectArgs {
-            sex: self.sex.clone(),
-            age: self.age,
-            stature: self.stature,
-            mass: self.mass,
-            breast_size: self.breast_size,
-            posture: self.posture.clone(),
-            lod: self.lod,
-            method: self.solver.clone(),
-            rtol: self.rtol,
-        }
-    }
-
-    /// The configuration (with `drive` and the grid).
+    /// The configuration (with `drive` and the grid); an error names the flag.
     pub fn config(&self, drive: Drive) -> Result<crate::Config> {
-        let mut c = self.subject_args().config(drive)?;
-        let (r, k) = parse_grid(&self.grid)?;
+        let mut c = self.subject.config(&self.solver, drive)?;
+        let (r, k) = self.grid()?;
         c.scene.grid_rows = r;
         c.scene.grid_cols = k;
-        c.validate()?;
+        c.validate().map_err(flag_error)?;
         Ok(c)
     }
-}
 
-/// Parses `ROWSxCOLS`.
-pub fn parse_grid(s: &str) -> Result<(usize, usize)> {
-    let bad = || Error::invalid("--grid", s, "ROWSxCOLS with 2..16 each, e.g. 10x6");
-    let (r, c) = s
-        .to_ascii_lowercase()
-        .split_once('x')
-        .map(|(a, b)| (a.trim().to_string(), b.trim().to_string()))
-        .ok_or_else(bad)?;
-    let (r, c): (usize, usize) = (r.parse().map_err(|_| bad())?, c.parse().map_err(|_| bad())?);
-    if !(2..=16).contains(&r) || !(2..=16).contains(&c) {
-        return Err(bad());
+    /// The marker grid `--grid` (rows, columns).
+    pub fn grid(&self) -> Result<(usize, usize)> {
+        parse_grid_flag("--grid", &self.grid)
     }
-    Ok((r, c))
 }
 
 /// A fit's absolute tolerance relative to its relative one (atol = rtol / 100, the
@@ -187,13 +143,23 @@ pub fn fit_file(
     options: &FitOptions,
     skin_fit: bool,
 ) -> Result<crate::fit::Fit> {
-    let recording = Recording::read(recording_path)?;
     let mut config = model.config(Drive::default())?;
+    let recording = Recording::read(recording_path)?;
+    prepare_output_file(out)?;
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
-    crate::fit::fitting::check_grid(
-        recording.grid,
-        (config.scene.grid_rows, config.scene.grid_cols),
-    )?;
+    let grid = (config.scene.grid_rows, config.scene.grid_cols);
+    if recording.grid != grid {
+        let (r, c) = recording.grid;
+        return Err(Error::State(format!(
+            "{} has a {r}x{c} grid ({} points), the model's marker grid is {}x{} ({} points); \
+             pass --grid {r}x{c}",
+            recording_path.display(),
+            r * c,
+            grid.0,
+            grid.1,
+            grid.0 * grid.1
+        )));
+    }
     let subject = config.subject.clone();
     let mut bar = Progress::new(options.max_evals);
     let fit = if skin_fit {
@@ -213,12 +179,17 @@ pub fn fit_file(
     bar.finish();
     let outputs = write_fit(&fit, out, recording_path, &subject)?;
     println!("{}", summary(&fit));
-    println!(
-        "wrote {}, {} and {}",
-        outputs.json.display(),
-        outputs.volume_csv.display(),
-        outputs.png.display()
-    );
+    let svg = outputs.png.with_extension("svg");
+    let mut files = vec![
+        outputs.json.display().to_string(),
+        outputs.volume_csv.display().to_string(),
+        outputs.png.display().to_string(),
+    ];
+    if svg.is_file() {
+        files.push(svg.display().to_string());
+    }
+    let last = files.pop().unwrap_or_default();
+    println!("wrote {} and {last}", files.join(", "));
     Ok(fit)
 }
 
@@ -294,10 +265,23 @@ fn package_fmu(out: &Path) -> Result<Option<PathBuf>> {
     Ok(Some(p.path))
 }
 
+/// What the figures of a fit mean, one line each, printed by `torso demo` under the fit.
+pub const FIT_NOTES: [&str; 4] = [
+    "registration: the recording's first frame (end-expiration) rigidly moved onto the \
+     model's rest markers; mean and rms are the distances left, rotation is the camera's \
+     turn relative to the model",
+    "cost: the mean distance between the model's markers and the recorded points over every \
+     frame and point (thesis eq. 3.1), after one rigid correction over all frames",
+    "noise floor: the mean length of the noise in the recording, the cost a perfect fit \
+     reaches (a synthetic recording's truth file states it)",
+    "phases: of each muscle family's sine, activation A/2 (sin(2 pi f t + phase) + 1), at the \
+     recording's first frame, in (-pi, pi]; delta phase > 0: the diaphragm leads the rib cage",
+];
+
 /// Runs `torso demo`.
 pub fn demo(args: &DemoArgs) -> Result<()> {
     let start = std::time::Instant::now();
-    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    prepare_output_dir(&args.out)?;
     println!("== 1. FMU");
     if let Some(fmu) = package_fmu(&args.out)? {
         println!("wrote {}", fmu.display());
@@ -309,17 +293,21 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
          detail 1: a 0.50 L tidal volume)"
     );
     let model = ModelArgs {
-        sex: "male".into(),
-        age: 30.0,
-        stature: 1.75,
-        mass: 75.0,
-        breast_size: 0.0,
-        posture: "standing".into(),
-        lod: 0,
-        solver: "dopri5".into(),
-        // The bundled recording was made at this tolerance; 1.5x faster than 1e-6 with the
-        // same tidal volume to 1 mL.
-        rtol: 1e-4,
+        subject: SubjectArgs {
+            sex: "male".into(),
+            age: 30.0,
+            stature: 1.75,
+            mass: 75.0,
+            breast_size: 0.0,
+            posture: "standing".into(),
+            lod: 0,
+        },
+        solver: SolverArgs {
+            solver: "dopri5".into(),
+            // The bundled recording was made at this tolerance; 1.5x faster than 1e-6 with
+            // the same tidal volume to 1 mL.
+            rtol: 1e-4,
+        },
         grid: "10x6".into(),
     };
     let mut torso = crate::Torso::new(model.config(Drive::quiet())?)?;
@@ -358,12 +346,23 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         },
         false,
     )?;
+    println!("what these figures mean:");
+    for note in FIT_NOTES {
+        println!("  {note}");
+    }
     let truth_path = recording.with_extension("truth.json");
     if let Ok(text) = std::fs::read_to_string(&truth_path)
         && let Ok(truth) = serde_json::from_str::<serde_json::Value>(&text)
     {
         let got = crate::fit::report::drive_fmi(&fit.drive);
-        println!("== fitted vs truth ({})", truth_path.display());
+        println!(
+            "== 4. fitted against the truth the recording was synthesised with ({})",
+            truth_path.display()
+        );
+        println!(
+            "{:<26} {:>9} {:>9} {:>9}",
+            "parameter", "fitted", "truth", "error"
+        );
         for key in [
             "drive.frequency",
             "drive.ribs.amplitude",
@@ -371,17 +370,23 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             "drive.ribs.phase",
             "drive.diaphragm.phase",
         ] {
-            println!(
-                "{key:<26} {:>9.4} {:>9.4}",
+            let (f, t) = (
                 got[key].as_f64().unwrap_or(f64::NAN),
-                truth[key].as_f64().unwrap_or(f64::NAN)
+                truth[key].as_f64().unwrap_or(f64::NAN),
             );
+            let error = if key.ends_with("phase") {
+                crate::fit::fitting::wrap_angle(f - t)
+            } else {
+                f - t
+            };
+            println!("{key:<26} {f:>9.4} {t:>9.4} {error:>+9.4}");
         }
+        let floor = truth["noise_floor_m"].as_f64().unwrap_or(f64::NAN);
         println!(
-            "{:<26} {:>9.3} {:>9.3}  (cost vs noise floor, mm)",
-            "cost",
+            "cost {:.3} mm against the recording's noise floor {:.3} mm ({:.2} x the floor)",
             fit.cost_m * 1e3,
-            truth["noise_floor_m"].as_f64().unwrap_or(f64::NAN) * 1e3
+            floor * 1e3,
+            fit.cost_m / floor
         );
     }
     println!("demo done in {:.1} s", start.elapsed().as_secs_f64());
@@ -454,7 +459,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
     for c in &cases {
         case_config(c, &options)?;
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    prepare_output_dir(&args.out)?;
     let start = std::time::Instant::now();
     let rows = run_sweep(&cases, &options, &|r| {
         eprintln!(

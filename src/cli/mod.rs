@@ -8,7 +8,7 @@ pub mod mesh;
 pub mod simulate;
 pub mod skin;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 mod fmu;
 pub mod synth;
@@ -62,9 +62,34 @@ pub enum Command {
     },
 }
 
+/// `cmd` and its subcommands with every option that takes a value accepting a negative
+/// number as that value (`--stature -1` is then a value, checked against its range, rather
+/// than an unknown flag `-1`). Real-valued options take any value starting with `-`, as
+/// clap's own number test does not know a negative exponent (`--rtol -1e-6`); what is not a
+/// number is then reported by the option's parser.
+pub fn allow_negative_values(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if !a.get_action().takes_values() {
+            a
+        } else if a.get_value_parser().type_id() == std::any::TypeId::of::<f64>() {
+            a.allow_hyphen_values(true)
+        } else {
+            a.allow_negative_numbers(true)
+        }
+    })
+    .mut_subcommands(allow_negative_values)
+}
+
+/// Parses the command line (see [`allow_negative_values`]); exits with clap's message on
+/// a usage error.
+pub fn parse() -> Cli {
+    let matches = allow_negative_values(Cli::command()).get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.
 pub fn main() -> i32 {
-    let cli = Cli::parse();
+    let cli = parse();
     let result: crate::Result<()> = match cli.command {
         Command::Simulate(args) => simulate::main(&args),
         Command::Version => {

@@ -1,10 +1,12 @@
 //! `torso simulate`: runs a scenario on a subject and writes a CSV of every volume, pressure
 //! and displacement at the output rate, then prints a breathing summary.
 
-use super::common::{DriveArgs, SubjectArgs};
+use super::common::{
+    DriveArgs, MethodAlias, SolverArgs, SubjectArgs, prepare_output_dir, prepare_output_file,
+};
 use crate::anatomy::MuscleGroup;
-use crate::model::Torso;
 use crate::model::run::{run, summarise};
+use crate::model::{Drive, Torso};
 use crate::{Error, Result};
 use clap::Args;
 use std::io::Write;
@@ -16,6 +18,12 @@ pub struct SimulateArgs {
     /// The subject and scene.
     #[command(flatten)]
     pub subject: SubjectArgs,
+    /// The ODE solver.
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// `--method`, the former name of `--solver`.
+    #[command(flatten)]
+    pub method: MethodAlias,
     /// The drive.
     #[command(flatten)]
     pub drive: DriveArgs,
@@ -25,7 +33,8 @@ pub struct SimulateArgs {
     /// Output rate [Hz] (SLP cameras: 56 Hz).
     #[arg(long, default_value_t = 56.0)]
     pub rate: f64,
-    /// CSV output file (default: out/simulation.csv).
+    /// CSV output file (default: out/simulation.csv). A missing folder is created only below
+    /// the working directory.
     #[arg(long, default_value = "out/simulation.csv")]
     pub out: PathBuf,
     /// Also write the skin, markers, abdominal surface and bones as VTK series (.vtp + .pvd).
@@ -49,7 +58,12 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
         return Err(Error::invalid("--rate", args.rate, "(0, 10000] Hz"));
     }
     let drive = args.drive.drive()?;
-    let mut config = args.subject.config(drive)?;
+    let solver = args.solver.with_alias(&args.method);
+    let mut config = args.subject.config(&solver, drive)?;
+    prepare_output_file(&args.out)?;
+    if let Some(dir) = &args.export_vtk {
+        prepare_output_dir(dir)?;
+    }
     config.subject_mesh_dir = args.mesh_dir.clone();
     let subject = config.subject.clone();
     let start = std::time::Instant::now();
@@ -65,21 +79,59 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
     let wall = start.elapsed().as_secs_f64();
     write_csv(&args.out, &frames)?;
     let period = 1.0 / drive.frequency;
-    let summary = summarise(
-        &frames,
-        (args.duration - 2.0 * period).max(period.min(args.duration * 0.5)),
-    );
     let stats = torso.solver_stats();
     println!(
         "subject: {:?}, {} y, {} m, {} kg, {:?}",
         subject.sex, subject.age, subject.stature, subject.mass, subject.posture
     );
-    println!("drive: {drive:?}");
+    println!("drive: {}", describe_drive(&drive));
+    if args.duration < period {
+        eprintln!(
+            "warning: the run ({} s) is shorter than one breath ({period} s at {} Hz): no \
+             tidal volume or breathing summary; run --duration {period} or more for one",
+            args.duration, drive.frequency,
+        );
+    } else {
+        // the last two breaths, or the last one of a run shorter than two
+        let from = (args.duration - 2.0 * period).max(period.min(args.duration - period));
+        print_summary(&summarise(&frames, from), subject.frc_ecsc());
+    }
+    println!(
+        "solver: {} steps, {} rejected, {} RHS evaluations; build {:.3} s, run {:.3} s",
+        stats.steps, stats.rejected, stats.rhs_evaluations, build, wall
+    );
+    if torso.stiffness_detected() {
+        println!(
+            "note: the explicit solver reported stiffness; the stiff method may be faster (--solver rosenbrock, FMI solver.method = 3), or use a lower level of detail"
+        );
+    }
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+/// The drive in one readable line: frequency, then each family's amplitude and phase.
+pub fn describe_drive(d: &Drive) -> String {
+    let waves = [
+        ("ribs", d.ribs),
+        ("diaphragm", d.diaphragm),
+        ("abdominals", d.abdominals),
+    ]
+    .map(|(n, w)| format!("{n} {:.3} at {:+.3} rad", w.amplitude, w.phase))
+    .join(", ");
+    format!(
+        "{} Hz ({:.1} breaths/min){}; amplitude and phase: {waves}",
+        d.frequency,
+        60.0 * d.frequency,
+        if d.enabled { "" } else { ", off" }
+    )
+}
+
+/// Prints the breathing summary of a run of at least one breath.
+fn print_summary(summary: &crate::model::run::BreathSummary, frc_ecsc: f64) {
     println!("tidal volume           {:8.3} L", summary.tidal_volume);
     println!(
-        "end-expiratory volume  {:8.3} L   (ECSC FRC {:.2} L)",
+        "end-expiratory volume  {:8.3} L   (ECSC FRC {frc_ecsc:.2} L)",
         summary.end_expiratory_volume,
-        subject.frc_ecsc()
     );
     println!(
         "rib-cage share         {:8.1} %",
@@ -101,24 +153,11 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
         "abdominal pressure     {:8.0} Pa peak-to-trough",
         summary.pressure_swing
     );
-    println!(
-        "solver: {} steps, {} rejected, {} RHS evaluations; build {:.3} s, run {:.3} s",
-        stats.steps, stats.rejected, stats.rhs_evaluations, build, wall
-    );
-    if torso.stiffness_detected() {
-        println!(
-            "note: the explicit solver reported stiffness; the stiff method may be faster (--method rosenbrock, FMI solver.method = 3), or use a lower level of detail"
-        );
-    }
-    println!("wrote {}", args.out.display());
-    Ok(())
 }
 
 /// Writes frames as CSV.
 pub fn write_csv(path: &std::path::Path, frames: &[crate::model::run::Frame]) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
+    prepare_output_file(path)?;
     let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
     let mut w = std::io::BufWriter::new(file);
     let mut header = vec!["time".to_string()];

@@ -2,7 +2,9 @@
 //! OBJ), `torso render-skin` (picture of the skin and markers at rest and at
 //! end-inspiration) and the VTK animation written by `torso simulate --export-vtk DIR`.
 
-use super::common::{DriveArgs, SubjectArgs};
+use super::common::{
+    DriveArgs, MethodAlias, SolverArgs, SubjectArgs, prepare_output_dir, prepare_output_file,
+};
 use crate::anatomy::skin::export::{MeshPart, PolylinePart, VtkSeries, write_obj};
 use crate::anatomy::skin::render::{RenderOptions, RgbImage, render_rgb};
 use crate::model::run::{Frame, frame};
@@ -14,7 +16,7 @@ use clap::Args;
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 
-/// Options of `torso export-obj`.
+/// Options of `torso export-obj`: the rest geometry needs no solver, so it takes none.
 #[derive(Args, Debug)]
 pub struct ExportObjArgs {
     /// The subject and scene.
@@ -30,14 +32,20 @@ pub struct RenderSkinArgs {
     /// The subject and scene.
     #[command(flatten)]
     pub subject: SubjectArgs,
+    /// The ODE solver.
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// `--method`, the former name of `--solver`.
+    #[command(flatten)]
+    pub method: MethodAlias,
     /// The drive whose end-inspiration is shown (default: quiet breathing).
     #[command(flatten)]
     pub drive: DriveArgs,
     /// Magnification of the marker displacements drawn as arrows.
     #[arg(long, default_value_t = 10.0)]
     pub magnify: f64,
-    /// Output PNG.
-    #[arg(long, default_value = "docs/skin.png")]
+    /// Output PNG (the README's picture is `--out docs/skin.png`).
+    #[arg(long, default_value = "skin.png")]
     pub out: PathBuf,
 }
 
@@ -77,9 +85,18 @@ fn posed_bones(model: &MarkerModel, y: &[f64]) -> Result<Vec<(String, Vec<Point3
         .collect())
 }
 
+/// The default solver options, for a configuration that is never integrated.
+fn default_solver() -> SolverArgs {
+    SolverArgs {
+        solver: "dopri5".into(),
+        rtol: crate::model::Config::default().solver.rtol,
+    }
+}
+
 /// Runs `torso export-obj`: the rest geometry (model frame, metres) as OBJ files.
 pub fn export_obj(args: &ExportObjArgs) -> Result<()> {
-    let config = args.subject.config(Drive::default())?;
+    let config = args.subject.config(&default_solver(), Drive::default())?;
+    prepare_output_dir(&args.dir)?;
     let mut torso = Torso::new(config)?;
     let model = torso.marker_model()?;
     let y = torso.state().to_vec();
@@ -344,7 +361,10 @@ pub fn render_skin(args: &RenderSkinArgs) -> Result<()> {
         return Err(Error::invalid("--magnify", args.magnify, "(0, 1000]"));
     }
     let drive = args.drive.drive()?;
-    let config = args.subject.config(drive)?;
+    let config = args
+        .subject
+        .config(&args.solver.with_alias(&args.method), drive)?;
+    prepare_output_file(&args.out)?;
     let mut torso = Torso::new(config)?;
     let model = torso.marker_model()?;
     let b = breath_extremes(&mut torso, 56.0)?;

@@ -1,8 +1,8 @@
 //! `torso synth`: writes a synthetic SLP recording with known drive parameters and its
 //! ground-truth JSON (FMI parameter names, subject, grid, camera transform, noise floor).
 
-use super::common::DriveArgs;
-use super::fit::{ModelArgs, parse_grid};
+use super::common::{DriveArgs, prepare_output_file};
+use super::fit::ModelArgs;
 use crate::fit::report::truth_json;
 use crate::fit::{Camera, SynthOptions, TorsoMarkers, synthesize};
 use crate::{Error, Result};
@@ -51,7 +51,7 @@ pub struct SynthArgs {
 pub fn main(args: &SynthArgs) -> Result<()> {
     let drive = args.drive.drive()?;
     let config = args.model.config(drive)?;
-    let (rows, cols) = parse_grid(&args.model.grid)?;
+    let (rows, cols) = args.model.grid()?;
     let camera = match args.camera.as_str() {
         "random" => Camera::Random,
         "identity" => Camera::Identity,
@@ -71,15 +71,14 @@ pub fn main(args: &SynthArgs) -> Result<()> {
     let subject = config.subject.clone();
     let lod = config.scene.level_of_detail;
     let start = std::time::Instant::now();
+    prepare_output_file(&args.out)?;
+    prepare_output_file(&args.truth)?;
     let mut model = TorsoMarkers::new(config)?;
     let synthetic = synthesize(&mut model, &options)?;
     synthetic.recording.write(&args.out)?;
     let truth = truth_json(&synthetic, &subject, lod, &options);
     let text = serde_json::to_string_pretty(&truth)
         .map_err(|e| Error::State(format!("truth JSON: {e}")))?;
-    if let Some(dir) = args.truth.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
     std::fs::write(&args.truth, text + "\n").map_err(|e| Error::io(&args.truth, e))?;
     println!(
         "{} frames of a {}x{} grid at {} Hz ({:.2} s), noise floor {:.3} mm",

@@ -4,11 +4,18 @@
 //! p = h + R(u, theta)(p0 - h), v = theta' u x (p - h). The sternum is a free rigid body:
 //! p = x + R(q)(p0 - x0), v = x' + w x (p - x). Free vertices are read directly. The rest
 //! arms p0 - h and p0 - x0 are precomputed in the [`Model`].
+//!
+//! The same poses as rigid motions ([`rib_pose`], [`sternum_pose`]) drive the skinning of
+//! the markers (`observe::markers`), so that the state is read into body poses in one place.
+//! The right-hand side turns a rib by its Rodrigues matrix, the skinning by the unit
+//! quaternion of the same axis and angle (the two agree to rounding).
 
 use super::Data;
 use super::model::{Model, RIBS};
 use super::state::Layout;
-use nalgebra::{Matrix3, Point3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{
+    Isometry3, Matrix3, Point3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3,
+};
 
 /// Rotation matrix about unit axis `u` by `angle` (Rodrigues' formula).
 pub fn axis_rotation(u: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
@@ -17,19 +24,41 @@ pub fn axis_rotation(u: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
     Matrix3::identity() + k * s + k * k * (1.0 - c)
 }
 
-/// Fills `data.pos` and `data.vel` for all moving anchors.
-pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &[f64]) {
-    for r in 0..RIBS {
-        data.rib_rotation[r] = axis_rotation(&model.rib_axis[r], y[l.theta + r]);
-    }
+/// The sternum's orientation (its quaternion normalised) and centre of mass at state `y`.
+pub fn sternum_frame(l: &Layout, y: &[f64]) -> (UnitQuaternion<f64>, Point3<f64>) {
     let q = Quaternion::new(
         y[l.sternum_q],
         y[l.sternum_q + 1],
         y[l.sternum_q + 2],
         y[l.sternum_q + 3],
     );
-    data.sternum_rotation = UnitQuaternion::from_quaternion(q);
-    data.sternum_x = Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]);
+    (
+        UnitQuaternion::from_quaternion(q),
+        Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]),
+    )
+}
+
+/// The sternum's motion from rest at state `y` as a rigid transform, `p -> x + R(q)(p - x0)`,
+/// with `com_rest` its rest centre of mass x0.
+pub fn sternum_pose(l: &Layout, y: &[f64], com_rest: &Point3<f64>) -> Isometry3<f64> {
+    let (rot, x) = sternum_frame(l, y);
+    Isometry3::from_parts(Translation3::from(x.coords - rot * com_rest.coords), rot)
+}
+
+/// A rib's motion from rest as a rigid transform: the turn by `theta` about the unit hinge
+/// `axis` through its `head`, `p -> h + R(u, theta)(p - h)`.
+pub fn rib_pose(head: &Point3<f64>, axis: &Unit<Vector3<f64>>, theta: f64) -> Isometry3<f64> {
+    let rot = UnitQuaternion::from_axis_angle(axis, theta);
+    let h = head.coords;
+    Isometry3::from_parts(Translation3::from(h - rot * h), rot)
+}
+
+/// Fills `data.pos` and `data.vel` for all moving anchors.
+pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &[f64]) {
+    for r in 0..RIBS {
+        data.rib_rotation[r] = axis_rotation(&model.rib_axis[r], y[l.theta + r]);
+    }
+    (data.sternum_rotation, data.sternum_x) = sternum_frame(l, y);
     data.sternum_w = Vector3::new(y[l.sternum_w], y[l.sternum_w + 1], y[l.sternum_w + 2]);
     let sternum_v = Vector3::new(y[l.sternum_v], y[l.sternum_v + 1], y[l.sternum_v + 2]);
 

@@ -93,11 +93,15 @@ fn cells(line: &str) -> Vec<(usize, &str)> {
         .collect()
 }
 
-/// Parses `RxC` (also `R x C`, `R X C`).
-fn parse_grid(s: &str) -> Option<(usize, usize)> {
+/// Parses a marker grid `RxC` (also `R x C`, `R X C`) with 1..[`MAX_GRID_SIDE`] rows and
+/// columns, the range of the FMU's and the C ABI's `grid.rows` and `grid.cols`; `None` for
+/// anything else. The one grid parser of the recordings and the command line.
+pub fn parse_grid(s: &str) -> Option<(usize, usize)> {
     let lower = s.trim().to_ascii_lowercase();
     let (r, c) = lower.split_once('x')?;
-    Some((r.trim().parse().ok()?, c.trim().parse().ok()?))
+    let (r, c) = (r.trim().parse().ok()?, c.trim().parse().ok()?);
+    let side = 1..=MAX_GRID_SIDE;
+    (side.contains(&r) && side.contains(&c)).then_some((r, c))
 }
 
 impl Recording {
@@ -158,28 +162,23 @@ impl Recording {
             let col_of = |key: &str| line.find(key).map_or(1, |b| b + 1);
             if let Some((key, value)) = body.split_once(':') {
                 match key.trim().to_ascii_lowercase().as_str() {
-                    "grid" => {
-                        let g = parse_grid(value).filter(|&(r, c)| {
-                            (1..=MAX_GRID_SIDE).contains(&r) && (1..=MAX_GRID_SIDE).contains(&c)
-                        });
-                        match g {
-                            Some(g) => {
-                                grid = Some(g);
-                                grid_line = no;
-                            }
-                            None => {
-                                return Err(parse_err(
-                                    name,
-                                    no,
-                                    col_of(value.trim()),
-                                    format!(
-                                        "bad grid `{}`: expected ROWSxCOLS with 1..{MAX_GRID_SIDE} each, e.g. `# grid: 10x6`",
-                                        value.trim()
-                                    ),
-                                ));
-                            }
+                    "grid" => match parse_grid(value) {
+                        Some(g) => {
+                            grid = Some(g);
+                            grid_line = no;
                         }
-                    }
+                        None => {
+                            return Err(parse_err(
+                                name,
+                                no,
+                                col_of(value.trim()),
+                                format!(
+                                    "bad grid `{}`: expected ROWSxCOLS with 1..{MAX_GRID_SIDE} each, e.g. `# grid: 10x6`",
+                                    value.trim()
+                                ),
+                            ));
+                        }
+                    },
                     "units" => {
                         units = match value.trim() {
                             "m" => Units::Metres,

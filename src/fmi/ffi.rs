@@ -12,20 +12,11 @@ use super::instance::{FmuState, Instance, LogSink, mask};
 use super::types::*;
 use super::uri::file_uri_to_path;
 use super::variables::table;
-use std::any::Any;
 use std::ffi::{CStr, CString};
 use std::os::raw::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use fmi2Status::{fmi2Error, fmi2OK};
-
-fn panic_message(payload: &(dyn Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "panic".to_string())
-}
 
 /// Runs `body` on the instance behind `c` if `function` is allowed in its state; panics are
 /// caught and reported. Every call is first logged under `logCalls` (when that category is
@@ -59,7 +50,7 @@ unsafe fn with_instance(
         Err(payload) => {
             let message = format!(
                 "{function}: internal error: {}",
-                panic_message(payload.as_ref())
+                crate::error::panic_message(payload.as_ref())
             );
             let _ = catch_unwind(AssertUnwindSafe(|| inst.fail(&message)));
             fmi2Error

@@ -9,9 +9,12 @@
 //! wall. Their poses come straight from the state vector ([`crate::dynamics::Layout`]):
 //!
 //! - rib r turns by theta_r about its unit hinge axis u_r through its head h_r:
-//!   `p -> h_r + R(u_r, theta_r) (p - h_r)` (Rodrigues, as in the dynamics' kinematics);
+//!   `p -> h_r + R(u_r, theta_r) (p - h_r)`;
 //! - the sternum is a free body with centre of mass x and orientation q:
 //!   `p -> x + R(q) (p - x0)`;
+//!
+//! both computed by the dynamics' kinematics ([`crate::dynamics::kinematics::rib_pose`],
+//! [`crate::dynamics::kinematics::sternum_pose`]);
 //! - a wall vertex moves by its displacement from rest.
 //!
 //! Only the points bound to the skin (the markers) are blended per state; the whole skin is
@@ -24,9 +27,10 @@ use super::skinning::{
 };
 use crate::anatomy::skin::{FitOptions, MarkerGrid, Registration, Skin, SkinOptions};
 use crate::anatomy::{Anatomy, Body, VertexRole};
+use crate::dynamics::kinematics::{rib_pose, sternum_pose};
 use crate::dynamics::{Layout, Model, RIBS};
 use crate::{Error, Result};
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Unit, Vector3};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -142,20 +146,14 @@ impl PoseRig {
     /// The pose of every handle at state `y` (length checked by the caller).
     fn poses_into(&self, sources: &[HandleSource], y: &[f64], out: &mut Vec<HandlePose>) {
         let l = &self.layout;
-        let q = &y[l.sternum_q..l.sternum_q + 4];
-        let rot = UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]));
-        let x = Point3::new(y[l.sternum_x], y[l.sternum_x + 1], y[l.sternum_x + 2]);
-        let sternum = Isometry3::from_parts(
-            Translation3::from(x.coords - rot * self.sternum_com.coords),
-            rot,
-        );
+        let sternum = sternum_pose(l, y, &self.sternum_com);
         out.clear();
         out.extend(sources.iter().map(|s| match *s {
-            HandleSource::Rib(r) if r < RIBS => {
-                let rot = UnitQuaternion::from_axis_angle(&self.rib_axis[r], y[l.theta + r]);
-                let h = self.rib_head[r].coords;
-                HandlePose::Rigid(Isometry3::from_parts(Translation3::from(h - rot * h), rot))
-            }
+            HandleSource::Rib(r) if r < RIBS => HandlePose::Rigid(rib_pose(
+                &self.rib_head[r],
+                &self.rib_axis[r],
+                y[l.theta + r],
+            )),
             HandleSource::Rib(_) | HandleSource::Spine | HandleSource::Clavicle => {
                 HandlePose::Rigid(Isometry3::identity())
             }

@@ -14,6 +14,7 @@
 //! abdomen are corrected by the constant volume the faceted dome cuts off the smooth one
 //! (computed when the anatomy is built), so that the levels of detail agree.
 
+mod envelope;
 pub mod markers;
 pub mod skinning;
 
