@@ -13,7 +13,8 @@
 # left in a binary, and the packaged FMU must stay at most 4 MB (4,000,000 bytes). Only the
 # cdylib is built for these targets (`cargo rustc --crate-type cdylib`: with the rlib beside
 # it, link-time optimisation would not run and the PE linker would keep the whole command-line
-# tool). win64 is skipped, saying why, when its toolchain cannot be had; linux64 cannot be
+# tool), and without the default feature `tools`, so the command-line tool, the benchmarks and
+# clap are not even compiled into it. win64 is skipped, saying why, when its toolchain cannot be had; linux64 cannot be
 # skipped.
 #
 # Usage: bash scripts/deploy.sh [--platforms linux64,win64] [--out fmu/BreathingTorso.fmu]
@@ -66,7 +67,7 @@ if wants linux64; then
   .venv/bin/python -m pip install -q --disable-pip-version-check -r python/requirements-deploy.txt
   command -v objdump >/dev/null || apt_install binutils || fail "objdump (binutils) is needed to check the glibc baseline"
   # cargo-zigbuild runs zig from the venv's `ziglang` package (python3 -m ziglang).
-  PATH="$ROOT/.venv/bin:$PATH" RUSTFLAGS="$CROSS_RUSTFLAGS" cargo-zigbuild rustc --profile fmu --lib --crate-type cdylib \
+  PATH="$ROOT/.venv/bin:$PATH" RUSTFLAGS="$CROSS_RUSTFLAGS" cargo-zigbuild rustc --profile fmu --lib --crate-type cdylib --no-default-features \
     --target "x86_64-unknown-linux-gnu.$GLIBC_BASELINE"
   LIB=target/x86_64-unknown-linux-gnu/fmu/libbreathing_torso.so
   [ -f "$LIB" ] || fail "cargo-zigbuild wrote no $LIB"
@@ -98,7 +99,7 @@ if wants win64; then
   WHY=""
   if win64_toolchain; then
     CARGO_TARGET_X86_64_PC_WINDOWS_GNU_LINKER=x86_64-w64-mingw32-gcc RUSTFLAGS="$CROSS_RUSTFLAGS" \
-      cargo rustc --profile fmu --lib --crate-type cdylib --target x86_64-pc-windows-gnu
+      cargo rustc --profile fmu --lib --crate-type cdylib --no-default-features --target x86_64-pc-windows-gnu
     DLL=target/x86_64-pc-windows-gnu/fmu/breathing_torso.dll
     [ -f "$DLL" ] || fail "cargo wrote no $DLL"
     # A DLL that needs a mingw runtime DLL (libgcc_s, libwinpthread) would not load on a

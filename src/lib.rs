@@ -18,11 +18,17 @@
 //! | [`model`] | the facade [`model::Torso`] |
 //! | [`fit`], [`stats`] | SLP recordings and fitting; validation statistics against spirometry |
 //! | [`fmi`], [`capi`] | the FMI 2.0 co-simulation layer and the native C ABI |
-//! | [`cli`] | the `torso` command-line tool |
+//! | `cli`, `bench` | the `torso` command-line tool and its measurements (feature `tools`) |
+//!
+//! The command-line tool and the benchmarks behind `torso bench` are compiled only with the
+//! default feature `tools`. The library shipped inside the FMU is built without it
+//! (`--no-default-features`, scripts/deploy.sh), so it carries neither them nor `clap`.
 
 pub mod anatomy;
+#[cfg(feature = "tools")]
 pub mod bench;
 pub mod capi;
+#[cfg(feature = "tools")]
 pub mod cli;
 pub mod dynamics;
 pub mod error;

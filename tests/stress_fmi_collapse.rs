@@ -12,14 +12,13 @@
 
 use breathing_torso::anatomy::{Posture, Sex, Subject};
 use breathing_torso::dynamics::pleural::capacity_ratios;
-use breathing_torso::fmi::instance::{
-    CAVITY_BOUNDS, FmuState, Instance, LogSink, Phase, cavity_bounds, mask,
-};
+use breathing_torso::fmi::instance::{FmuState, Instance, LogSink, Phase, mask};
 use breathing_torso::fmi::table;
 use breathing_torso::fmi::types::fmi2Status::{self, *};
 use breathing_torso::fmi::types::{fmi2LastSuccessfulTime, fmi2Terminated};
 use breathing_torso::fmi::variables::ScalarType;
 use breathing_torso::model::Snapshot;
+use breathing_torso::model::bounds::{CAVITY_BOUNDS, cavity_bounds};
 use std::cell::RefCell;
 use std::rc::Rc;
 

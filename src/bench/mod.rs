@@ -420,8 +420,8 @@ pub const LUNG_BOUNDS: (f64, f64) = (0.2, 15.0);
 /// Bounds on every cavity volume (thorax, abdomen, trunk) relative to its value at the start
 /// of a stress run (the rest state): a wall that halves or doubles a cavity has blown up. The
 /// thorax's widen to the subject's residual volume and total lung capacity where those lie
-/// beyond ([`crate::dynamics::pleural::cavity_bounds`]).
-pub const RELATIVE_VOLUME_BOUNDS: (f64, f64) = crate::dynamics::pleural::CAVITY_BOUNDS;
+/// beyond ([`crate::model::bounds::cavity_bounds`]).
+pub const RELATIVE_VOLUME_BOUNDS: (f64, f64) = crate::model::bounds::CAVITY_BOUNDS;
 
 /// Outcome of one stress scene.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -470,7 +470,7 @@ pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneO
     for (s, q) in start.iter_mut().zip(cavities) {
         *s = torso.read(q)?;
     }
-    let bounds = crate::dynamics::pleural::cavity_bounds(&torso.config().subject);
+    let bounds = crate::model::bounds::cavity_bounds(&torso.config().subject);
     for i in 0..=frames {
         if i > 0 {
             match torso.advance_to(t0 + i as f64 / rate) {

@@ -58,7 +58,7 @@ pub struct Monitor {
     pub ratios: [(f64, f64); 3],
     /// Checks made.
     pub checks: u64,
-    /// Bounds of each cavity's ratio (the subject's: `dynamics::pleural::cavity_bounds`).
+    /// Bounds of each cavity's ratio (the subject's: `model::bounds::cavity_bounds`).
     pub bounds: [(f64, f64); 3],
 }
 
@@ -80,7 +80,7 @@ impl Monitor {
             lung: (f64::INFINITY, f64::NEG_INFINITY),
             ratios: [(f64::INFINITY, f64::NEG_INFINITY); 3],
             checks: 0,
-            bounds: crate::dynamics::pleural::cavity_bounds(&torso.config().subject),
+            bounds: crate::model::bounds::cavity_bounds(&torso.config().subject),
         })
     }
 

@@ -21,7 +21,7 @@ use super::variables::{
     Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output, table,
 };
 use crate::anatomy::MuscleGroup;
-use crate::model::{Checkpoint, Config, Quantity, Snapshot, Torso};
+use crate::model::{Checkpoint, Config, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -164,33 +164,7 @@ const ALL_CATEGORIES: u32 = (1 << 6) - 1;
 /// instance's time.
 pub const TIME_TOLERANCE: f64 = 1e-9;
 
-pub use crate::dynamics::pleural::{CAPACITY_SLACK, CAVITY_BOUNDS, cavity_bounds};
-
-/// The cavity volumes checked against [`cavity_bounds`], with their FMI names.
-const CHECKED_VOLUMES: [(Quantity, &str); 3] = [
-    (Quantity::ThoraxVolume, "volume.thorax"),
-    (Quantity::AbdomenVolume, "volume.abdomen"),
-    (Quantity::TrunkVolume, "volume.trunk"),
-];
-
-/// Why the state of `torso` is unphysical: a non-finite state variable, or a cavity volume
-/// outside its [`cavity_bounds`] x `rest`; `None` when it is within bounds.
-fn physiology_violation(torso: &mut Torso, rest: &[f64; 3]) -> Result<Option<String>> {
-    let bounds = cavity_bounds(&torso.config().subject);
-    if let Some(i) = torso.state().iter().position(|v| !v.is_finite()) {
-        return Ok(Some(format!("state variable {i} is not finite")));
-    }
-    for (((q, name), r), (lo, hi)) in CHECKED_VOLUMES.into_iter().zip(rest).zip(bounds) {
-        let v = torso.read(q)?;
-        let ratio = v / r;
-        if !(ratio.is_finite() && (lo..=hi).contains(&ratio)) {
-            return Ok(Some(format!(
-                "{name} = {v:.4} L is {ratio:.3} x its rest value {r:.4} L, outside the physiological bounds [{lo:.3}, {hi:.3}] x rest (the subject's residual volume to total lung capacity, with room)"
-            )));
-        }
-    }
-    Ok(None)
-}
+use crate::model::bounds::{CHECKED_VOLUMES, physiology_violation};
 
 /// An FMU instance.
 pub struct Instance {

@@ -13,6 +13,7 @@
 //! # Ok::<(), breathing_torso::Error>(())
 //! ```
 
+pub mod bounds;
 mod config;
 mod drive;
 mod quantity;

@@ -30,7 +30,7 @@
 //! half the overlap (the lag search compares at least half the records at every lag).
 
 use super::io::Series;
-use super::resample::{rate_ratio, resample_poly};
+use super::resample::{gcd, rate_ratio, resample_poly};
 use crate::{Error, Result};
 use serde::Serialize;
 
@@ -114,10 +114,6 @@ pub fn edge_samples(up: usize, down: usize) -> usize {
     let g = gcd(up, down);
     let (up, down) = (up / g, down / g);
     (10 * up.max(down)).div_ceil(down)
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// Cumulative trapezoid integral of `y(t)`, starting at zero.

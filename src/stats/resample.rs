@@ -16,8 +16,8 @@
 use super::special::bessel_i0;
 use crate::{Error, Result};
 
-/// Greatest common divisor.
-fn gcd(a: usize, b: usize) -> usize {
+/// Greatest common divisor (Euclid), which reduces resampling ratios.
+pub(crate) fn gcd(a: usize, b: usize) -> usize {
     if b == 0 { a } else { gcd(b, a % b) }
 }
 
