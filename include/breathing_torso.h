@@ -192,7 +192,8 @@ typedef struct BtConfig {
    */
   struct BtDrive drive;
   /**
-   * Lung volume as a fraction of the thoracic volume, 0.3-1.
+   * Lung volume as a fraction of the thoracic volume at rest, 0.3-1; the rest (heart,
+   * mediastinum) keeps its volume, so lung and thoracic volumes change one to one.
    */
   double lung_ratio;
   /**
@@ -482,7 +483,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{7a13ce02-0433-b26a-d8f2-a250ceb84e63}"
+#define BT_FMI_GUID "{418f76df-c948-3365-c69a-f1669457e9e0}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u

@@ -43,10 +43,11 @@ impl Ode for Rhs {
 /// at the end falls at least as 2^4.5 when the step halves, so no switch in the right-hand
 /// side spoils the order (a kink would bring it down to 1-2). With the transverse inertia of
 /// `dynamics::inertia` the fastest modes are slow and well damped enough that the error
-/// falls faster than h^5 between 20 and 5 ms (3.1e-9, 2.2e-11 and 2.9e-14 L at 200, 400 and
-/// 800 steps: observed orders 7.2 and 9.5) and reaches the rounding of the 3.5 L volume
-/// before the asymptotic h^5 regime shows; 40 ms steps are beyond Dormand-Prince's
-/// stability. The test therefore asserts the lower side only, on 10 and 5 ms.
+/// falls faster than h^5 (3.3e-9 and 5.2e-12 L at 200 and 400 steps, 20 and 10 ms: observed
+/// order 9.3) and reaches the rounding floor of the summed volume, about 1e-12 L, at 5 ms
+/// (7.5e-13 L at 800 steps), before the asymptotic h^5 regime shows; 40 ms steps are beyond
+/// Dormand-Prince's stability. The test therefore asserts the lower side only, on 20 and 10
+/// ms, and that 5 ms reaches the floor.
 #[test]
 fn dormand_prince_shows_its_order_over_a_breath() {
     let mut torso = Torso::new(config(0, 1e-10, false)).expect("builds");
@@ -65,8 +66,8 @@ fn dormand_prince_shows_its_order_over_a_breath() {
         ode.0.read(Quantity::LungVolume).expect("reads")
     };
     let reference = run(&mut ode, 6400.0);
-    // 10 and 5 ms (doc above)
-    let steps = [400.0, 800.0];
+    // 20 and 10 ms (doc above)
+    let steps = [200.0, 400.0];
     let errors: Vec<f64> = steps
         .iter()
         .map(|&k| (run(&mut ode, k) - reference).abs())
@@ -79,6 +80,9 @@ fn dormand_prince_shows_its_order_over_a_breath() {
             "observed order {order:.2} (errors {errors:?} at {steps:?} steps)"
         );
     }
+    let floor = (run(&mut ode, 800.0) - reference).abs();
+    println!("lung-volume error {floor:e} L at 800 steps");
+    assert!(floor < 1e-11, "5 ms steps leave {floor} L");
 }
 
 /// 1000 frames at rtol 1e-6: rejected steps under 2 % of the accepted ones, and the lung

@@ -135,8 +135,8 @@ fn simulate_prints_a_readable_drive_and_warns_on_short_runs() {
     assert!(!out.contains("Drive {") && !out.contains("Wave {"), "{out}");
     assert!(
         out.contains("drive: 0.25 Hz (15.0 breaths/min)")
-            && out.contains("ribs 0.120 at +0.000 rad")
-            && out.contains("diaphragm 0.300 at +0.100 rad"),
+            && out.contains("ribs 0.096 at +0.000 rad")
+            && out.contains("diaphragm 0.240 at +0.100 rad"),
         "{out}"
     );
     assert!(

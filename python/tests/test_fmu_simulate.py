@@ -94,15 +94,15 @@ def test_default_fmu_breathes_the_quiet_scenario():
     from fmpy import read_model_description
     md = read_model_description(fmu_path())
     start = {v.name: v.start for v in md.modelVariables}
-    # Drive::quiet (src/model/drive.rs): 0.25 Hz, ribs 0.12, diaphragm 0.30 0.1 rad ahead.
+    # Drive::quiet (src/model/drive.rs): 0.25 Hz, ribs 0.096, diaphragm 0.24 0.1 rad ahead.
     assert start["drive.enabled"] == "true"
     assert [float(start[n]) for n in ["drive.frequency", "drive.ribs.amplitude", "drive.diaphragm.amplitude",
                                       "drive.diaphragm.phase", "drive.abdominals.amplitude"]] == [
-        0.25, 0.12, 0.30, 0.1, 0.0]
+        0.25, 0.096, 0.24, 0.1, 0.0]
     r = simulate_fmu(fmu_path(), stop_time=20.0, output_interval=1 / 56, output=["volume.lung"])
-    # The quiet breath of the README's table (0.50 L, tests/physiology.rs), here over five
+    # The quiet breath of the README's table (0.526 L, tests/physiology.rs), here over five
     # breaths from rest.
-    assert abs(np.ptp(r["volume.lung"]) - 0.50) < 0.01, np.ptp(r["volume.lung"])
+    assert abs(np.ptp(r["volume.lung"]) - 0.526) < 0.01, np.ptp(r["volume.lung"])
 
 
 def test_drive_enabled_switches_the_drive_between_steps():

@@ -124,7 +124,8 @@ pub struct BtConfig {
     pub solver_max_step: f64,
     /// The drive.
     pub drive: BtDrive,
-    /// Lung volume as a fraction of the thoracic volume, 0.3-1.
+    /// Lung volume as a fraction of the thoracic volume at rest, 0.3-1; the rest (heart,
+    /// mediastinum) keeps its volume, so lung and thoracic volumes change one to one.
     pub lung_ratio: f64,
     /// Activation gain of the left side, 0-2.
     pub gain_left: f64,

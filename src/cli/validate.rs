@@ -5,7 +5,7 @@
 use crate::stats::autoreg::ArGlsConfig;
 use crate::stats::bars::BarsConfig;
 use crate::stats::io::{Series, Table, read_table, write_csv};
-use crate::stats::prepare::{DEFAULT_LUNG_RATIO, PrepareOptions, SpiroKind};
+use crate::stats::prepare::{PrepareOptions, SpiroKind};
 use crate::stats::synth::{SpiroSynthOptions, VolumeSource, synth_spirometry};
 use crate::stats::validation::{ValidationOptions, summary_markdown, validate, write_outputs};
 use crate::{Error, Result};
@@ -28,12 +28,11 @@ pub struct ValidateArgs {
     /// else `volume`).
     #[arg(long)]
     pub sim_column: Option<String>,
-    /// Lung-to-thoracic volume ratio applied to the simulation (implies it is thoracic).
-    #[arg(long, conflicts_with = "sim_is_thoracic")]
-    pub lung_ratio: Option<f64>,
-    /// The simulation column is the thoracic-cavity volume: apply the default ratio 0.75.
+    /// Factor applied to the simulated volume, for a model whose lungs change as a fraction
+    /// of a thoracic volume (the thesis's 0.75, section 4.2); this model's `volume.thorax`
+    /// changes one to one with `volume.lung`, so either compares as it is (default 1).
     #[arg(long)]
-    pub sim_is_thoracic: bool,
+    pub lung_ratio: Option<f64>,
     /// Largest alignment lag searched [frames at the simulation's rate].
     #[arg(long, default_value_t = 100)]
     pub max_lag: usize,
@@ -135,11 +134,7 @@ pub fn options(args: &ValidateArgs) -> Result<ValidationOptions> {
             "more than the burn-in of 200",
         ));
     }
-    let lung_ratio = match (args.lung_ratio, args.sim_is_thoracic) {
-        (Some(r), _) => r,
-        (None, true) => DEFAULT_LUNG_RATIO,
-        (None, false) => 1.0,
-    };
+    let lung_ratio = args.lung_ratio.unwrap_or(1.0);
     Ok(ValidationOptions {
         prepare: PrepareOptions {
             lung_ratio,

@@ -26,8 +26,8 @@ pub mod pleural;
 pub mod state;
 
 pub use model::{
-    Carrier, Elements, Model, PASSIVE, PATH_CORE, RIBS, VIA, VectorSprings, path_length,
-    via_segment_length, volume,
+    Carrier, Elements, Model, PASSIVE, PATH_CORE, REST_LUNG_FRACTION, RIBS, VIA, VectorSprings,
+    path_length, via_segment_length, volume,
 };
 pub use params::{
     DIAPHRAGM_CONTRACTION_UPRIGHT, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,

@@ -11,6 +11,16 @@ use nalgebra::{Matrix3, Point3, Vector3};
 /// Number of rib bodies.
 pub const RIBS: usize = 24;
 
+/// Rest lung volume as a fraction of the thoracic cavity volume, the thesis's split (Maldonado
+/// 2011, section 4.2: lung volume 0.75 x thoracic volume). Only the rest split: the rest of the
+/// cavity (heart, great vessels, mediastinum) keeps its volume over a breath, so lung volume
+/// changes equal thoracic volume changes, as optoelectronic plethysmography shows against
+/// spirometry (Aliverti et al. 2001, Am J Respir Crit Care Med 164:1016: chest-wall displaced
+/// volume within -4.2 +- 6.2 % of spirometry in quiet breathing). For the default man the split
+/// leaves 1.13 L of non-lung volume (rest thorax 4.51 L, `torso simulate`: end-expiratory lung
+/// volume 3.385 L at 0.75).
+pub const REST_LUNG_FRACTION: f64 = 0.75;
+
 /// Code of an element's group when it is passive (membrane).
 pub const PASSIVE: u8 = u8::MAX;
 
@@ -245,8 +255,21 @@ pub struct Model {
     pub dome_faceting_volume: f64,
     /// Pressure-volume law of the lungs: the pleural pressure is `-pleural.recoil(V_thorax)`
     /// (linear about rest with slope `params.lung_elastance`, bounded by the subject's
-    /// residual volume and total lung capacity).
+    /// residual volume and total lung capacity). Since the lung volume is the thoracic
+    /// volume less the constant [`Model::non_lung_volume`], the law is the lungs' own,
+    /// expressed on the thoracic mesh: its slope is the lung elastance per litre of lung, and
+    /// its asymptotes sit where the lungs reach the subject's RV and TLC.
     pub pleural: PleuralLaw,
+    /// Rest lung volume as a fraction of the observed thoracic cavity's rest volume
+    /// ([`REST_LUNG_FRACTION`] unless set by [`Model::set_lung_fraction`]).
+    pub lung_fraction: f64,
+    /// Intrathoracic volume that is not lung [m^3]: heart, great vessels and the rest of the
+    /// mediastinum, `(1 - lung_fraction)` x the observed thorax at rest, constant over a
+    /// breath, so that a change of thoracic volume is the same change of lung volume.
+    pub non_lung_volume: f64,
+    /// The subject's RV/FRC and TLC/FRC ([`capacity_ratios`]), where the lungs meet the
+    /// pleural law's asymptotes relative to their rest volume.
+    pub capacity: (f64, f64),
     /// Gravity vector [m/s^2].
     pub gravity: Vector3<f64>,
     /// Anchor at the middle of the sternum (for its displacement).
@@ -452,19 +475,10 @@ impl Model {
         let thorax_triangles = anatomy.thorax_triangles();
         let abdomen_rest_volume = volume(&rest, &abdomen_triangles);
         let thorax_rest_volume = volume(&rest, &thorax_triangles);
-        // The capacity ratios hold for the observed thorax (the mesh's less the dome's
-        // faceting volume d): an asymptote at r x (V0 - d) observed is at d + r (V0 - d) on
-        // the mesh, i.e. at the ratio (d + r (V0 - d)) / V0 of the mesh's rest volume.
         let d = ab.dome_faceting_volume;
-        let on_mesh = |r: f64| (d + r * (thorax_rest_volume - d)) / thorax_rest_volume;
-        let (rv, tlc) = capacity_ratios(&anatomy.subject);
-        let pleural = PleuralLaw::new(
-            thorax_rest_volume,
-            params.lung_elastance,
-            (on_mesh(rv), on_mesh(tlc)),
-            params.pleural_barrier_pressure,
-            params.pleural_barrier_margin,
-        );
+        let capacity = capacity_ratios(&anatomy.subject);
+        let (pleural, non_lung_volume) =
+            pleural_law(capacity, &params, thorax_rest_volume, d, REST_LUNG_FRACTION);
         let st = &anatomy.sternum;
         let sternum_com = st.centre_of_mass();
         rest.push(nalgebra::center(&st.angle, &st.xiphisternal));
@@ -544,6 +558,9 @@ impl Model {
             thorax_rest_volume,
             dome_faceting_volume: ab.dome_faceting_volume,
             pleural,
+            lung_fraction: REST_LUNG_FRACTION,
+            non_lung_volume,
+            capacity,
             gravity,
             sternum_probe,
             airway_resistance: 1.0
@@ -595,6 +612,23 @@ impl Model {
         }
     }
 
+    /// Sets the rest split of the thoracic cavity: the lungs fill `fraction` of it at rest
+    /// and the non-lung volume (heart, great vessels, mediastinum) the rest, constant over a
+    /// breath. The pleural law's asymptotes follow (the lungs meet the subject's RV and TLC, [`Model::capacity`]);
+    /// its slope, the lung elastance, does not depend on the split.
+    pub fn set_lung_fraction(&mut self, fraction: f64) {
+        let (pleural, non_lung) = pleural_law(
+            self.capacity,
+            &self.params,
+            self.thorax_rest_volume,
+            self.dome_faceting_volume,
+            fraction,
+        );
+        self.pleural = pleural;
+        self.non_lung_volume = non_lung;
+        self.lung_fraction = fraction;
+    }
+
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
     /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
     /// pleural law's asymptotes, barrier pressure and margin, and gravity), so that a snapshot is only restored into the model it was taken from.
@@ -637,6 +671,33 @@ impl Model {
             .get(self.elements.group[e] as usize)
             .copied()
     }
+}
+
+/// The pleural law on the thoracic mesh and the non-lung volume, for a thorax whose mesh rest
+/// volume is `mesh_rest` and whose faceted dome falls short of the smooth one by `faceting`
+/// (the observed thorax is the mesh's less it), with lungs filling `fraction` of the observed
+/// thorax at rest. The lungs' rest volume L0 is the model's functional residual capacity; the
+/// subject's RV/FRC and TLC/FRC (`rv`, `tlc`: [`capacity_ratios`]) place the asymptotes at r L0 of lung,
+/// that is at d + V_nl + r L0 on the mesh.
+fn pleural_law(
+    (rv, tlc): (f64, f64),
+    params: &Params,
+    mesh_rest: f64,
+    faceting: f64,
+    fraction: f64,
+) -> (PleuralLaw, f64) {
+    let observed = mesh_rest - faceting;
+    let lung_rest = fraction * observed;
+    let non_lung = observed - lung_rest;
+    let on_mesh = |r: f64| (faceting + non_lung + r * lung_rest) / mesh_rest;
+    let law = PleuralLaw::new(
+        mesh_rest,
+        params.lung_elastance,
+        (on_mesh(rv), on_mesh(tlc)),
+        params.pleural_barrier_pressure,
+        params.pleural_barrier_margin,
+    );
+    (law, non_lung)
 }
 
 #[cfg(test)]

@@ -38,9 +38,10 @@ use crate::anatomy::Subject;
 /// et al. 1993, Eur Respir J 6 Suppl 16:5-40) give a subject's residual volume, functional
 /// residual capacity and total lung capacity; the model's rest state (muscles relaxed) is its
 /// functional residual capacity, so the limits are placed at the same multiples of the rest
-/// thoracic volume as RV / FRC and TLC / FRC. Since the lung volume is a fixed ratio of the
-/// thoracic volume (thesis 4.2), the lung volume then meets the limits at the subject's RV and
-/// TLC scaled to the model's own FRC, whatever the generated geometry's size.
+/// lung volume as RV / FRC and TLC / FRC: the lungs meet them at the subject's RV and TLC
+/// scaled to the model's own FRC, whatever the generated geometry's size. The lung volume is
+/// the thoracic volume less the constant non-lung volume, so the model places them on the
+/// thoracic mesh at that volume plus each limit (`dynamics::Model::set_lung_fraction`).
 pub fn capacity_ratios(subject: &Subject) -> (f64, f64) {
     let frc = subject.frc_ecsc();
     let rv = subject.rv_ecsc() / frc;

@@ -761,7 +761,7 @@ fn build() -> Vec<Variable> {
         );
     }
     params.extend([
-        par("lung.ratio", 120, Real, P::LungRatio, "Lung volume as a fraction of the thoracic cavity volume (thesis 4.2)")
+        par("lung.ratio", 120, Real, P::LungRatio, "Lung volume as a fraction of the thoracic cavity volume at rest (thesis 4.2); the rest, heart and mediastinum, is constant over a breath")
             .range(0.3, 1.0),
         par("gain.left", 121, Real, P::GainLeft, "Activation gain of the subject's left side (1: healthy)").range(0.0, 2.0),
         par("gain.right", 122, Real, P::GainRight, "Activation gain of the subject's right side (1: healthy)").range(0.0, 2.0),
@@ -809,7 +809,7 @@ fn build() -> Vec<Variable> {
             1000,
             Q::LungVolume,
             "L",
-            "Lung volume = lung.ratio x thoracic volume (thesis 4.2)",
+            "Lung volume = thoracic volume - the constant non-lung volume (heart, mediastinum; lung.ratio of the thorax at rest)",
         )
         .0,
         out(

@@ -78,7 +78,9 @@ pub struct Config {
     pub solver: SolverConfig,
     /// Sinusoidal drive (tunable while running).
     pub drive: Drive,
-    /// Lung volume as a fraction of the thoracic cavity volume (thesis 4.2: 0.75), in [0.3, 1].
+    /// Lung volume as a fraction of the thoracic cavity volume at rest (thesis 4.2: 0.75), in
+    /// [0.3, 1]; the rest of the cavity (heart, great vessels, mediastinum) keeps its volume
+    /// over a breath, so thoracic volume changes are lung volume changes one to one.
     pub lung_ratio: f64,
     /// Activation gain of the subject's left side, in [0, 2] (1: healthy).
     pub gain_left: f64,
@@ -104,7 +106,7 @@ impl Default for Config {
             scene: Scene::default(),
             solver: SolverConfig::default(),
             drive: Drive::default(),
-            lung_ratio: 0.75,
+            lung_ratio: crate::dynamics::REST_LUNG_FRACTION,
             gain_left: 1.0,
             gain_right: 1.0,
             subject_mesh_dir: None,

@@ -64,22 +64,27 @@ pub const PHASE_RANGE: (f64, f64) = (-2.0 * PI, 2.0 * PI);
 
 impl Drive {
     /// Quiet breathing: 15 breaths/min, the diaphragm fired slightly first (thesis Table 4.3:
-    /// in 7 of 9 quiet breaths). The amplitudes are this model's: A_ribs 0.12 and
-    /// A_diaphragm 0.30 give the default upright subject a quiet breath with upper-chest skin
-    /// moving 2-6 mm and the skin near the umbilicus moving mostly ventrally, as measured on
-    /// seated subjects (De Groote et al. 1997), with a 0.50 L tidal volume. The thesis's own
-    /// fitted upright quiet amplitudes (Table 4.3: A_ribs 0.12-0.25, A_diaphragm 0.13-0.31)
-    /// belong to its model and are, as it notes in 4.3.2, simulation-dependent.
+    /// in 7 of 9 quiet breaths). The amplitudes are this model's: A_ribs 0.096 and
+    /// A_diaphragm 0.24 give the default upright subject (75 kg) a 0.526 L tidal volume, the
+    /// 7 mL/kg of quiet breathing (about 0.5 L, 12-16 breaths/min; e.g. West, Respiratory
+    /// Physiology: The Essentials), with upper-chest skin moving a few millimetres and the
+    /// skin near the umbilicus moving mostly ventrally, as measured on seated subjects (De
+    /// Groote et al. 1997). Their ratio, 0.4, is the one the drive had when the lungs were
+    /// read as 0.75 of the thorax; the lung now follows the thoracic volume one to one and
+    /// both amplitudes were scaled by 0.8 to keep the breath quiet (`torso simulate
+    /// --diaphragm-amplitude 0.24 --ribs-amplitude 0.096`). The thesis's own fitted upright
+    /// quiet amplitudes (Table 4.3: A_ribs 0.12-0.25, A_diaphragm 0.13-0.31, ratio 0.64 on
+    /// average) belong to its model and are, as it notes in 4.3.2, simulation-dependent.
     pub fn quiet() -> Self {
         Drive {
             enabled: true,
             frequency: 0.25,
             ribs: Wave {
-                amplitude: 0.12,
+                amplitude: 0.096,
                 phase: 0.0,
             },
             diaphragm: Wave {
-                amplitude: 0.30,
+                amplitude: 0.24,
                 phase: 0.1,
             },
             abdominals: Wave::default(),
@@ -88,23 +93,26 @@ impl Drive {
 
     /// Forced (deep) breathing: 12 breaths/min, the rib cage fired slightly first (thesis
     /// Table 4.3: in 7 of 9 forced breaths), the abdominal muscles helping expiration, as in
-    /// deep breathing. A_ribs 0.35 and A_diaphragm 0.6 move the default subject's markers
-    /// about three times as far as [`Drive::quiet`] with a 1.6 L tidal volume (thesis Table
-    /// 4.3, forced: A_ribs 0.12-0.38, A_diaphragm 0.23-0.51).
+    /// deep breathing. A_ribs 0.28, A_diaphragm 0.48 and A_abdominals 0.4 move the default
+    /// subject's markers about three times as far as [`Drive::quiet`] (Kaneko & Horie 2012:
+    /// about 3x for deep breathing) with a 1.71 L tidal volume (deep breathing 1.5-3 L). They
+    /// are the amplitudes calibrated that way when the lungs were read as 0.75 of the thorax
+    /// (0.35 / 0.6 / 0.5), scaled by the same 0.8 as the quiet drive (thesis Table 4.3,
+    /// forced: A_ribs 0.12-0.38, A_diaphragm 0.23-0.51).
     pub fn forced() -> Self {
         Drive {
             enabled: true,
             frequency: 0.2,
             ribs: Wave {
-                amplitude: 0.35,
+                amplitude: 0.28,
                 phase: 0.0,
             },
             diaphragm: Wave {
-                amplitude: 0.6,
+                amplitude: 0.48,
                 phase: -0.1,
             },
             abdominals: Wave {
-                amplitude: 0.5,
+                amplitude: 0.4,
                 phase: 0.0,
             },
         }

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 pub enum Quantity {
     /// Simulated time [s].
     Time,
-    /// Lung volume = lung ratio x thoracic volume [L] (thesis 4.2).
+    /// Lung volume = thoracic volume - the non-lung volume (heart, great vessels,
+    /// mediastinum: `lung.ratio` sets the rest split, thesis 4.2), constant over a breath [L].
     LungVolume,
     /// Thoracic cavity volume = trunk - abdomen [L].
     ThoraxVolume,

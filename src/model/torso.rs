@@ -60,7 +60,8 @@ impl Compiled {
             .params
             .clone()
             .unwrap_or_else(|| Params::for_posture(config.subject.posture));
-        let model = Model::compile(&anatomy, params);
+        let mut model = Model::compile(&anatomy, params);
+        model.set_lung_fraction(config.lung_ratio);
         Ok(Compiled::from_model(anatomy, model))
     }
 
@@ -178,6 +179,13 @@ impl Torso {
     pub fn with_compiled(config: Config, compiled: Arc<Compiled>) -> Result<Torso> {
         config.validate()?;
         let model = &compiled.model;
+        if model.lung_fraction != config.lung_ratio {
+            return Err(Error::invalid(
+                "lung.ratio",
+                config.lung_ratio,
+                format!("{} (the compiled model's rest split)", model.lung_fraction),
+            ));
+        }
         let y = dynamics::rest_state(model);
         let integrator = Integrator::new(config.solver.method, solver_options(&config), y.len())
             .map_err(|e| Error::invalid("solver", e.to_string(), "valid solver options"))?;
@@ -325,7 +333,7 @@ impl Torso {
         let litres = 1e3;
         Ok(match quantity {
             Quantity::Time => self.time,
-            Quantity::LungVolume => self.observation().thorax * litres * self.config.lung_ratio,
+            Quantity::LungVolume => self.observation().lung * litres,
             Quantity::ThoraxVolume => self.observation().thorax * litres,
             Quantity::AbdomenVolume => self.observation().abdomen * litres,
             Quantity::TrunkVolume => self.observation().trunk * litres,

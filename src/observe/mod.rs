@@ -10,7 +10,10 @@
 //! the horizontal plane through the lowest point of the costal margin gives the displaced
 //! compartments of optoelectronic plethysmography, rib cage above and abdomen below, which
 //! add up to the trunk's volume change.
-//! V_thorax = V_trunk - V_abdomen and V_lung = ratio x V_thorax (thesis 4.2). The thorax and
+//! V_thorax = V_trunk - V_abdomen and V_lung = V_thorax - V_non-lung, the heart's, great
+//! vessels' and mediastinum's volume, constant over a breath ([`Model::non_lung_volume`]: the
+//! thesis's 0.75 lung split at rest, section 4.2), so that lung volume changes are thoracic
+//! ones, as optoelectronic plethysmography measures them against spirometry. The thorax and
 //! abdomen are corrected by the constant volume the faceted dome cuts off the smooth one
 //! (computed when the anatomy is built), so that the levels of detail agree.
 
@@ -27,6 +30,8 @@ use nalgebra::{Point3, Vector3};
 pub struct Observation {
     /// Thoracic cavity volume [m^3].
     pub thorax: f64,
+    /// Lung volume [m^3]: the thorax less the non-lung volume.
+    pub lung: f64,
     /// Abdominal cavity volume [m^3].
     pub abdomen: f64,
     /// Trunk cavity volume [m^3].
@@ -160,6 +165,7 @@ pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) 
     let probe = model.sternum_probe as usize;
     Observation {
         thorax,
+        lung: thorax - model.non_lung_volume,
         abdomen,
         trunk: thorax + abdomen,
         rib_cage_displaced,

@@ -8,8 +8,9 @@
 //! 2. the spirogram is resampled to the simulation's rate by the polyphase filter of
 //!    [`resample`](super::resample) (100 -> 56 Hz is 14/25), and the samples at each end
 //!    that the filter's zero padding reaches ([`edge_samples`], 10 at 14/25) are dropped;
-//! 3. the simulated volume is multiplied by the lung ratio when it is a thoracic-cavity
-//!    volume (0.75 by default, thesis 4.2);
+//! 3. the simulated volume is multiplied by the lung ratio, for a simulation whose lungs
+//!    change as a fraction of its thoracic volume (the thesis's 0.75, section 4.2; 1 for this
+//!    model, whose lung and thoracic volumes change one to one);
 //! 4. the two time columns are read as one clock: simulation sample `i` at `t_i` meets the
 //!    spirogram at `t_i + lag / fs`, and the lag in `[-max_lag, max_lag]` frames maximising
 //!    the normalised cross-correlation (Pearson correlation over the overlapping samples of
@@ -43,9 +44,6 @@ pub enum SpiroKind {
     /// Flow [L/s], integrated.
     Flow,
 }
-
-/// Default lung-to-thoracic-cavity volume ratio (thesis 4.2, from the Zygote model).
-pub const DEFAULT_LUNG_RATIO: f64 = 0.75;
 
 /// Options of [`prepare`].
 #[derive(Debug, Clone, Copy, Serialize)]
