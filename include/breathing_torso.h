@@ -311,6 +311,17 @@ int bt_set_activation(struct BtTorso *h, int group, double value);
 int bt_set_activation_by_name(struct BtTorso *h, const char *name, double value);
 
 /**
+ * Sets the pressure at the airway opening relative to the body surface [Pa] (FMI input
+ * `pressure.airway_opening`; 0 breathing air, a ventilator's pressure, within +-50 cmH2O).
+ * It reaches the alveolar and pleural pressures at once and the volumes through the
+ * dynamics; a rejected value (`BT_ERR_INVALID`) changes nothing.
+ *
+ * # Safety
+ * `h` must be NULL or a live handle.
+ */
+int bt_set_airway_opening(struct BtTorso *h, double pascal);
+
+/**
  * Replaces the drive (validated; on error nothing changes).
  *
  * # Safety
@@ -483,7 +494,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{418f76df-c948-3365-c69a-f1669457e9e0}"
+#define BT_FMI_GUID "{b639b285-8414-96db-6c44-bea5a45bb19e}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -494,6 +505,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_ACTIVATION_RECTUS_ABDOMINIS 6u
 #define BT_VR_ACTIVATION_EXTERNAL_OBLIQUES 7u
 #define BT_VR_ACTIVATION_INTERNAL_OBLIQUES 8u
+#define BT_VR_PRESSURE_AIRWAY_OPENING 9u
 #define BT_VR_SUBJECT_SEX 200u
 #define BT_VR_SUBJECT_AGE 100u
 #define BT_VR_SUBJECT_STATURE 101u
@@ -528,6 +540,9 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_VOLUME_ABDOMEN_DISPLACED 1005u
 #define BT_VR_PRESSURE_ABDOMEN 1006u
 #define BT_VR_DIAPHRAGM_DISPLACEMENT 1007u
+#define BT_VR_PRESSURE_PLEURAL 1011u
+#define BT_VR_PRESSURE_ALVEOLAR 1012u
+#define BT_VR_FLOW_AIRWAY 1013u
 #define BT_VR_STERNUM_DISPLACEMENT_X 1008u
 #define BT_VR_STERNUM_DISPLACEMENT_Y 1009u
 #define BT_VR_STERNUM_DISPLACEMENT_Z 1010u

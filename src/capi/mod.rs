@@ -580,6 +580,18 @@ pub unsafe extern "C" fn bt_set_activation_by_name(
     }
 }
 
+/// Sets the pressure at the airway opening relative to the body surface [Pa] (FMI input
+/// `pressure.airway_opening`; 0 breathing air, a ventilator's pressure, within +-50 cmH2O).
+/// It reaches the alveolar and pleural pressures at once and the volumes through the
+/// dynamics; a rejected value (`BT_ERR_INVALID`) changes nothing.
+///
+/// # Safety
+/// `h` must be NULL or a live handle.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn bt_set_airway_opening(h: *mut BtTorso, pascal: f64) -> c_int {
+    unsafe { with_handle(h, |b| Ok(b.torso.set_airway_opening(pascal)?)) }
+}
+
 /// Replaces the drive (validated; on error nothing changes).
 ///
 /// # Safety
@@ -647,7 +659,7 @@ pub unsafe extern "C" fn bt_time(h: *mut BtTorso, t: *mut f64) -> c_int {
 fn read_variable(b: &mut BtTorso, var: &crate::fmi::variables::Variable) -> Result<f64> {
     match var.role {
         Role::Time => Ok(b.torso.time()),
-        Role::Input(g) => Ok(b.torso.activation_input(g)),
+        Role::Input(input) => Ok(input.value(&b.torso)),
         Role::Parameter(p) => match p.get(b.torso.config()) {
             crate::fmi::variables::Value::Real(x) => Ok(x),
             crate::fmi::variables::Value::Integer(i) => Ok(f64::from(i)),

@@ -26,4 +26,4 @@ pub(crate) use drive::check;
 pub use drive::{Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::{Checkpoint, Snapshot};
-pub use torso::{AdvanceStats, Compiled, Sample, Torso};
+pub use torso::{AIRWAY_OPENING_RANGE, AdvanceStats, Compiled, Sample, Torso};

@@ -27,6 +27,14 @@ pub enum Quantity {
     AbdominalPressure,
     /// Cranial displacement of the diaphragm dome since the start [m] (positive cranial).
     DiaphragmDisplacement,
+    /// Pleural pressure relative to the body surface [Pa]: the alveolar pressure less the
+    /// lungs' elastic recoil (about -5 cmH2O at rest).
+    PleuralPressure,
+    /// Alveolar pressure relative to the body surface [Pa]: the airway opening's less the
+    /// drop across the airway resistance.
+    AlveolarPressure,
+    /// Airflow into the lungs [L/s], positive in inspiration.
+    AirwayFlow,
     /// Sternum displacement since the start along axis 0 = x, 1 = y, 2 = z [m].
     SternumDisplacement(u8),
     /// Marker `index` (0-based, row-major from the top row, column 0 on the subject's right),

@@ -47,6 +47,29 @@ pub struct Observation {
     pub diaphragm_displacement: f64,
     /// Displacement of the middle of the sternum since rest [m].
     pub sternum_displacement: Vector3<f64>,
+    /// Airflow into the lungs [m^3/s], the rate of the thoracic volume (positive in
+    /// inspiration).
+    pub airway_flow: f64,
+    /// Alveolar pressure relative to the body surface [Pa]: the airway opening's less the
+    /// drop R V' across the airway resistance.
+    pub alveolar_pressure: f64,
+    /// Pleural pressure relative to the body surface [Pa]: the alveolar pressure less the
+    /// lungs' elastic recoil, -[`crate::dynamics::Params::lung_recoil_at_frc`] at rest.
+    pub pleural_pressure: f64,
+}
+
+/// Rate of change of the volume enclosed by the closed surface `tris` [m^3/s]: the time
+/// derivative of the divergence-theorem sum, 1/6 sum_t (a' . (b x c) + a . (b' x c) +
+/// a . (b x c')).
+fn volume_rate(pos: &[Point3<f64>], vel: &[Vector3<f64>], tris: &[[u32; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| pos[i as usize].coords);
+            let [va, vb, vc] = t.map(|i| vel[i as usize]);
+            va.dot(&b.cross(&c)) + a.dot(&vb.cross(&c)) + a.dot(&b.cross(&vc))
+        })
+        .sum::<f64>()
+        / 6.0
 }
 
 /// Sum of the divergence-theorem terms of `tris` about `origin` (not closed: a wall region).
@@ -147,13 +170,25 @@ pub fn costal_margin_height(model: &Model) -> f64 {
     }
 }
 
-/// Observes the state whose anchor positions are `pos`.
-pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) -> Observation {
+/// Observes the state whose anchor positions are `pos` and velocities `vel`, with the airway
+/// opening at `airway_opening` [Pa] (0 breathing air).
+pub fn observe(
+    model: &Model,
+    compartments: &Compartments,
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
+    airway_opening: f64,
+) -> Observation {
     // The mesh's volumes (the dynamics' own), then corrected for the dome's faceting so
     // that every level of detail reports the volumes of the smooth surfaces.
     let abdomen_mesh = volume(pos, &model.abdomen_triangles);
-    let thorax = volume(pos, &model.thorax_triangles) - model.dome_faceting_volume;
+    let thorax_mesh = volume(pos, &model.thorax_triangles);
+    let thorax = thorax_mesh - model.dome_faceting_volume;
     let abdomen = abdomen_mesh + model.dome_faceting_volume;
+    let airway_flow = volume_rate(pos, vel, &model.thorax_triangles);
+    let alveolar_pressure = airway_opening - model.airway_resistance * airway_flow;
+    let pleural_pressure =
+        alveolar_pressure - model.params.lung_recoil_at_frc - model.pleural.recoil(thorax_mesh);
     let o = &compartments.origin;
     let rib_cage_displaced =
         partial_volume(pos, &compartments.rib_cage_wall, o) - compartments.rib_cage_rest;
@@ -174,5 +209,8 @@ pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) 
             * (model.abdomen_rest_volume / abdomen_mesh - 1.0),
         diaphragm_displacement,
         sternum_displacement: pos[probe] - model.rest[probe],
+        airway_flow,
+        alveolar_pressure,
+        pleural_pressure,
     }
 }
