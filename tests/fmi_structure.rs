@@ -69,8 +69,8 @@ fn every_output_declares_its_input_dependencies() {
     let outputs = outputs();
     assert_eq!(
         outputs.len(),
-        8 + 3 + 3 + 3 * 256 + 3,
-        "volumes and pressures, pressures and flow, sternum, markers, solver"
+        8 + 3 + 8 + 3 + 3 * 256 + 3,
+        "volumes and pressures, pressures and flow, sides, sternum, markers, solver"
     );
     for v in &outputs {
         let (expected, deps): (&[u32], String) = if FED_THROUGH.contains(&v.name.as_str()) {

@@ -135,6 +135,11 @@ pub struct BtConfig {
     /// `subject.mesh_dir`): its skin and cavity replace the generated ones. NULL or `""`:
     /// generated geometry. Copied by `bt_create`.
     pub subject_mesh_dir: *const c_char,
+    /// Activation gain of each muscle group (index as `bt_set_activation`) on the right side,
+    /// 0-2, times `gain_right` (FMI `gain.<group>.right`; 1 healthy, 0 paralysed).
+    pub group_gain_right: [f64; 8],
+    /// Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
+    pub group_gain_left: [f64; 8],
 }
 
 /// Statistics of one `bt_advance_to` call.
@@ -345,6 +350,10 @@ unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         lung_ratio: c.lung_ratio,
         gain_left: c.gain_left,
         gain_right: c.gain_right,
+        group_gains: crate::model::GroupGains {
+            right: c.group_gain_right,
+            left: c.group_gain_left,
+        },
         subject_mesh_dir,
         // the C ABI builds the default constants; overrides are a library-level study tool
         params: None,
@@ -380,6 +389,8 @@ fn config_to_c(
         gain_left: c.gain_left,
         gain_right: c.gain_right,
         subject_mesh_dir,
+        group_gain_right: c.group_gains.right,
+        group_gain_left: c.group_gains.left,
     }
 }
 

@@ -53,13 +53,20 @@ pub struct Activations {
 impl Activations {
     /// From per-group activations in [0, 1] and the left/right gains: a = min(1, a_g G_side).
     pub fn new(groups: &[f64; 8], gain_right: f64, gain_left: f64) -> Activations {
+        Activations::per_group(groups, &[gain_right; 8], &[gain_left; 8])
+    }
+
+    /// From per-group activations in [0, 1] and per-group gains of each side: a = min(1,
+    /// a_g G_g,side); midline elements take the mean of the two sides' gains.
+    pub fn per_group(groups: &[f64; 8], right: &[f64; 8], left: &[f64; 8]) -> Activations {
         let mut level = [[0.0; 3]; 8];
         for (g, a) in groups.iter().enumerate() {
             let a = a.clamp(0.0, 1.0);
+            let (r, l) = (right[g], left[g]);
             level[g] = [
-                (a * gain_right).min(1.0),
-                (a * gain_left).min(1.0),
-                (a * 0.5 * (gain_right + gain_left)).min(1.0),
+                (a * r).min(1.0),
+                (a * l).min(1.0),
+                (a * 0.5 * (r + l)).min(1.0),
             ];
         }
         Activations {

@@ -15,7 +15,7 @@
 //! [`crate::Config::validate`] stays the final check. A test checks that both agree at every
 //! bound.
 
-use crate::anatomy::{MuscleGroup, SUBJECT_RANGES};
+use crate::anatomy::{MuscleGroup, SUBJECT_RANGES, Side};
 use crate::model::{Config, Quantity, Torso, Wave};
 use crate::solver::Method;
 use crate::{Error, Result};
@@ -170,6 +170,8 @@ pub enum Parameter {
     GainLeft,
     /// `gain.right`.
     GainRight,
+    /// `gain.<group>.left|right`: one group's gain on one side.
+    GroupGain(MuscleGroup, Side),
     /// `scene.level_of_detail` (Integer).
     LevelOfDetail,
     /// `grid.rows` (Integer).
@@ -233,6 +235,10 @@ impl Parameter {
             LungRatio => Value::Real(config.lung_ratio),
             GainLeft => Value::Real(config.gain_left),
             GainRight => Value::Real(config.gain_right),
+            GroupGain(g, side) => Value::Real(match side {
+                Side::Right => config.group_gains.right[g.index()],
+                Side::Left => config.group_gains.left[g.index()],
+            }),
             LevelOfDetail => Value::Integer(config.scene.level_of_detail as i32),
             GridRows => Value::Integer(config.scene.grid_rows as i32),
             GridCols => Value::Integer(config.scene.grid_cols as i32),
@@ -280,6 +286,10 @@ impl Parameter {
             (LungRatio, Value::Real(v)) => config.lung_ratio = v,
             (GainLeft, Value::Real(v)) => config.gain_left = v,
             (GainRight, Value::Real(v)) => config.gain_right = v,
+            (GroupGain(g, side), Value::Real(v)) => match side {
+                Side::Right => config.group_gains.right[g.index()] = v,
+                Side::Left => config.group_gains.left[g.index()] = v,
+            },
             (LevelOfDetail, Value::Integer(v)) => {
                 config.scene.level_of_detail = non_negative(v)? as u32
             }
@@ -872,6 +882,28 @@ fn build() -> Vec<Variable> {
         par("solver.atol", 131, Real, P::SolverAtol, "Absolute tolerance of the integrator on the state").range(1e-14, 1e-2),
         par("solver.max_step", 132, Real, P::SolverMaxStep, "Largest internal integration step").unit("s").range(1e-5, 1.0),
     ]);
+    // 140 + 2 k (right) and 141 + 2 k (left) for the k-th group of MuscleGroup::ALL.
+    for (k, g) in MuscleGroup::ALL.into_iter().enumerate() {
+        for (s, side) in [Side::Right, Side::Left].into_iter().enumerate() {
+            let side_name = match side {
+                Side::Right => "right",
+                Side::Left => "left",
+            };
+            params.push(
+                par(
+                    &format!("gain.{}.{side_name}", g.name()),
+                    140 + 2 * k as u32 + s as u32,
+                    Real,
+                    P::GroupGain(g, side),
+                    &format!(
+                        "Activation gain of the {} on the subject's {side_name} side, times gain.{side_name} (1: healthy, 0: paralysed)",
+                        g.name().replace('_', " ")
+                    ),
+                )
+                .range(0.0, 2.0),
+            );
+        }
+    }
     rows.extend(params.into_iter().map(|r| r.parameter(&d).0));
 
     use Quantity as Q;
@@ -976,6 +1008,50 @@ fn build() -> Vec<Variable> {
         )
         .0,
     ]);
+    // 1014 + 2 k + side (0 right, 1 left) for lung, rib-cage and abdominal displaced
+    // volumes and the hemidiaphragm.
+    type Sided = (&'static str, fn(u8) -> Quantity, &'static str, &'static str);
+    let sided: [Sided; 4] = [
+        (
+            "volume.lung",
+            Q::LungVolumeSide,
+            "L",
+            "Volume of the {side} lung: its rest share of the lungs (right 53.3 %, CT volumetry) plus the change of its side of the thorax",
+        ),
+        (
+            "volume.rib_cage_displaced",
+            Q::RibCageDisplacedSide,
+            "L",
+            "Volume displaced by the {side} half of the rib-cage wall since the start",
+        ),
+        (
+            "volume.abdomen_displaced",
+            Q::AbdomenDisplacedSide,
+            "L",
+            "Volume displaced by the {side} half of the abdominal wall since the start",
+        ),
+        (
+            "diaphragm.displacement",
+            Q::DiaphragmDisplacementSide,
+            "m",
+            "Displacement of the {side} hemidiaphragm since the start, positive cranial",
+        ),
+    ];
+    for (k, (name, q, unit, desc)) in sided.into_iter().enumerate() {
+        for (s, side) in ["right", "left"].into_iter().enumerate() {
+            let mut row = out(
+                &format!("{name}.{side}"),
+                1014 + 2 * k as u32 + s as u32,
+                q(s as u8),
+                unit,
+                &desc.replace("{side}", side),
+            );
+            if unit == "m" {
+                row = row.display("mm");
+            }
+            rows.push(row.0);
+        }
+    }
     for (axis, a) in AXES.iter().enumerate() {
         rows.push(
             out(

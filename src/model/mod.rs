@@ -21,7 +21,7 @@ pub mod run;
 mod snapshot;
 mod torso;
 
-pub use config::{Config, Scene, SolverConfig};
+pub use config::{Config, GroupGains, Scene, SolverConfig};
 pub(crate) use drive::check;
 pub use drive::{Drive, Wave};
 pub use quantity::Quantity;

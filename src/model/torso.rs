@@ -22,6 +22,15 @@ pub use sampled::Sample;
 /// cmH2O; ARDS Network 2000, N Engl J Med 342:1301).
 pub const AIRWAY_OPENING_RANGE: (f64, f64) = (-50.0 * 98.0665, 50.0 * 98.0665);
 
+/// The gain of each group on each side: the side's overall gain times the group's.
+fn side_gains(config: &Config) -> ([f64; 8], [f64; 8]) {
+    let g = &config.group_gains;
+    (
+        g.right.map(|x| x * config.gain_right),
+        g.left.map(|x| x * config.gain_left),
+    )
+}
+
 /// Statistics of one [`Torso::advance_to`] call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AdvanceStats {
@@ -94,8 +103,8 @@ struct System<'a> {
     /// Pressure at the airway opening [Pa].
     airway_opening: f64,
     drive: &'a Drive,
-    gain_right: f64,
-    gain_left: f64,
+    /// Gain of each group on the right and left sides (overall side gain times group gain).
+    gains: ([f64; 8], [f64; 8]),
     /// Jacobian memory, when the stiff method is in use.
     jacobian: Option<&'a mut TorsoJacobian>,
 }
@@ -107,7 +116,7 @@ impl System<'_> {
             groups[g.index()] =
                 (self.inputs[g.index()] + self.drive.activation(g, t)).clamp(0.0, 1.0);
         }
-        Activations::new(&groups, self.gain_right, self.gain_left)
+        Activations::per_group(&groups, &self.gains.0, &self.gains.1)
             .with_airway_opening(self.airway_opening)
     }
 }
@@ -302,8 +311,7 @@ impl Torso {
             inputs: *inputs,
             airway_opening: *airway_opening,
             drive: &config.drive,
-            gain_right: config.gain_right,
-            gain_left: config.gain_left,
+            gains: side_gains(config),
             jacobian: jacobian.as_deref_mut(),
         };
         (system, y, time, integrator)
@@ -382,6 +390,25 @@ impl Torso {
             Quantity::PleuralPressure => self.observation().pleural_pressure,
             Quantity::AlveolarPressure => self.observation().alveolar_pressure,
             Quantity::AirwayFlow => self.observation().airway_flow * litres,
+            Quantity::LungVolumeSide(s) if s < 2 => {
+                let m = &self.compiled.model;
+                let rest = m.thorax_rest_volume - m.dome_faceting_volume - m.non_lung_volume;
+                let share = if s == 0 {
+                    observe::RIGHT_LUNG_FRACTION
+                } else {
+                    1.0 - observe::RIGHT_LUNG_FRACTION
+                };
+                (rest * share + self.observation().sides[s as usize].lung_change) * litres
+            }
+            Quantity::RibCageDisplacedSide(s) if s < 2 => {
+                self.observation().sides[s as usize].rib_cage_displaced * litres
+            }
+            Quantity::AbdomenDisplacedSide(s) if s < 2 => {
+                self.observation().sides[s as usize].abdomen_displaced * litres
+            }
+            Quantity::DiaphragmDisplacementSide(s) if s < 2 => {
+                self.observation().sides[s as usize].diaphragm_displacement
+            }
             Quantity::SternumDisplacement(axis) if axis < 3 => {
                 self.observation().sternum_displacement[axis as usize]
             }
@@ -477,8 +504,7 @@ impl Torso {
             inputs: *inputs,
             airway_opening: *airway_opening,
             drive: &config.drive,
-            gain_right: config.gain_right,
-            gain_left: config.gain_left,
+            gains: side_gains(config),
             jacobian: None,
         };
         system.rhs(t, y, dydt);
