@@ -87,7 +87,7 @@ fn partial_volume(pos: &[Point3<f64>], tris: &[[u32; 3]], origin: &Point3<f64>) 
 }
 
 /// Right lung's share of the lungs' volume: 53.3 +- 1.3 % standing, 53.6 +- 1.5 % supine (CT
-/// volumetry of 32 healthy volunteers; Yamada et al. 2020, Radiology 296:E110, Table 3). It
+/// volumetry of 32 healthy volunteers; Yamada et al. 2020, Respiration 99:598, Table 3; PMC7490509). It
 /// splits the rest lung volume between the sides; the changes are each side's own.
 pub const RIGHT_LUNG_FRACTION: f64 = 0.533;
 
