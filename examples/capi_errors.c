@@ -60,6 +60,20 @@ int main(void) {
     double a = -1;
     expect(bt_read(torso, BT_VR_ACTIVATION_DIAPHRAGM, &a) == BT_OK && a == 0.3, "input reads back", "");
 
+    /* The airway-opening pressure: out of range is refused and changes nothing; a
+       ventilator's 5 cmH2O reaches the alveolar and pleural pressures at once. */
+    double alveolar = 1, pleural = 0, pleural_after = 0;
+    bt_read(torso, BT_VR_PRESSURE_PLEURAL, &pleural);
+    rc = bt_set_airway_opening(torso, 1e6);
+    expect(rc == BT_ERR_INVALID && strstr(bt_last_error(torso), "pressure.airway_opening"), "airway pressure 1e6 Pa rejected", bt_last_error(torso));
+    expect(bt_read(torso, BT_VR_PRESSURE_ALVEOLAR, &alveolar) == BT_OK && alveolar == 0.0, "rejected pressure kept the state", "");
+    expect(bt_set_airway_opening(torso, 5 * 98.0665) == BT_OK, "airway pressure 5 cmH2O accepted", bt_last_error(torso));
+    bt_read(torso, BT_VR_PRESSURE_ALVEOLAR, &alveolar);
+    bt_read(torso, BT_VR_PRESSURE_PLEURAL, &pleural_after);
+    expect(fabs(alveolar - 5 * 98.0665) < 1e-9 && fabs(pleural_after - pleural - 5 * 98.0665) < 1e-9,
+           "airway pressure reaches the alveoli and the pleura without a step", "");
+    expect(bt_set_airway_opening(torso, 0.0) == BT_OK, "airway pressure back to 0", "");
+
     BtDrive drive;
     expect(bt_get_drive(torso, &drive) == BT_OK, "drive read", "");
     drive.frequency = 10.0;

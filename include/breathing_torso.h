@@ -210,6 +210,15 @@ typedef struct BtConfig {
    * generated geometry. Copied by `bt_create`.
    */
   const char *subject_mesh_dir;
+  /**
+   * Activation gain of each muscle group (index as `bt_set_activation`) on the right side,
+   * 0-2, times `gain_right` (FMI `gain.<group>.right`; 1 healthy, 0 paralysed).
+   */
+  double group_gain_right[8];
+  /**
+   * Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
+   */
+  double group_gain_left[8];
 } BtConfig;
 
 /**
@@ -309,6 +318,17 @@ int bt_set_activation(struct BtTorso *h, int group, double value);
  * `h` must be NULL or a live handle; `name` NULL or NUL-terminated.
  */
 int bt_set_activation_by_name(struct BtTorso *h, const char *name, double value);
+
+/**
+ * Sets the pressure at the airway opening relative to the body surface [Pa] (FMI input
+ * `pressure.airway_opening`; 0 breathing air, a ventilator's pressure, within +-50 cmH2O).
+ * It reaches the alveolar and pleural pressures at once and the volumes through the
+ * dynamics; a rejected value (`BT_ERR_INVALID`) changes nothing.
+ *
+ * # Safety
+ * `h` must be NULL or a live handle.
+ */
+int bt_set_airway_opening(struct BtTorso *h, double pascal);
 
 /**
  * Replaces the drive (validated; on error nothing changes).
@@ -483,7 +503,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{418f76df-c948-3365-c69a-f1669457e9e0}"
+#define BT_FMI_GUID "{b5b114c5-0d46-20e7-b876-f3c022dd9e88}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -494,6 +514,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_ACTIVATION_RECTUS_ABDOMINIS 6u
 #define BT_VR_ACTIVATION_EXTERNAL_OBLIQUES 7u
 #define BT_VR_ACTIVATION_INTERNAL_OBLIQUES 8u
+#define BT_VR_PRESSURE_AIRWAY_OPENING 9u
 #define BT_VR_SUBJECT_SEX 200u
 #define BT_VR_SUBJECT_AGE 100u
 #define BT_VR_SUBJECT_STATURE 101u
@@ -520,6 +541,22 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u
 #define BT_VR_SOLVER_MAX_STEP 132u
+#define BT_VR_GAIN_DIAPHRAGM_RIGHT 140u
+#define BT_VR_GAIN_DIAPHRAGM_LEFT 141u
+#define BT_VR_GAIN_EXTERNAL_INTERCOSTALS_RIGHT 142u
+#define BT_VR_GAIN_EXTERNAL_INTERCOSTALS_LEFT 143u
+#define BT_VR_GAIN_INTERNAL_INTERCOSTALS_RIGHT 144u
+#define BT_VR_GAIN_INTERNAL_INTERCOSTALS_LEFT 145u
+#define BT_VR_GAIN_SCALENES_RIGHT 146u
+#define BT_VR_GAIN_SCALENES_LEFT 147u
+#define BT_VR_GAIN_TRANSVERSUS_ABDOMINIS_RIGHT 148u
+#define BT_VR_GAIN_TRANSVERSUS_ABDOMINIS_LEFT 149u
+#define BT_VR_GAIN_RECTUS_ABDOMINIS_RIGHT 150u
+#define BT_VR_GAIN_RECTUS_ABDOMINIS_LEFT 151u
+#define BT_VR_GAIN_EXTERNAL_OBLIQUES_RIGHT 152u
+#define BT_VR_GAIN_EXTERNAL_OBLIQUES_LEFT 153u
+#define BT_VR_GAIN_INTERNAL_OBLIQUES_RIGHT 154u
+#define BT_VR_GAIN_INTERNAL_OBLIQUES_LEFT 155u
 #define BT_VR_VOLUME_LUNG 1000u
 #define BT_VR_VOLUME_THORAX 1001u
 #define BT_VR_VOLUME_ABDOMEN 1002u
@@ -528,6 +565,17 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_VOLUME_ABDOMEN_DISPLACED 1005u
 #define BT_VR_PRESSURE_ABDOMEN 1006u
 #define BT_VR_DIAPHRAGM_DISPLACEMENT 1007u
+#define BT_VR_PRESSURE_PLEURAL 1011u
+#define BT_VR_PRESSURE_ALVEOLAR 1012u
+#define BT_VR_FLOW_AIRWAY 1013u
+#define BT_VR_VOLUME_LUNG_RIGHT 1014u
+#define BT_VR_VOLUME_LUNG_LEFT 1015u
+#define BT_VR_VOLUME_RIB_CAGE_DISPLACED_RIGHT 1016u
+#define BT_VR_VOLUME_RIB_CAGE_DISPLACED_LEFT 1017u
+#define BT_VR_VOLUME_ABDOMEN_DISPLACED_RIGHT 1018u
+#define BT_VR_VOLUME_ABDOMEN_DISPLACED_LEFT 1019u
+#define BT_VR_DIAPHRAGM_DISPLACEMENT_RIGHT 1020u
+#define BT_VR_DIAPHRAGM_DISPLACEMENT_LEFT 1021u
 #define BT_VR_STERNUM_DISPLACEMENT_X 1008u
 #define BT_VR_STERNUM_DISPLACEMENT_Y 1009u
 #define BT_VR_STERNUM_DISPLACEMENT_Z 1010u

@@ -3,12 +3,13 @@
 //! instance. Setting every input to 1 at a communication point, without a step, must leave
 //! every output whose declared input dependencies are empty bit for bit unchanged (in
 //! initialization mode and after breathing steps), while the next step does respond to the
-//! inputs (so that the measurement can see a change).
+//! inputs (so that the measurement can see a change). The alveolar and pleural pressures
+//! declare the airway-opening pressure, and do change with it at once.
 
 use breathing_torso::fmi::instance::Instance;
 use breathing_torso::fmi::table;
 use breathing_torso::fmi::types::fmi2Status::fmi2OK;
-use breathing_torso::fmi::variables::{Causality, Role, ScalarType, Variable};
+use breathing_torso::fmi::variables::{Causality, Role, ScalarType, VR_AIRWAY_OPENING, Variable};
 use breathing_torso::fmi::xml::model_description;
 
 fn outputs() -> Vec<&'static Variable> {
@@ -59,38 +60,68 @@ fn false_claims(a: &[u64], b: &[u64]) -> Vec<String> {
         .collect()
 }
 
+/// The outputs the airway-opening pressure reaches without a step.
+const FED_THROUGH: [&str; 2] = ["pressure.pleural", "pressure.alveolar"];
+
 #[test]
 fn every_output_declares_its_input_dependencies() {
     let md = model_description();
     let outputs = outputs();
     assert_eq!(
         outputs.len(),
-        8 + 3 + 3 * 256 + 3,
-        "volumes, sternum, markers, solver"
+        8 + 3 + 8 + 3 + 3 * 256 + 3,
+        "volumes and pressures, pressures and flow, sides, sternum, markers, solver"
     );
     for v in &outputs {
+        let (expected, deps): (&[u32], String) = if FED_THROUGH.contains(&v.name.as_str()) {
+            let input = table().index_of(VR_AIRWAY_OPENING).unwrap();
+            (&[VR_AIRWAY_OPENING], input.to_string())
+        } else {
+            (&[], String::new())
+        };
         assert_eq!(
             v.input_dependencies.as_deref(),
-            Some(&[][..]),
-            "{} is read off the state",
+            Some(expected),
+            "{}'s dependencies",
             v.name
         );
         assert!(matches!(v.role, Role::Output(_)));
         let index = table().index_of(v.vr).unwrap();
-        let line = format!("<Unknown index=\"{index}\" dependencies=\"\"/>");
+        let line = format!("<Unknown index=\"{index}\" dependencies=\"{deps}\"/>");
         assert!(md.contains(&line), "{} ({line}) not in <Outputs>", v.name);
     }
-    // The initial unknowns depend on the parameters only, never on an input or on time.
+    // The initial unknowns depend on the parameters, never on time, and on an input only
+    // where the output declares it (the pressures on the airway opening).
     let start = md.find("<InitialUnknowns>").unwrap();
     let inputs: Vec<String> = inputs()
         .iter()
         .map(|&vr| table().index_of(vr).unwrap().to_string())
         .collect();
+    let fed: Vec<String> = FED_THROUGH
+        .iter()
+        .map(|n| {
+            table()
+                .index_of(table().by_name(n).unwrap().vr)
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    let opening = table().index_of(VR_AIRWAY_OPENING).unwrap().to_string();
     let time = table().index_of(0).unwrap().to_string();
     for line in md[start..].lines().filter(|l| l.contains("<Unknown ")) {
+        let index = line.split("index=\"").nth(1).unwrap();
+        let index = &index[..index.find('"').unwrap()];
         let deps = line.split("dependencies=\"").nth(1).unwrap();
         let deps: Vec<&str> = deps[..deps.find('"').unwrap()].split(' ').collect();
-        assert!(!deps.is_empty() && deps.iter().all(|d| !inputs.iter().any(|i| i == d)));
+        let allowed = |d: &&str| {
+            !inputs.iter().any(|i| i == d) || (fed.iter().any(|f| f == index) && *d == opening)
+        };
+        assert!(!deps.is_empty() && deps.iter().all(allowed), "{line}");
+        assert_eq!(
+            deps.contains(&opening.as_str()),
+            fed.iter().any(|f| f == index),
+            "{line}"
+        );
         assert!(!deps.contains(&time.as_str()), "{line}");
         let mut sorted: Vec<usize> = deps.iter().map(|d| d.parse().unwrap()).collect();
         sorted.sort_unstable();
@@ -108,7 +139,8 @@ fn setting_every_input_without_a_step_changes_no_output() {
     let vr = |n: &str| table.by_name(n).unwrap().vr;
     let inputs = inputs();
     let ones = vec![1.0; inputs.len()];
-    assert_eq!(inputs.len(), 8);
+    assert_eq!(inputs.len(), 9);
+    let zeros = vec![0.0; inputs.len()];
 
     let mut inst = Instance::new("feedthrough", None, None, false);
     // Breathing, so that velocities and activations are not zero when the inputs change.
@@ -127,7 +159,7 @@ fn setting_every_input_without_a_step_changes_no_output() {
     assert_eq!(inst.set_real(&inputs, &ones), fmi2OK);
     let after = read_outputs(&mut inst);
     assert_eq!(false_claims(&before, &after), Vec::<String>::new());
-    assert_eq!(inst.set_real(&inputs, &[0.0; 8]), fmi2OK);
+    assert_eq!(inst.set_real(&inputs, &zeros), fmi2OK);
     assert_eq!(inst.exit_initialization_mode(), fmi2OK);
 
     // After breathing steps, at several communication points.
@@ -147,6 +179,12 @@ fn setting_every_input_without_a_step_changes_no_output() {
             Vec::<String>::new(),
             "t = {t}"
         );
+        // The declared feedthrough is real: 1 Pa at the airway opening moves both pressures.
+        for name in FED_THROUGH {
+            let i = outputs().iter().position(|v| v.name == name).unwrap();
+            let moved = f64::from_bits(after[i]) - f64::from_bits(before[i]);
+            assert!((moved - 1.0).abs() < 1e-9, "{name} moved by {moved} Pa");
+        }
         // The inputs do act, through the state: the next step differs from one without them.
         assert_eq!(inst.do_step(t, h), fmi2OK);
         let driven = read_outputs(&mut inst);

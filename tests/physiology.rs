@@ -89,11 +89,15 @@ fn rest_is_an_equilibrium_near_frc() {
 /// slope is about 2.8 L, deeper than the forced scenario's 1.7 L (its excursion is 2.96 cm).
 const CM_PER_LITRE: std::ops::RangeInclusive<f64> = 1.18..=2.14;
 
-/// Quiet tidal volume per kilogram of body mass [L/kg]: about 0.5 L, about 7 mL/kg
-/// (data/physiology_bounds.md), taken within +-25 %.
+/// Quiet tidal volume per kilogram of body mass [L/kg]: the textbook 500 mL for 70 kg, about
+/// 7 mL/kg (West & Luks, Respiratory Physiology: The Essentials, 10th ed. 2016), and 383 +- 91
+/// mL, about 5.5 mL/kg, when breathing is measured without a mouthpiece (Tobin et al. 1983,
+/// Chest 84:202); the bound is 7 mL/kg +- 25 %, which holds both means.
 const QUIET_VT_PER_KG: std::ops::RangeInclusive<f64> = 0.00525..=0.00875;
 
-/// Deep (forced) breathing tidal volume [L], 1.5-3 L (data/physiology_bounds.md).
+/// Deep (forced) breathing tidal volume [L]: 1.5-3 L, between three times a quiet breath and
+/// about two thirds of the default man's 4.9 L vital capacity (ECSC 1993); the project's
+/// physiology reference.
 const FORCED_VT: std::ops::RangeInclusive<f64> = 1.5..=3.0;
 
 #[test]

@@ -2,6 +2,7 @@
 declares its input dependencies, and the ones declared empty are measured: setting every input
 to 1 at a communication point, without a step, leaves those outputs unchanged (in
 initialization mode and after breathing steps), while the next step responds to the inputs.
+The alveolar and pleural pressures declare the airway-opening pressure, and move with it.
 
 Needs fmu/BreathingTorso.fmu (scripts/test.sh builds it).
 """
@@ -51,30 +52,37 @@ def false_claims(md, before, after):
     return sorted(n for n in free if before[n] != after[n])
 
 
+FED_THROUGH = {"pressure.pleural", "pressure.alveolar"}
+
+
 def test_every_output_declares_its_dependencies(md):
     inputs = {v.name for v in md.modelVariables if v.causality == "input"}
     outputs = [v for v in md.modelVariables if v.causality == "output"]
-    assert len(md.outputs) == len(outputs) == 782
+    assert len(md.outputs) == len(outputs) == 793
     for u in md.outputs:
         assert u.dependencies is not None, f"{u.variable.name} would depend on all knowns"
-        assert u.dependencies == [], f"{u.variable.name} is read off the state"
+        expected = ["pressure.airway_opening"] if u.variable.name in FED_THROUGH else []
+        assert [d.name for d in u.dependencies] == expected, u.variable.name
     for u in md.initialUnknowns:
         assert u.dependencies, u.variable.name
-        assert all(d.causality == "parameter" for d in u.dependencies), u.variable.name
-        assert not inputs & {d.name for d in u.dependencies}
+        fed = u.variable.name in FED_THROUGH
+        assert all(d.causality == "parameter" or (fed and d.name == "pressure.airway_opening")
+                   for d in u.dependencies), u.variable.name
+        assert (inputs & {d.name for d in u.dependencies}) == ({"pressure.airway_opening"} if fed else set())
 
 
 def test_setting_every_input_without_a_step_changes_no_output(md, slave):
     vr = {v.name: v.valueReference for v in md.modelVariables}
     inputs = [v.valueReference for v in md.modelVariables if v.causality == "input"]
-    assert len(inputs) == 8
+    n = len(inputs)
+    assert n == 9
     slave.setupExperiment(startTime=0.0)
     slave.setReal([vr["drive.ribs.amplitude"], vr["drive.diaphragm.amplitude"]], [0.12, 0.30])
     slave.enterInitializationMode()
     before = read_outputs(slave, md)
-    slave.setReal(inputs, [1.0] * 8)
+    slave.setReal(inputs, [1.0] * n)
     assert false_claims(md, before, read_outputs(slave, md)) == []
-    slave.setReal(inputs, [0.0] * 8)
+    slave.setReal(inputs, [0.0] * n)
     slave.exitInitializationMode()
 
     t, h = 0.0, 0.05
@@ -84,8 +92,11 @@ def test_setting_every_input_without_a_step_changes_no_output(md, slave):
             t += h
         state = slave.getFMUstate()
         before = read_outputs(slave, md)
-        slave.setReal(inputs, [1.0] * 8)
-        assert false_claims(md, before, read_outputs(slave, md)) == [], f"t = {t}"
+        slave.setReal(inputs, [1.0] * n)
+        after = read_outputs(slave, md)
+        assert false_claims(md, before, after) == [], f"t = {t}"
+        for name in FED_THROUGH:  # 1 Pa at the airway opening, at once
+            assert abs(after[name] - before[name] - 1.0) < 1e-9, name
         slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
         driven = read_outputs(slave, md)["volume.lung"]
         slave.setFMUstate(state)

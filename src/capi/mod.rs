@@ -135,6 +135,11 @@ pub struct BtConfig {
     /// `subject.mesh_dir`): its skin and cavity replace the generated ones. NULL or `""`:
     /// generated geometry. Copied by `bt_create`.
     pub subject_mesh_dir: *const c_char,
+    /// Activation gain of each muscle group (index as `bt_set_activation`) on the right side,
+    /// 0-2, times `gain_right` (FMI `gain.<group>.right`; 1 healthy, 0 paralysed).
+    pub group_gain_right: [f64; 8],
+    /// Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
+    pub group_gain_left: [f64; 8],
 }
 
 /// Statistics of one `bt_advance_to` call.
@@ -345,6 +350,10 @@ unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         lung_ratio: c.lung_ratio,
         gain_left: c.gain_left,
         gain_right: c.gain_right,
+        group_gains: crate::model::GroupGains {
+            right: c.group_gain_right,
+            left: c.group_gain_left,
+        },
         subject_mesh_dir,
         // the C ABI builds the default constants; overrides are a library-level study tool
         params: None,
@@ -380,6 +389,8 @@ fn config_to_c(
         gain_left: c.gain_left,
         gain_right: c.gain_right,
         subject_mesh_dir,
+        group_gain_right: c.group_gains.right,
+        group_gain_left: c.group_gains.left,
     }
 }
 
@@ -580,6 +591,18 @@ pub unsafe extern "C" fn bt_set_activation_by_name(
     }
 }
 
+/// Sets the pressure at the airway opening relative to the body surface [Pa] (FMI input
+/// `pressure.airway_opening`; 0 breathing air, a ventilator's pressure, within +-50 cmH2O).
+/// It reaches the alveolar and pleural pressures at once and the volumes through the
+/// dynamics; a rejected value (`BT_ERR_INVALID`) changes nothing.
+///
+/// # Safety
+/// `h` must be NULL or a live handle.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn bt_set_airway_opening(h: *mut BtTorso, pascal: f64) -> c_int {
+    unsafe { with_handle(h, |b| Ok(b.torso.set_airway_opening(pascal)?)) }
+}
+
 /// Replaces the drive (validated; on error nothing changes).
 ///
 /// # Safety
@@ -647,7 +670,7 @@ pub unsafe extern "C" fn bt_time(h: *mut BtTorso, t: *mut f64) -> c_int {
 fn read_variable(b: &mut BtTorso, var: &crate::fmi::variables::Variable) -> Result<f64> {
     match var.role {
         Role::Time => Ok(b.torso.time()),
-        Role::Input(g) => Ok(b.torso.activation_input(g)),
+        Role::Input(input) => Ok(input.value(&b.torso)),
         Role::Parameter(p) => match p.get(b.torso.config()) {
             crate::fmi::variables::Value::Real(x) => Ok(x),
             crate::fmi::variables::Value::Integer(i) => Ok(f64::from(i)),

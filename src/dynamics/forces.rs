@@ -14,10 +14,12 @@
 //! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1) - mu dV/dt; each triangle pushes each of
 //!   its corners with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx. The
 //!   viscous term mu (`Model::abdomen_viscosity`) damps the cavity's volume mode.
-//! - Pleural pressure: P_pl = -P_L(V_th) - R dV_th/dt on the thoracic surface: the lungs'
-//!   recoil and the pressure drop of the airflow through the airway resistance R
+//! - Pleural pressure: P_pl = P_ao - P_L(V_th) - R dV_th/dt on the thoracic surface: the
+//!   pressure at the airway opening (`Activations::airway_opening`, 0 breathing air) less the
+//!   lungs' recoil and the pressure drop of the airflow through the airway resistance R
 //!   (`Model::airway_resistance`); dV/dt is the sum over the triangles of A n . (v_a + v_b +
-//!   v_c) / 3, exact on a closed surface.
+//!   v_c) / 3, exact on a closed surface. All relative to rest, where the chest wall's rest
+//!   forces balance the lungs' recoil at FRC.
 
 use super::model::{Model, PASSIVE, VIA, via_segment_length};
 use super::{Activations, Data};
@@ -27,7 +29,7 @@ use nalgebra::{Point3, Vector3};
 pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
     local_forces(model, data, act);
     abdominal_pressure(model, data);
-    pleural_pressure(model, data);
+    pleural_pressure(model, data, act.airway_opening);
 }
 
 /// As [`accumulate`], but with the abdominal and pleural pressures held at the given values
@@ -256,13 +258,14 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
     data.abdomen_pressure = p;
 }
 
-/// Pleural pressure from the thoracic volume: the lungs' elastic recoil, the pressure-volume
-/// law of [`super::pleural::PleuralLaw`] (linear with the lung elastance about rest, with
-/// inverse barriers at the residual volume and total lung capacity), less the pressure drop
-/// R dV/dt of the airflow through the airway resistance. The dome's
+/// Pleural pressure from the thoracic volume: the pressure at the airway opening less the
+/// lungs' elastic recoil, the pressure-volume law of [`super::pleural::PleuralLaw`] (linear
+/// with the lung elastance about rest, with inverse barriers at the residual volume and total
+/// lung capacity), and less the pressure drop R dV/dt of the airflow through the airway
+/// resistance. The dome's
 /// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
 /// volume terms negated (exactly what recomputing them would give).
-fn pleural_pressure(model: &Model, data: &mut Data) {
+fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
     let tris = &model.thorax_triangles;
     let (na, nt) = (model.abdomen_triangles.len(), tris.len());
     let Data {
@@ -292,7 +295,7 @@ fn pleural_pressure(model: &Model, data: &mut Data) {
     };
     let v = sum / 6.0;
     let rate = volume_rate(tris, &model.thorax_moving, thorax_face, vel);
-    let p = -model.pleural.recoil(v) - model.airway_resistance * rate;
+    let p = airway_opening - model.pleural.recoil(v) - model.airway_resistance * rate;
     apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
     data.pleural_pressure = p;

@@ -30,34 +30,57 @@ pub use model::{
     path_length, via_segment_length, volume,
 };
 pub use params::{
-    DIAPHRAGM_CONTRACTION_UPRIGHT, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
-    diaphragm_contraction, diaphragm_length_ratio,
+    DIAPHRAGM_CONTRACTION_UPRIGHT, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN,
+    PLEURAL_BARRIER_PRESSURE, Params, diaphragm_contraction, diaphragm_length_ratio,
 };
 pub use state::{Layout, error_weights, rest_state};
 
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 
-/// Activations applied to the muscles in one evaluation: per group, per side (right, left,
-/// midline), already clamped and multiplied by the side gains.
+/// What drives the model in one evaluation: the activations applied to the muscles, per
+/// group, per side (right, left, midline), already clamped and multiplied by the side gains,
+/// and the pressure at the airway opening (a ventilator's, 0 when breathing air at the
+/// body's surface pressure).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Activations {
     /// `[group][side]`.
     pub level: [[f64; 3]; 8],
+    /// Pressure at the airway opening relative to the body surface [Pa]: it reaches the
+    /// alveoli through the airway resistance and pushes the thoracic wall outward.
+    pub airway_opening: f64,
 }
 
 impl Activations {
     /// From per-group activations in [0, 1] and the left/right gains: a = min(1, a_g G_side).
     pub fn new(groups: &[f64; 8], gain_right: f64, gain_left: f64) -> Activations {
+        Activations::per_group(groups, &[gain_right; 8], &[gain_left; 8])
+    }
+
+    /// From per-group activations in [0, 1] and per-group gains of each side: a = min(1,
+    /// a_g G_g,side); midline elements take the mean of the two sides' gains.
+    pub fn per_group(groups: &[f64; 8], right: &[f64; 8], left: &[f64; 8]) -> Activations {
         let mut level = [[0.0; 3]; 8];
         for (g, a) in groups.iter().enumerate() {
             let a = a.clamp(0.0, 1.0);
+            let (r, l) = (right[g], left[g]);
             level[g] = [
-                (a * gain_right).min(1.0),
-                (a * gain_left).min(1.0),
-                (a * 0.5 * (gain_right + gain_left)).min(1.0),
+                (a * r).min(1.0),
+                (a * l).min(1.0),
+                (a * 0.5 * (r + l)).min(1.0),
             ];
         }
-        Activations { level }
+        Activations {
+            level,
+            airway_opening: 0.0,
+        }
+    }
+
+    /// The same activations with the airway opening at `pressure` [Pa].
+    pub fn with_airway_opening(self, pressure: f64) -> Activations {
+        Activations {
+            airway_opening: pressure,
+            ..self
+        }
     }
 
     /// The levels as a table indexed by an element's [`Elements::slot`] (3 group + side);
@@ -71,9 +94,9 @@ impl Activations {
         table
     }
 
-    /// Whether every group is inactive.
+    /// Whether every group is inactive and the airway opening at the surface pressure.
     pub fn is_zero(&self) -> bool {
-        self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
+        self.airway_opening == 0.0 && self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
     }
 }
 

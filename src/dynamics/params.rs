@@ -91,6 +91,12 @@ pub const INERTIA_FREQUENCY: f64 = 25.0;
 /// Physiology).
 pub const SPECIFIC_AIRWAY_CONDUCTANCE: f64 = 0.2 / 98.0665;
 
+/// Default [`Params::lung_recoil_at_frc`] [Pa]: 5 cmH2O. At the functional residual capacity,
+/// with no flow, the pleural pressure is minus the lungs' elastic recoil, about -5 cmH2O in
+/// upright adults (oesophageal balloon; Milic-Emili et al. 1964, J Appl Physiol 19:207;
+/// Agostoni & Hyatt 1986, Handbook of Physiology, The Respiratory System III, ch. 9).
+pub const LUNG_RECOIL_AT_FRC: f64 = 5.0 * 98.0665;
+
 /// Default [`Params::tension_toe`] [N]: the width of the smooth toe of the tension-only law.
 /// 0.1 N is about 1 % of the smallest muscle element's tension in quiet breathing and a few
 /// thousandths of its largest; it is measured, not cited: halving it changes the default
@@ -130,6 +136,10 @@ fn default_inertia_frequency() -> f64 {
 
 fn default_specific_airway_conductance() -> f64 {
     SPECIFIC_AIRWAY_CONDUCTANCE
+}
+
+fn default_lung_recoil_at_frc() -> f64 {
+    LUNG_RECOIL_AT_FRC
 }
 
 fn default_tension_toe() -> f64 {
@@ -194,9 +204,16 @@ pub struct Params {
     pub transverse_fraction: f64,
     /// Bulk modulus K of the abdominal contents [Pa] (thesis eq. 2.5: P = K (V0/V - 1)).
     pub bulk_modulus: f64,
-    /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the thorax,
-    /// 1 / (0.2 L/cmH2O) (lung compliance, physiology reference).
+    /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the lungs (the
+    /// thorax's, one to one), 1 / (0.2 L/cmH2O) (lung compliance, physiology reference).
     pub lung_elastance: f64,
+    /// The lungs' elastic recoil at rest, the functional residual capacity [Pa]
+    /// ([`LUNG_RECOIL_AT_FRC`]): the pleural pressure read out is minus it at rest. The
+    /// dynamics work with changes from rest (the chest wall's rest forces balance it), so it
+    /// sets only the absolute pleural pressure. Configurations written before it existed
+    /// read [`LUNG_RECOIL_AT_FRC`].
+    #[serde(default = "default_lung_recoil_at_frc")]
+    pub lung_recoil_at_frc: f64,
     /// Barrier pressure p_b [Pa] of the pleural pressure-volume law
     /// ([`super::pleural::PleuralLaw`]): the recoil added near the residual volume (and the
     /// total lung capacity) is about p_b x0 / x at a distance x from it (x0 from rest). > 0;
@@ -272,6 +289,7 @@ impl Params {
             transverse_fraction: TRANSVERSE_FRACTION,
             bulk_modulus: 3.0e5,
             lung_elastance: 1.0 / 2.0e-6,
+            lung_recoil_at_frc: LUNG_RECOIL_AT_FRC,
             pleural_barrier_pressure: PLEURAL_BARRIER_PRESSURE,
             pleural_barrier_margin: PLEURAL_BARRIER_MARGIN,
             cartilage_stiffness: 1.0e4,
@@ -299,6 +317,7 @@ impl Params {
             ("params.tension_toe", self.tension_toe),
             ("params.bulk_modulus", self.bulk_modulus),
             ("params.lung_elastance", self.lung_elastance),
+            ("params.lung_recoil_at_frc", self.lung_recoil_at_frc),
             (
                 "params.pleural_barrier_pressure",
                 self.pleural_barrier_pressure,

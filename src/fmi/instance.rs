@@ -18,9 +18,9 @@ use super::types::{
     fmi2DoStepStatus, fmi2LastSuccessfulTime, fmi2PendingStatus, fmi2Status, fmi2Terminated,
 };
 use super::variables::{
-    Causality, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output, table,
+    Causality, Input, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output,
+    table,
 };
-use crate::anatomy::MuscleGroup;
 use crate::model::{Checkpoint, Config, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -175,7 +175,7 @@ pub struct Instance {
     phase: Phase,
     config: Config,
     rtol_explicit: bool,
-    inputs: [f64; 8],
+    inputs: [f64; Input::COUNT],
     torso: Option<Torso>,
     /// Snapshot of `torso` taken right after it was built (its fresh state).
     fresh: Option<Snapshot>,
@@ -215,7 +215,7 @@ struct Saved {
     phase: Phase,
     config: Config,
     rtol_explicit: bool,
-    inputs: [f64; 8],
+    inputs: [f64; Input::COUNT],
     start_time: f64,
     stop_time: Option<f64>,
     tolerance: Option<f64>,
@@ -275,9 +275,12 @@ impl FmuState {
             )));
         }
         saved.config.validate()?;
-        for (g, v) in MuscleGroup::ALL.iter().zip(saved.inputs) {
-            let var = table().by_vr(super::variables::VR_ACTIVATION + g.index() as u32);
-            if let Some(var) = var {
+        for (input, v) in Input::all().into_iter().zip(saved.inputs) {
+            let vr = match input {
+                Input::Activation(g) => super::variables::VR_ACTIVATION + g.index() as u32,
+                Input::AirwayOpening => super::variables::VR_AIRWAY_OPENING,
+            };
+            if let Some(var) = table().by_vr(vr) {
                 var.check(v)?;
             }
         }
@@ -338,7 +341,7 @@ fn type_name(t: ScalarType) -> &'static str {
 
 /// A pending change collected by a setter before it is committed.
 enum Change {
-    Input(MuscleGroup, f64),
+    Input(Input, f64),
     Parameter(Parameter, Value),
 }
 
@@ -366,7 +369,7 @@ impl Instance {
             rtol_explicit: false,
             stiffness_logged: false,
             step_start: Checkpoint::default(),
-            inputs: [0.0; 8],
+            inputs: [0.0; Input::COUNT],
             torso: None,
             fresh: None,
             spare: None,
@@ -613,8 +616,8 @@ impl Instance {
                 }
             };
             torso.set_drive(self.config.drive)?;
-            for g in MuscleGroup::ALL {
-                torso.set_activation(g, self.inputs[g.index()])?;
+            for input in Input::all() {
+                input.apply(&mut torso, self.inputs[input.index()])?;
             }
             self.fresh = Some(fresh);
             self.torso = Some(torso);
@@ -651,7 +654,7 @@ impl Instance {
         let var = self.variable(function, vr, ty)?;
         let value = match var.role {
             Role::Time => Ok(Value::Real(self.time)),
-            Role::Input(g) => Ok(Value::Real(self.inputs[g.index()])),
+            Role::Input(input) => Ok(Value::Real(self.inputs[input.index()])),
             Role::Parameter(p) => Ok(p.get(&self.config)),
             Role::Output(q) => self
                 .ensure_torso()
@@ -744,7 +747,7 @@ impl Instance {
             return Err(self.error(&format!("{function}: {e}; the value was not applied")));
         }
         match var.role {
-            Role::Input(g) => Ok(Change::Input(g, numeric.unwrap_or_default())),
+            Role::Input(input) => Ok(Change::Input(input, numeric.unwrap_or_default())),
             Role::Parameter(p) => {
                 let before_run =
                     matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
@@ -787,7 +790,7 @@ impl Instance {
         let mut drive_changed = false;
         for change in changes {
             match change {
-                Change::Input(g, v) => inputs[g.index()] = v,
+                Change::Input(input, v) => inputs[input.index()] = v,
                 Change::Parameter(p, v) => {
                     if let Err(e) = p.set(&mut config, v) {
                         return self.error(&format!("{function}: {e}"));
@@ -811,9 +814,10 @@ impl Instance {
             if drive_changed {
                 result = torso.set_drive(config.drive);
             }
-            for g in MuscleGroup::ALL {
-                if result.is_ok() && inputs[g.index()] != self.inputs[g.index()] {
-                    result = torso.set_activation(g, inputs[g.index()]);
+            for input in Input::all() {
+                let i = input.index();
+                if result.is_ok() && inputs[i] != self.inputs[i] {
+                    result = input.apply(torso, inputs[i]);
                 }
             }
             if let Err(e) = result {

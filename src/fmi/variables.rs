@@ -7,15 +7,15 @@
 //! the range checks of `fmi2SetReal`/`fmi2SetInteger`, and the GUID (a hash of the interface
 //! part of the table, so that it changes exactly when the interface changes).
 //!
-//! Value references are unique across types and grouped: 0 time, 1-8 activation inputs,
-//! 100-199 Real parameters, 200-299 Integer parameters, 300 the String parameter, 1000-1099
+//! Value references are unique across types and grouped: 0 time, 1-8 activation inputs, 9 the
+//! airway-opening pressure input, 100-199 Real parameters, 200-299 Integer parameters, 300 the String parameter, 1000-1099
 //! Real outputs, 2000-2767 markers (`2000 + 3 (i - 1) + axis`), 3000-3002 Integer outputs.
 //!
 //! Ranges: the table's min/max are what the FMI layer checks first (and what masters see);
 //! [`crate::Config::validate`] stays the final check. A test checks that both agree at every
 //! bound.
 
-use crate::anatomy::{MuscleGroup, SUBJECT_RANGES};
+use crate::anatomy::{MuscleGroup, SUBJECT_RANGES, Side};
 use crate::model::{Config, Quantity, Torso, Wave};
 use crate::solver::Method;
 use crate::{Error, Result};
@@ -32,6 +32,8 @@ pub const MARKER_SLOTS: u16 = 256;
 pub const VR_TIME: u32 = 0;
 /// First value reference of the activation inputs (in [`MuscleGroup::ALL`] order).
 pub const VR_ACTIVATION: u32 = 1;
+/// Value reference of `pressure.airway_opening`, the input after the activations.
+pub const VR_AIRWAY_OPENING: u32 = 9;
 /// Value reference of `marker[1].x`; `marker[i].<axis>` is `VR_MARKER + 3 (i - 1) + axis`.
 pub const VR_MARKER: u32 = 2000;
 
@@ -168,6 +170,8 @@ pub enum Parameter {
     GainLeft,
     /// `gain.right`.
     GainRight,
+    /// `gain.<group>.left|right`: one group's gain on one side.
+    GroupGain(MuscleGroup, Side),
     /// `scene.level_of_detail` (Integer).
     LevelOfDetail,
     /// `grid.rows` (Integer).
@@ -231,6 +235,10 @@ impl Parameter {
             LungRatio => Value::Real(config.lung_ratio),
             GainLeft => Value::Real(config.gain_left),
             GainRight => Value::Real(config.gain_right),
+            GroupGain(g, side) => Value::Real(match side {
+                Side::Right => config.group_gains.right[g.index()],
+                Side::Left => config.group_gains.left[g.index()],
+            }),
             LevelOfDetail => Value::Integer(config.scene.level_of_detail as i32),
             GridRows => Value::Integer(config.scene.grid_rows as i32),
             GridCols => Value::Integer(config.scene.grid_cols as i32),
@@ -278,6 +286,10 @@ impl Parameter {
             (LungRatio, Value::Real(v)) => config.lung_ratio = v,
             (GainLeft, Value::Real(v)) => config.gain_left = v,
             (GainRight, Value::Real(v)) => config.gain_right = v,
+            (GroupGain(g, side), Value::Real(v)) => match side {
+                Side::Right => config.group_gains.right[g.index()] = v,
+                Side::Left => config.group_gains.left[g.index()] = v,
+            },
             (LevelOfDetail, Value::Integer(v)) => {
                 config.scene.level_of_detail = non_negative(v)? as u32
             }
@@ -317,13 +329,61 @@ fn non_negative(v: i32) -> Result<usize> {
     usize::try_from(v).map_err(|_| Error::State(format!("negative value {v}")))
 }
 
+/// An input of the model: a muscle group's activation or the pressure at the airway opening.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Input {
+    /// The activation input of a muscle group, in [0, 1].
+    Activation(MuscleGroup),
+    /// The pressure at the airway opening relative to the body surface [Pa].
+    AirwayOpening,
+}
+
+impl Input {
+    /// Number of inputs.
+    pub const COUNT: usize = 9;
+
+    /// Every input, in value-reference order (the activations in [`MuscleGroup::ALL`] order,
+    /// then the airway opening).
+    pub fn all() -> [Input; Input::COUNT] {
+        let mut all = [Input::AirwayOpening; Input::COUNT];
+        for (slot, g) in all.iter_mut().zip(MuscleGroup::ALL) {
+            *slot = Input::Activation(g);
+        }
+        all
+    }
+
+    /// Position in [`Input::all`].
+    pub fn index(self) -> usize {
+        match self {
+            Input::Activation(g) => g.index(),
+            Input::AirwayOpening => Input::COUNT - 1,
+        }
+    }
+
+    /// Applies `value` to `torso` (range-checked there; a rejected value changes nothing).
+    pub fn apply(self, torso: &mut Torso, value: f64) -> Result<()> {
+        match self {
+            Input::Activation(g) => torso.set_activation(g, value),
+            Input::AirwayOpening => torso.set_airway_opening(value),
+        }
+    }
+
+    /// The value `torso` holds.
+    pub fn value(self, torso: &Torso) -> f64 {
+        match self {
+            Input::Activation(g) => torso.activation_input(g),
+            Input::AirwayOpening => torso.airway_opening(),
+        }
+    }
+}
+
 /// What a variable stands for in the model.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Role {
     /// Simulated time.
     Time,
-    /// The activation input of a muscle group.
-    Input(MuscleGroup),
+    /// An input.
+    Input(Input),
     /// A configuration field.
     Parameter(Parameter),
     /// A quantity read off the model.
@@ -361,8 +421,9 @@ pub struct Variable {
     pub role: Role,
     /// For outputs, the inputs (value references, ascending) the output depends on directly:
     /// those whose new value changes the output at the same communication point, without a
-    /// step. Empty for an output read off the model's state, which every output of this model
-    /// is (activations act on the state through the dynamics, not on the outputs; measured by
+    /// step. Empty for an output read off the model's state, which every output but two is
+    /// (activations act on the state through the dynamics, not on the outputs); the alveolar
+    /// and pleural pressures depend on the airway-opening pressure at once (measured by
     /// `python/tests/test_fmu_structure.py` and `tests/fmi_structure.rs`). `None` for the
     /// other causalities. Written as the `dependencies` of `<ModelStructure>`.
     pub input_dependencies: Option<Vec<u32>>,
@@ -431,6 +492,12 @@ pub const UNITS: &[Unit] = &[
         base: &[("kg", 1), ("m", -1), ("s", -2)],
         factor: 1.0,
         display: &[("cmH2O", 1.0 / PA_PER_CMH2O)],
+    },
+    Unit {
+        name: "L/s",
+        base: &[("m", 3), ("s", -1)],
+        factor: 0.001,
+        display: &[],
     },
     Unit {
         name: "Hz",
@@ -615,6 +682,11 @@ impl Row {
         self.0.input_dependencies = Some(Vec::new());
         self
     }
+    /// An output that the inputs `vrs` reach at once, without a step (direct feedthrough).
+    fn depends_on(mut self, vrs: &[u32]) -> Row {
+        self.0.input_dependencies = Some(vrs.to_vec());
+        self
+    }
     /// A parameter whose start value is read from the default configuration.
     fn parameter(mut self, defaults: &Config) -> Row {
         let Role::Parameter(p) = self.0.role else {
@@ -656,7 +728,7 @@ fn build() -> Vec<Variable> {
             format!("activation.{}", g.name()),
             VR_ACTIVATION + k as u32,
             Real,
-            Role::Input(g),
+            Role::Input(Input::Activation(g)),
             format!(
                 "Activation input of the {} (added to the drive, applied clamped to [0, 1])",
                 g.name().replace('_', " ")
@@ -668,6 +740,21 @@ fn build() -> Vec<Variable> {
         r.start = Start::Real(0.0);
         rows.push(r);
     }
+    let (lo, hi) = crate::model::AIRWAY_OPENING_RANGE;
+    let mut r = Row::new(
+        "pressure.airway_opening",
+        VR_AIRWAY_OPENING,
+        Real,
+        Role::Input(Input::AirwayOpening),
+        "Pressure at the airway opening relative to the body surface (0: breathing air; a ventilator's pressure); reaches the alveoli through the airway resistance",
+    )
+    .unit("Pa")
+    .display("cmH2O")
+    .range(lo, hi)
+    .0;
+    r.causality = Causality::Input;
+    r.start = Start::Real(0.0);
+    rows.push(r);
 
     let methods = (Method::ALL.len() - 1) as f64;
     let par = |name: &str, vr: u32, ty: ScalarType, p: Parameter, desc: &str| {
@@ -795,6 +882,28 @@ fn build() -> Vec<Variable> {
         par("solver.atol", 131, Real, P::SolverAtol, "Absolute tolerance of the integrator on the state").range(1e-14, 1e-2),
         par("solver.max_step", 132, Real, P::SolverMaxStep, "Largest internal integration step").unit("s").range(1e-5, 1.0),
     ]);
+    // 140 + 2 k (right) and 141 + 2 k (left) for the k-th group of MuscleGroup::ALL.
+    for (k, g) in MuscleGroup::ALL.into_iter().enumerate() {
+        for (s, side) in [Side::Right, Side::Left].into_iter().enumerate() {
+            let side_name = match side {
+                Side::Right => "right",
+                Side::Left => "left",
+            };
+            params.push(
+                par(
+                    &format!("gain.{}.{side_name}", g.name()),
+                    140 + 2 * k as u32 + s as u32,
+                    Real,
+                    P::GroupGain(g, side),
+                    &format!(
+                        "Activation gain of the {} on the subject's {side_name} side, times gain.{side_name} (1: healthy, 0: paralysed)",
+                        g.name().replace('_', " ")
+                    ),
+                )
+                .range(0.0, 2.0),
+            );
+        }
+    }
     rows.extend(params.into_iter().map(|r| r.parameter(&d).0));
 
     use Quantity as Q;
@@ -870,7 +979,79 @@ fn build() -> Vec<Variable> {
         )
         .display("mm")
         .0,
+        out(
+            "pressure.pleural",
+            1011,
+            Q::PleuralPressure,
+            "Pa",
+            "Pleural pressure relative to the body surface: alveolar pressure less the lungs' elastic recoil (about -5 cmH2O at rest)",
+        )
+        .display("cmH2O")
+        .depends_on(&[VR_AIRWAY_OPENING])
+        .0,
+        out(
+            "pressure.alveolar",
+            1012,
+            Q::AlveolarPressure,
+            "Pa",
+            "Alveolar pressure relative to the body surface: the airway opening's less the drop across the airway resistance",
+        )
+        .display("cmH2O")
+        .depends_on(&[VR_AIRWAY_OPENING])
+        .0,
+        out(
+            "flow.airway",
+            1013,
+            Q::AirwayFlow,
+            "L/s",
+            "Airflow into the lungs (rate of the lung volume), positive in inspiration",
+        )
+        .0,
     ]);
+    // 1014 + 2 k + side (0 right, 1 left) for lung, rib-cage and abdominal displaced
+    // volumes and the hemidiaphragm.
+    type Sided = (&'static str, fn(u8) -> Quantity, &'static str, &'static str);
+    let sided: [Sided; 4] = [
+        (
+            "volume.lung",
+            Q::LungVolumeSide,
+            "L",
+            "Volume of the {side} lung: its rest share of the lungs (right 53.3 %, CT volumetry) plus the change of its side of the thorax",
+        ),
+        (
+            "volume.rib_cage_displaced",
+            Q::RibCageDisplacedSide,
+            "L",
+            "Volume displaced by the {side} half of the rib-cage wall since the start",
+        ),
+        (
+            "volume.abdomen_displaced",
+            Q::AbdomenDisplacedSide,
+            "L",
+            "Volume displaced by the {side} half of the abdominal wall since the start",
+        ),
+        (
+            "diaphragm.displacement",
+            Q::DiaphragmDisplacementSide,
+            "m",
+            "Displacement of the {side} hemidiaphragm since the start, positive cranial",
+        ),
+    ];
+    for (k, (name, q, unit, desc)) in sided.into_iter().enumerate() {
+        for (s, side) in ["right", "left"].into_iter().enumerate() {
+            let mut row = out(
+                &format!("{name}.{side}"),
+                1014 + 2 * k as u32 + s as u32,
+                q(s as u8),
+                unit,
+                &desc.replace("{side}", side),
+            );
+            if unit == "m" {
+                row = row.display("mm");
+            }
+            rows.push(row.0);
+        }
+    }
     for (axis, a) in AXES.iter().enumerate() {
         rows.push(
             out(

@@ -86,6 +86,12 @@ pub struct Config {
     pub gain_left: f64,
     /// Activation gain of the subject's right side, in [0, 2].
     pub gain_right: f64,
+    /// Activation gain of each muscle group on each side, on top of `gain_left` and
+    /// `gain_right` (FMI `gain.<group>.left|right`, in [0, 2]; 1 healthy): 0 on the left
+    /// diaphragm paralyses the left hemidiaphragm. Configurations written before it existed
+    /// read all ones.
+    #[serde(default)]
+    pub group_gains: GroupGains,
     /// A subject mesh directory written by `torso mesh prepare` (FMI `subject.mesh_dir`): its
     /// `skin.obj` replaces the generated skin and its `abdomen.obj`, when present, the
     /// generated abdominal cavity (see [`crate::anatomy::prepared`]); `None`: generated
@@ -109,6 +115,7 @@ impl Default for Config {
             lung_ratio: crate::dynamics::REST_LUNG_FRACTION,
             gain_left: 1.0,
             gain_right: 1.0,
+            group_gains: GroupGains::default(),
             subject_mesh_dir: None,
             params: None,
         }
@@ -141,6 +148,15 @@ impl Config {
         check("lung.ratio", self.lung_ratio, (0.3, 1.0))?;
         check("gain.left", self.gain_left, (0.0, 2.0))?;
         check("gain.right", self.gain_right, (0.0, 2.0))?;
+        for g in crate::anatomy::MuscleGroup::ALL {
+            for (side, gains) in [
+                ("right", &self.group_gains.right),
+                ("left", &self.group_gains.left),
+            ] {
+                let name = format!("gain.{}.{side}", g.name());
+                check(&name, gains[g.index()], (0.0, 2.0))?;
+            }
+        }
         if let Some(dir) = &self.subject_mesh_dir {
             crate::anatomy::prepared::check_dir(dir)?;
         }
@@ -148,5 +164,25 @@ impl Config {
             p.validate()?;
         }
         Ok(())
+    }
+}
+
+/// Activation gains per muscle group (in [`crate::anatomy::MuscleGroup::ALL`] order) and
+/// side, each in [0, 2], multiplying the side's overall gain: a paralysed group has 0 on its
+/// side, a healthy one 1.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GroupGains {
+    /// Gains of the subject's right side.
+    pub right: [f64; 8],
+    /// Gains of the subject's left side.
+    pub left: [f64; 8],
+}
+
+impl Default for GroupGains {
+    fn default() -> Self {
+        GroupGains {
+            right: [1.0; 8],
+            left: [1.0; 8],
+        }
     }
 }

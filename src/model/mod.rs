@@ -21,9 +21,9 @@ pub mod run;
 mod snapshot;
 mod torso;
 
-pub use config::{Config, Scene, SolverConfig};
+pub use config::{Config, GroupGains, Scene, SolverConfig};
 pub(crate) use drive::check;
 pub use drive::{Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::{Checkpoint, Snapshot};
-pub use torso::{AdvanceStats, Compiled, Sample, Torso};
+pub use torso::{AIRWAY_OPENING_RANGE, AdvanceStats, Compiled, Sample, Torso};

@@ -27,6 +27,23 @@ pub enum Quantity {
     AbdominalPressure,
     /// Cranial displacement of the diaphragm dome since the start [m] (positive cranial).
     DiaphragmDisplacement,
+    /// Pleural pressure relative to the body surface [Pa]: the alveolar pressure less the
+    /// lungs' elastic recoil (about -5 cmH2O at rest).
+    PleuralPressure,
+    /// Alveolar pressure relative to the body surface [Pa]: the airway opening's less the
+    /// drop across the airway resistance.
+    AlveolarPressure,
+    /// Airflow into the lungs [L/s], positive in inspiration.
+    AirwayFlow,
+    /// One lung's volume [L], side 0 right, 1 left: the right lung's rest share of the lungs
+    /// (`observe::RIGHT_LUNG_FRACTION`) plus the change of its side's share of the thorax.
+    LungVolumeSide(u8),
+    /// Volume displaced by one side's rib-cage wall since the start [L] (0 right, 1 left).
+    RibCageDisplacedSide(u8),
+    /// Volume displaced by one side's abdominal wall since the start [L] (0 right, 1 left).
+    AbdomenDisplacedSide(u8),
+    /// Cranial displacement of one hemidiaphragm since the start [m] (0 right, 1 left).
+    DiaphragmDisplacementSide(u8),
     /// Sternum displacement since the start along axis 0 = x, 1 = y, 2 = z [m].
     SternumDisplacement(u8),
     /// Marker `index` (0-based, row-major from the top row, column 0 on the subject's right),

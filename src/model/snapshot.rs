@@ -25,6 +25,9 @@ pub struct Snapshot {
     pub state: Vec<f64>,
     /// Activation inputs, one per group in [`crate::anatomy::MuscleGroup::ALL`] order.
     pub inputs: [f64; 8],
+    /// Pressure at the airway opening [Pa]; snapshots written before it existed read 0.
+    #[serde(default)]
+    pub airway_opening: f64,
     /// The drive.
     pub drive: super::Drive,
     /// Solver memory and statistics, serialised by the solver.
@@ -57,7 +60,7 @@ impl Snapshot {
     }
 }
 
-/// What a [`Snapshot`] keeps (time, state vector, inputs, drive, solver memory), held natively
+/// What a [`Snapshot`] keeps (time, state vector, inputs, airway pressure, drive, solver memory), held natively
 /// for rolling back a step within one instance ([`super::Torso::checkpoint`],
 /// [`super::Torso::rollback`]). Taking a checkpoint again reuses its buffers: one before every
 /// communication step costs copies of three state-length vectors, with no allocation and no
@@ -68,6 +71,7 @@ pub struct Checkpoint {
     pub(super) time: f64,
     pub(super) state: Vec<f64>,
     pub(super) inputs: [f64; 8],
+    pub(super) airway_opening: f64,
     pub(super) drive: Option<super::Drive>,
     pub(super) solver: Option<Integrator>,
 }

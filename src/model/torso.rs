@@ -17,6 +17,20 @@ mod sampled;
 
 pub use sampled::Sample;
 
+/// Allowed pressure at the airway opening [Pa]: +-50 cmH2O, beyond the peak pressures of
+/// mechanical ventilation (lung-protective ventilation keeps the plateau at or below 30
+/// cmH2O; ARDS Network 2000, N Engl J Med 342:1301).
+pub const AIRWAY_OPENING_RANGE: (f64, f64) = (-50.0 * 98.0665, 50.0 * 98.0665);
+
+/// The gain of each group on each side: the side's overall gain times the group's.
+fn side_gains(config: &Config) -> ([f64; 8], [f64; 8]) {
+    let g = &config.group_gains;
+    (
+        g.right.map(|x| x * config.gain_right),
+        g.left.map(|x| x * config.gain_left),
+    )
+}
+
 /// Statistics of one [`Torso::advance_to`] call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AdvanceStats {
@@ -86,9 +100,11 @@ struct System<'a> {
     weights: &'a (Vec<u32>, Vec<f64>),
     data: &'a mut Data,
     inputs: [f64; 8],
+    /// Pressure at the airway opening [Pa].
+    airway_opening: f64,
     drive: &'a Drive,
-    gain_right: f64,
-    gain_left: f64,
+    /// Gain of each group on the right and left sides (overall side gain times group gain).
+    gains: ([f64; 8], [f64; 8]),
     /// Jacobian memory, when the stiff method is in use.
     jacobian: Option<&'a mut TorsoJacobian>,
 }
@@ -100,7 +116,8 @@ impl System<'_> {
             groups[g.index()] =
                 (self.inputs[g.index()] + self.drive.activation(g, t)).clamp(0.0, 1.0);
         }
-        Activations::new(&groups, self.gain_right, self.gain_left)
+        Activations::per_group(&groups, &self.gains.0, &self.gains.1)
+            .with_airway_opening(self.airway_opening)
     }
 }
 
@@ -151,6 +168,8 @@ pub struct Torso {
     y: Vec<f64>,
     time: f64,
     inputs: [f64; 8],
+    /// Pressure at the airway opening [Pa] (an input, like the activations).
+    airway_opening: f64,
     integrator: Integrator,
     observation: Option<Observation>,
     markers: MarkerOutputs,
@@ -194,6 +213,7 @@ impl Torso {
             y,
             time: 0.0,
             inputs: [0.0; 8],
+            airway_opening: 0.0,
             integrator,
             observation: None,
             markers: MarkerOutputs::default(),
@@ -229,6 +249,25 @@ impl Torso {
         Ok(())
     }
 
+    /// Sets the pressure at the airway opening relative to the body surface [Pa], within
+    /// [`AIRWAY_OPENING_RANGE`] (0 breathing air; a ventilator's pressure; negative for
+    /// negative-pressure ventilation). It acts on the alveolar and pleural pressures at once
+    /// and on the volumes through the dynamics; a rejected value leaves the state as it was.
+    pub fn set_airway_opening(&mut self, pressure: f64) -> Result<()> {
+        super::check("pressure.airway_opening", pressure, AIRWAY_OPENING_RANGE)?;
+        if self.airway_opening != pressure {
+            self.airway_opening = pressure;
+            self.integrator.invalidate();
+            self.observation = None;
+        }
+        Ok(())
+    }
+
+    /// The pressure at the airway opening [Pa].
+    pub fn airway_opening(&self) -> f64 {
+        self.airway_opening
+    }
+
     /// The activation input of `group`.
     pub fn activation_input(&self, group: MuscleGroup) -> f64 {
         self.inputs[group.index()]
@@ -259,6 +298,7 @@ impl Torso {
             y,
             time,
             inputs,
+            airway_opening,
             integrator,
             config,
             jacobian,
@@ -269,9 +309,9 @@ impl Torso {
             weights: &compiled.error_weights,
             data,
             inputs: *inputs,
+            airway_opening: *airway_opening,
             drive: &config.drive,
-            gain_right: config.gain_right,
-            gain_left: config.gain_left,
+            gains: side_gains(config),
             jacobian: jacobian.as_deref_mut(),
         };
         (system, y, time, integrator)
@@ -323,7 +363,13 @@ impl Torso {
             &Layout::new(model),
             &self.y,
         );
-        let o = observe::observe(model, &self.compiled.compartments, &self.data.pos);
+        let o = observe::observe(
+            model,
+            &self.compiled.compartments,
+            &self.data.pos,
+            &self.data.vel,
+            self.airway_opening,
+        );
         self.observation = Some(o);
         o
     }
@@ -341,6 +387,28 @@ impl Torso {
             Quantity::AbdomenDisplaced => self.observation().abdomen_displaced * litres,
             Quantity::AbdominalPressure => self.observation().abdominal_pressure,
             Quantity::DiaphragmDisplacement => self.observation().diaphragm_displacement,
+            Quantity::PleuralPressure => self.observation().pleural_pressure,
+            Quantity::AlveolarPressure => self.observation().alveolar_pressure,
+            Quantity::AirwayFlow => self.observation().airway_flow * litres,
+            Quantity::LungVolumeSide(s) if s < 2 => {
+                let m = &self.compiled.model;
+                let rest = m.thorax_rest_volume - m.dome_faceting_volume - m.non_lung_volume;
+                let share = if s == 0 {
+                    observe::RIGHT_LUNG_FRACTION
+                } else {
+                    1.0 - observe::RIGHT_LUNG_FRACTION
+                };
+                (rest * share + self.observation().sides[s as usize].lung_change) * litres
+            }
+            Quantity::RibCageDisplacedSide(s) if s < 2 => {
+                self.observation().sides[s as usize].rib_cage_displaced * litres
+            }
+            Quantity::AbdomenDisplacedSide(s) if s < 2 => {
+                self.observation().sides[s as usize].abdomen_displaced * litres
+            }
+            Quantity::DiaphragmDisplacementSide(s) if s < 2 => {
+                self.observation().sides[s as usize].diaphragm_displacement
+            }
             Quantity::SternumDisplacement(axis) if axis < 3 => {
                 self.observation().sternum_displacement[axis as usize]
             }
@@ -425,6 +493,7 @@ impl Torso {
             compiled,
             data,
             inputs,
+            airway_opening,
             config,
             ..
         } = self;
@@ -433,9 +502,9 @@ impl Torso {
             weights: &compiled.error_weights,
             data,
             inputs: *inputs,
+            airway_opening: *airway_opening,
             drive: &config.drive,
-            gain_right: config.gain_right,
-            gain_left: config.gain_left,
+            gains: side_gains(config),
             jacobian: None,
         };
         system.rhs(t, y, dydt);
@@ -455,6 +524,7 @@ impl Torso {
             time: self.time,
             state: self.y.clone(),
             inputs: self.inputs,
+            airway_opening: self.airway_opening,
             drive: self.config.drive,
             solver: serde_json::to_value(&self.integrator).unwrap_or(serde_json::Value::Null),
         }
@@ -492,6 +562,7 @@ impl Torso {
         self.time = snapshot.time;
         self.y.copy_from_slice(&snapshot.state);
         self.inputs = snapshot.inputs;
+        self.airway_opening = snapshot.airway_opening;
         self.config.drive = snapshot.drive;
         self.observation = None;
         self.markers.invalidate();
@@ -506,6 +577,7 @@ impl Torso {
         checkpoint.time = self.time;
         checkpoint.state.clone_from(&self.y);
         checkpoint.inputs = self.inputs;
+        checkpoint.airway_opening = self.airway_opening;
         checkpoint.drive = Some(self.config.drive);
         match &mut checkpoint.solver {
             Some(solver) => solver.copy_memory_from(&self.integrator),
@@ -536,16 +608,19 @@ impl Torso {
         self.time = checkpoint.time;
         self.y.copy_from_slice(&checkpoint.state);
         self.inputs = checkpoint.inputs;
+        self.airway_opening = checkpoint.airway_opening;
         self.config.drive = drive;
         self.observation = None;
         self.markers.invalidate();
         Ok(())
     }
 
-    /// Back to the freshly built state (time 0, rest state, zero inputs, solver memory cleared).
+    /// Back to the freshly built state (time 0, rest state, zero inputs and airway pressure,
+    /// solver memory cleared).
     pub fn reset(&mut self) {
         self.time = 0.0;
         self.inputs = [0.0; 8];
+        self.airway_opening = 0.0;
         self.y = dynamics::rest_state(&self.compiled.model);
         self.integrator.reset();
         self.observation = None;

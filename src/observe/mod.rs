@@ -47,6 +47,32 @@ pub struct Observation {
     pub diaphragm_displacement: f64,
     /// Displacement of the middle of the sternum since rest [m].
     pub sternum_displacement: Vector3<f64>,
+    /// Airflow into the lungs [m^3/s], the rate of the thoracic volume (positive in
+    /// inspiration).
+    pub airway_flow: f64,
+    /// Alveolar pressure relative to the body surface [Pa]: the airway opening's less the
+    /// drop R V' across the airway resistance.
+    pub alveolar_pressure: f64,
+    /// Pleural pressure relative to the body surface [Pa]: the alveolar pressure less the
+    /// lungs' elastic recoil, -[`crate::dynamics::Params::lung_recoil_at_frc`] at rest.
+    pub pleural_pressure: f64,
+    /// The right side's and the left side's shares (the midsagittal plane splits each
+    /// region); each pair adds up to the whole.
+    pub sides: [SideObservation; 2],
+}
+
+/// Rate of change of the volume enclosed by the closed surface `tris` [m^3/s]: the time
+/// derivative of the divergence-theorem sum, 1/6 sum_t (a' . (b x c) + a . (b' x c) +
+/// a . (b x c')).
+fn volume_rate(pos: &[Point3<f64>], vel: &[Vector3<f64>], tris: &[[u32; 3]]) -> f64 {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| pos[i as usize].coords);
+            let [va, vb, vc] = t.map(|i| vel[i as usize]);
+            va.dot(&b.cross(&c)) + a.dot(&vb.cross(&c)) + a.dot(&b.cross(&vc))
+        })
+        .sum::<f64>()
+        / 6.0
 }
 
 /// Sum of the divergence-theorem terms of `tris` about `origin` (not closed: a wall region).
@@ -60,6 +86,48 @@ fn partial_volume(pos: &[Point3<f64>], tris: &[[u32; 3]], origin: &Point3<f64>) 
         / 6.0
 }
 
+/// Right lung's share of the lungs' volume: 53.3 +- 1.3 % standing, 53.6 +- 1.5 % supine (CT
+/// volumetry of 32 healthy volunteers; Yamada et al. 2020, Respiration 99:598, Table 3; PMC7490509). It
+/// splits the rest lung volume between the sides; the changes are each side's own.
+pub const RIGHT_LUNG_FRACTION: f64 = 0.533;
+
+/// One side's share of the wall regions: triangles whose rest centroid lies on that side of
+/// the midsagittal plane (z > 0 right) with weight 1, those on the plane with weight 1/2;
+/// their divergence sums are taken about a point of the plane.
+#[derive(Clone, Debug)]
+struct SideRegions {
+    /// Rib-cage wall, abdominal wall, dome and thorax, each as (triangle, weight).
+    regions: [Vec<([u32; 3], f64)>; 4],
+    /// Rest sums of the four, in that order.
+    rest: [f64; 4],
+    /// Projected (horizontal) area of the side's dome [m^2].
+    dome_area: f64,
+}
+
+/// Weighted divergence-theorem sum of `tris` about `origin`.
+fn weighted_volume(pos: &[Point3<f64>], tris: &[([u32; 3], f64)], origin: &Point3<f64>) -> f64 {
+    tris.iter()
+        .map(|(t, w)| {
+            let [a, b, c] = t.map(|i| pos[i as usize] - origin);
+            w * a.dot(&b.cross(&c))
+        })
+        .sum::<f64>()
+        / 6.0
+}
+
+/// What one side contributes to an observation (changes since rest).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SideObservation {
+    /// Volume displaced by this side's rib-cage wall [m^3].
+    pub rib_cage_displaced: f64,
+    /// Volume displaced by this side's abdominal wall [m^3].
+    pub abdomen_displaced: f64,
+    /// Change of this side's share of the thoracic volume, the change of its lung [m^3].
+    pub lung_change: f64,
+    /// Cranial displacement of this side's hemidiaphragm [m] (piston-equivalent).
+    pub diaphragm_displacement: f64,
+}
+
 /// Precomputed wall regions of a model for the compartment split.
 #[derive(Clone, Debug)]
 pub struct Compartments {
@@ -71,6 +139,8 @@ pub struct Compartments {
     origin: Point3<f64>,
     rib_cage_rest: f64,
     wall_rest: f64,
+    /// Right, then left.
+    sides: [SideRegions; 2],
 }
 
 impl Compartments {
@@ -112,7 +182,53 @@ impl Compartments {
                 .fold(Vector3::zeros(), |s, &i| s + model.rest[i as usize].coords)
                 / n.max(1.0),
         );
+        // The sides: the midsagittal plane z = 0 splits every region; the sums are taken about
+        // the origin moved onto that plane, so that the two sides add up to the whole.
+        let mid = Point3::new(origin.x, origin.y, 0.0);
+        let centroid_z = |t: &[u32; 3]| t.iter().map(|&i| model.rest[i as usize].z).sum::<f64>();
+        // Weight of a triangle on each side: whole on its own side, halved on the plane.
+        let weight = |t: &[u32; 3], side: usize| {
+            let z = centroid_z(t);
+            if z.abs() < 1e-9 {
+                0.5
+            } else if (z > 0.0) == (side == 0) {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        let sides = [0, 1].map(|side| {
+            let regions = [
+                rib_cage_wall.as_slice(),
+                abdominal_wall.as_slice(),
+                dome.as_slice(),
+                model.thorax_triangles.as_slice(),
+            ]
+            .map(|tris| {
+                tris.iter()
+                    .map(|t| (*t, weight(t, side)))
+                    .filter(|(_, w)| *w > 0.0)
+                    .collect::<Vec<_>>()
+            });
+            let rest = regions
+                .each_ref()
+                .map(|r| weighted_volume(&model.rest, r, &mid));
+            let dome_area = regions[2]
+                .iter()
+                .map(|(t, w)| {
+                    let [a, b, c] = t.map(|i| model.rest[i as usize]);
+                    w * 0.5 * (b - a).cross(&(c - a)).y
+                })
+                .sum::<f64>()
+                .max(1e-9);
+            SideRegions {
+                regions,
+                rest,
+                dome_area,
+            }
+        });
         Compartments {
+            sides,
             dome_rest: partial_volume(&model.rest, &dome, &origin),
             dome,
             dome_area,
@@ -147,13 +263,25 @@ pub fn costal_margin_height(model: &Model) -> f64 {
     }
 }
 
-/// Observes the state whose anchor positions are `pos`.
-pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) -> Observation {
+/// Observes the state whose anchor positions are `pos` and velocities `vel`, with the airway
+/// opening at `airway_opening` [Pa] (0 breathing air).
+pub fn observe(
+    model: &Model,
+    compartments: &Compartments,
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
+    airway_opening: f64,
+) -> Observation {
     // The mesh's volumes (the dynamics' own), then corrected for the dome's faceting so
     // that every level of detail reports the volumes of the smooth surfaces.
     let abdomen_mesh = volume(pos, &model.abdomen_triangles);
-    let thorax = volume(pos, &model.thorax_triangles) - model.dome_faceting_volume;
+    let thorax_mesh = volume(pos, &model.thorax_triangles);
+    let thorax = thorax_mesh - model.dome_faceting_volume;
     let abdomen = abdomen_mesh + model.dome_faceting_volume;
+    let airway_flow = volume_rate(pos, vel, &model.thorax_triangles);
+    let alveolar_pressure = airway_opening - model.airway_resistance * airway_flow;
+    let pleural_pressure =
+        alveolar_pressure - model.params.lung_recoil_at_frc - model.pleural.recoil(thorax_mesh);
     let o = &compartments.origin;
     let rib_cage_displaced =
         partial_volume(pos, &compartments.rib_cage_wall, o) - compartments.rib_cage_rest;
@@ -174,5 +302,18 @@ pub fn observe(model: &Model, compartments: &Compartments, pos: &[Point3<f64>]) 
             * (model.abdomen_rest_volume / abdomen_mesh - 1.0),
         diaphragm_displacement,
         sternum_displacement: pos[probe] - model.rest[probe],
+        airway_flow,
+        alveolar_pressure,
+        pleural_pressure,
+        sides: compartments.sides.each_ref().map(|s| {
+            let mid = Point3::new(o.x, o.y, 0.0);
+            let now = s.regions.each_ref().map(|r| weighted_volume(pos, r, &mid));
+            SideObservation {
+                rib_cage_displaced: now[0] - s.rest[0],
+                abdomen_displaced: now[1] - s.rest[1],
+                diaphragm_displacement: (now[2] - s.rest[2]) / s.dome_area,
+                lung_change: now[3] - s.rest[3],
+            }
+        }),
     }
 }
