@@ -172,6 +172,8 @@ pub struct Torso {
     airway_opening: f64,
     integrator: Integrator,
     observation: Option<Observation>,
+    /// Each side's share of the observation (right, left), computed when first read.
+    sides: Option<[observe::SideObservation; 2]>,
     markers: MarkerOutputs,
     /// Jacobian pattern and scratch of the stiff method (built when it is used).
     jacobian: Option<Box<TorsoJacobian>>,
@@ -216,6 +218,7 @@ impl Torso {
             airway_opening: 0.0,
             integrator,
             observation: None,
+            sides: None,
             markers: MarkerOutputs::default(),
             jacobian: (config.solver.method == Method::Rosenbrock)
                 .then(|| Box::new(TorsoJacobian::new(model))),
@@ -259,6 +262,7 @@ impl Torso {
             self.airway_opening = pressure;
             self.integrator.invalidate();
             self.observation = None;
+            self.sides = None;
         }
         Ok(())
     }
@@ -337,6 +341,7 @@ impl Torso {
                 integrator.integrate(&mut system, time, y, t)
             };
             self.observation = None;
+            self.sides = None;
             self.markers.invalidate();
             result.map_err(|e| Error::Numerical {
                 time: self.time,
@@ -374,6 +379,25 @@ impl Torso {
         o
     }
 
+    /// Each side's share of the observation of the current state: right, then left.
+    pub fn side_observation(&mut self) -> [observe::SideObservation; 2] {
+        if let Some(s) = self.sides {
+            return s;
+        }
+        // The positions of the current state (scratch that an external rhs call may have
+        // overwritten since the observation was cached).
+        let model = &self.compiled.model;
+        dynamics::kinematics::positions_and_velocities(
+            model,
+            &mut self.data,
+            &Layout::new(model),
+            &self.y,
+        );
+        let s = observe::observe_sides(&self.compiled.compartments, &self.data.pos);
+        self.sides = Some(s);
+        s
+    }
+
     /// Reads a quantity (volumes in litres, pressure in Pa, lengths in m).
     pub fn read(&mut self, quantity: Quantity) -> Result<f64> {
         let litres = 1e3;
@@ -398,16 +422,16 @@ impl Torso {
                 } else {
                     1.0 - observe::RIGHT_LUNG_FRACTION
                 };
-                (rest * share + self.observation().sides[s as usize].lung_change) * litres
+                (rest * share + self.side_observation()[s as usize].lung_change) * litres
             }
             Quantity::RibCageDisplacedSide(s) if s < 2 => {
-                self.observation().sides[s as usize].rib_cage_displaced * litres
+                self.side_observation()[s as usize].rib_cage_displaced * litres
             }
             Quantity::AbdomenDisplacedSide(s) if s < 2 => {
-                self.observation().sides[s as usize].abdomen_displaced * litres
+                self.side_observation()[s as usize].abdomen_displaced * litres
             }
             Quantity::DiaphragmDisplacementSide(s) if s < 2 => {
-                self.observation().sides[s as usize].diaphragm_displacement
+                self.side_observation()[s as usize].diaphragm_displacement
             }
             Quantity::SternumDisplacement(axis) if axis < 3 => {
                 self.observation().sternum_displacement[axis as usize]
@@ -474,6 +498,7 @@ impl Torso {
         self.y.copy_from_slice(y);
         self.integrator.invalidate();
         self.observation = None;
+        self.sides = None;
         self.markers.invalidate();
         Ok(())
     }
@@ -565,6 +590,7 @@ impl Torso {
         self.airway_opening = snapshot.airway_opening;
         self.config.drive = snapshot.drive;
         self.observation = None;
+        self.sides = None;
         self.markers.invalidate();
         Ok(())
     }
@@ -611,6 +637,7 @@ impl Torso {
         self.airway_opening = checkpoint.airway_opening;
         self.config.drive = drive;
         self.observation = None;
+        self.sides = None;
         self.markers.invalidate();
         Ok(())
     }
@@ -624,6 +651,7 @@ impl Torso {
         self.y = dynamics::rest_state(&self.compiled.model);
         self.integrator.reset();
         self.observation = None;
+        self.sides = None;
         self.markers.invalidate();
     }
 }

@@ -56,9 +56,6 @@ pub struct Observation {
     /// Pleural pressure relative to the body surface [Pa]: the alveolar pressure less the
     /// lungs' elastic recoil, -[`crate::dynamics::Params::lung_recoil_at_frc`] at rest.
     pub pleural_pressure: f64,
-    /// The right side's and the left side's shares (the midsagittal plane splits each
-    /// region); each pair adds up to the whole.
-    pub sides: [SideObservation; 2],
 }
 
 /// Rate of change of the volume enclosed by the closed surface `tris` [m^3/s]: the time
@@ -305,15 +302,21 @@ pub fn observe(
         airway_flow,
         alveolar_pressure,
         pleural_pressure,
-        sides: compartments.sides.each_ref().map(|s| {
-            let mid = Point3::new(o.x, o.y, 0.0);
-            let now = s.regions.each_ref().map(|r| weighted_volume(pos, r, &mid));
-            SideObservation {
-                rib_cage_displaced: now[0] - s.rest[0],
-                abdomen_displaced: now[1] - s.rest[1],
-                diaphragm_displacement: (now[2] - s.rest[2]) / s.dome_area,
-                lung_change: now[3] - s.rest[3],
-            }
-        }),
     }
+}
+
+/// Each side's share of the observation of the state whose anchor positions are `pos`:
+/// right, then left (kept apart from [`observe`], so that only readers of a side pay for it).
+pub fn observe_sides(compartments: &Compartments, pos: &[Point3<f64>]) -> [SideObservation; 2] {
+    let o = &compartments.origin;
+    let mid = Point3::new(o.x, o.y, 0.0);
+    compartments.sides.each_ref().map(|s| {
+        let now = s.regions.each_ref().map(|r| weighted_volume(pos, r, &mid));
+        SideObservation {
+            rib_cage_displaced: now[0] - s.rest[0],
+            abdomen_displaced: now[1] - s.rest[1],
+            diaphragm_displacement: (now[2] - s.rest[2]) / s.dome_area,
+            lung_change: now[3] - s.rest[3],
+        }
+    })
 }
