@@ -88,6 +88,10 @@ pub struct FitArgs {
     /// and a polish from the first optimum follows (both within --max-evals).
     #[arg(long)]
     pub skin_fit: bool,
+    /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search (0.2-0.8;
+    /// 0.5 is the sine of thesis eq. 2.4).
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
+    pub ti_ttot: f64,
 }
 
 /// A progress bar on a terminal; silent when stdout is not one.
@@ -200,8 +204,14 @@ pub fn main(args: &FitArgs) -> Result<()> {
         max_evals: args.max_evals,
         seed: args.seed,
         threads: args.threads.unwrap_or_else(default_threads),
+        inspiratory_fraction: args.ti_ttot,
         ..FitOptions::default()
     };
+    crate::model::check(
+        "--ti-ttot",
+        args.ti_ttot,
+        crate::model::drive::INSPIRATORY_FRACTION_RANGE,
+    )?;
     if !(1..=2).contains(&options.threads) {
         return Err(Error::invalid("--threads", options.threads, "1 or 2"));
     }

@@ -82,6 +82,9 @@ pub struct FitOptions {
     /// Abdominal muscles' wave, held fixed (not fitted; amplitude 0 by default as in the
     /// thesis's three-parameter fits).
     pub abdominals: Wave,
+    /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search (0.5: the
+    /// sine of thesis eq. 2.4).
+    pub inspiratory_fraction: f64,
     /// Starting points of the multi-start method.
     pub starts: usize,
     /// Seed of the randomised methods.
@@ -105,6 +108,7 @@ impl Default for FitOptions {
             linearised_start: true,
             start_amplitudes: (0.3, 0.3),
             abdominals: Wave::default(),
+            inspiratory_fraction: crate::model::drive::SINE_FRACTION,
             starts: 4,
             seed: 1,
             start: None,
@@ -287,6 +291,7 @@ fn linearised_start(
     f: f64,
     psi: f64,
     abdominals: Wave,
+    inspiratory_fraction: f64,
     rate: f64,
 ) -> Result<[f64; 4]> {
     let period = 1.0 / f;
@@ -305,6 +310,7 @@ fn linearised_start(
         let drive = Drive {
             enabled: true,
             frequency: f,
+            inspiratory_fraction,
             ribs: wave(family == 0),
             diaphragm: wave(family == 1),
             abdominals,
@@ -514,6 +520,7 @@ pub fn fit_recording(
     let drive_of = |x: &[f64]| Drive {
         enabled: true,
         frequency: f,
+        inspiratory_fraction: options.inspiratory_fraction,
         ribs: Wave {
             amplitude: x[0],
             phase: x[2],
@@ -536,6 +543,7 @@ pub fn fit_recording(
             f,
             psi,
             options.abdominals,
+            options.inspiratory_fraction,
             recording.rate(),
         )?
     } else {

@@ -16,6 +16,10 @@ use std::path::{Path, PathBuf};
 pub fn drive_fmi(drive: &Drive) -> serde_json::Map<String, Value> {
     let mut m = serde_json::Map::new();
     m.insert("drive.frequency".into(), json!(drive.frequency));
+    m.insert(
+        "drive.inspiratory_fraction".into(),
+        json!(drive.inspiratory_fraction),
+    );
     for (name, w) in [
         ("ribs", drive.ribs),
         ("diaphragm", drive.diaphragm),

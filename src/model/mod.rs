@@ -14,7 +14,7 @@
 //! ```
 
 mod config;
-mod drive;
+pub mod drive;
 mod quantity;
 pub mod run;
 mod snapshot;
@@ -22,7 +22,7 @@ mod torso;
 
 pub use config::{Config, Scene, SolverConfig};
 pub(crate) use drive::check;
-pub use drive::{Drive, Wave};
+pub use drive::{Breath, Breaths, Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::{Checkpoint, Snapshot};
 pub use torso::{AdvanceStats, Compiled, Sample, Torso};
