@@ -14,6 +14,7 @@
 //! phases at the recording's first frame; the synthetic recordings use the same convention.
 
 use super::Recording;
+use super::breathing::{RecordingBreaths, breaths_of_signal};
 use super::optimize::{
     Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
 };
@@ -83,8 +84,9 @@ pub struct FitOptions {
     /// thesis's three-parameter fits).
     pub abdominals: Wave,
     /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search (0.5: the
-    /// sine of thesis eq. 2.4).
-    pub inspiratory_fraction: f64,
+    /// sine of thesis eq. 2.4); `None`: the median Ti/Ttot of the recording's breaths
+    /// ([`super::breathing`]), clamped to the drive's range.
+    pub inspiratory_fraction: Option<f64>,
     /// Starting points of the multi-start method.
     pub starts: usize,
     /// Seed of the randomised methods.
@@ -108,7 +110,7 @@ impl Default for FitOptions {
             linearised_start: true,
             start_amplitudes: (0.3, 0.3),
             abdominals: Wave::default(),
-            inspiratory_fraction: crate::model::drive::SINE_FRACTION,
+            inspiratory_fraction: Some(crate::model::drive::SINE_FRACTION),
             starts: 4,
             seed: 1,
             start: None,
@@ -159,6 +161,8 @@ pub struct Fit {
     pub method: Method,
     /// Grid (rows, columns).
     pub grid: (usize, usize),
+    /// The recording's breaths, read off its principal displacement.
+    pub breathing: RecordingBreaths,
 }
 
 /// Wraps an angle to (-pi, pi].
@@ -512,6 +516,21 @@ pub fn fit_recording(
     let times: Vec<f64> = recording.times.iter().map(|t| t - t0).collect();
     let signal: Vec<f64> = pd.signal.iter().map(|v| sign * v).collect();
     let psi = fundamental_phase(&times, &signal, f);
+    let breathing = breaths_of_signal(&times, &signal, f);
+    let inspiratory_fraction = match options.inspiratory_fraction {
+        Some(v) => v,
+        None if breathing.ti_ttot.is_finite() => {
+            let (lo, hi) = crate::model::drive::INSPIRATORY_FRACTION_RANGE;
+            breathing.ti_ttot.clamp(lo, hi)
+        }
+        None => {
+            return Err(Error::invalid(
+                "Ti/Ttot from the recording",
+                "no whole breath",
+                "a recording with at least one whole breath (minimum, maximum, minimum), or a given Ti/Ttot",
+            ));
+        }
+    };
 
     // The search over (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm).
     let settle = 1.0 / f;
@@ -520,7 +539,7 @@ pub fn fit_recording(
     let drive_of = |x: &[f64]| Drive {
         enabled: true,
         frequency: f,
-        inspiratory_fraction: options.inspiratory_fraction,
+        inspiratory_fraction,
         ribs: Wave {
             amplitude: x[0],
             phase: x[2],
@@ -543,7 +562,7 @@ pub fn fit_recording(
             f,
             psi,
             options.abdominals,
-            options.inspiratory_fraction,
+            inspiratory_fraction,
             recording.rate(),
         )?
     } else {
@@ -657,6 +676,7 @@ pub fn fit_recording(
         fitted,
         method: options.method,
         grid: recording.grid,
+        breathing,
     })
 }
 
