@@ -186,6 +186,11 @@ fn core(args: &CoreArgs) -> Result<()> {
         drive: Drive::quiet(),
         ..Config::default()
     };
+    crate::model::check(
+        "--ti-ttot",
+        args.ti_ttot,
+        crate::model::drive::INSPIRATORY_FRACTION_RANGE,
+    )?;
     config.drive.inspiratory_fraction = args.ti_ttot;
     config.scene.level_of_detail = args.lod;
     config.solver.method = Method::from_name(&args.method).ok_or_else(|| {

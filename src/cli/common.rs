@@ -124,6 +124,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",
+        "drive.inspiratory_fraction" => "--ti-ttot",
         "drive.ribs.amplitude" => "--ribs-amplitude",
         "drive.ribs.phase" => "--ribs-phase",
         "drive.diaphragm.amplitude" => "--diaphragm-amplitude",
