@@ -74,12 +74,18 @@ fn variable_breaths_are_found_and_the_shape_is_fitted() {
         found.breaths.len()
     );
     let mut worst: (f64, f64, f64) = (0.0, 0.0, 0.0);
-    for (b, &onset) in found.breaths.iter().zip(&found.onsets) {
+    let mut depth_pairs = Vec::new();
+    for ((b, &onset), &depth) in found.breaths.iter().zip(&found.onsets).zip(&found.depths) {
         // The drive breath whose onset is nearest the found onset.
-        let (start, period) = *truth
-            .iter()
-            .min_by(|a, c| (a.0 - onset).abs().total_cmp(&(c.0 - onset).abs()))
+        let k = (0..truth.len())
+            .min_by(|&a, &c| {
+                (truth[a].0 - onset)
+                    .abs()
+                    .total_cmp(&(truth[c].0 - onset).abs())
+            })
             .unwrap();
+        let (start, period) = truth[k];
+        depth_pairs.push((depth, s.breaths.0[k].depth));
         assert!(
             (start - onset).abs() < 0.5,
             "onset {onset:.3} s, drive {start:.3} s"
@@ -103,6 +109,23 @@ fn variable_breaths_are_found_and_the_shape_is_fitted() {
         "worst |error|: Ti {:.3} s, Te {:.3} s, Ttot {:.3} s; fitted Ti/Ttot {:.4} (drive {fraction})",
         worst.0, worst.1, worst.2, fit.drive.inspiratory_fraction
     );
+    // Depths relative to their median, found against the drive's.
+    let mut drive_depths: Vec<f64> = depth_pairs.iter().map(|p| p.1).collect();
+    drive_depths.sort_by(f64::total_cmp);
+    let n = drive_depths.len();
+    let mid = 0.5 * (drive_depths[(n - 1) / 2] + drive_depths[n / 2]);
+    // The depth estimate beats taking every breath as deep as the median: its RMS error is
+    // below the RMS deviation of the drive's relative depths from 1.
+    let rms = |e: &mut dyn Iterator<Item = f64>| {
+        let v: Vec<f64> = e.collect();
+        (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    let error = rms(&mut depth_pairs.iter().map(|(f, d)| f - d / mid));
+    let baseline = rms(&mut depth_pairs.iter().map(|(_, d)| d / mid - 1.0));
+    println!(
+        "depths found against drive: {depth_pairs:.3?}; RMS error {error:.3} against {baseline:.3} for equal breaths"
+    );
+    assert!(error < baseline, "depth RMS error {error} >= {baseline}");
     assert!(
         worst.0 <= 0.22 && worst.1 <= 0.29 && worst.2 <= 0.32,
         "{worst:?}"

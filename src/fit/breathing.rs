@@ -8,7 +8,8 @@
 //! default drops short breaths (seen: a 3.2 s breath of Ti/Ttot 0.42 in a 4.2 s rhythm). Per breath: Ti, Te, Ttot and Ti/Ttot, the indices the
 //! SLP validation against pneumotachography compares (Motamedi-Fakhr et al. 2017, Physiol.
 //! Rep. 5(3):e13124: breath-by-breath limits of agreement +-0.22 s for Ti, +-0.29 s for Te,
-//! +-0.32 s for Ttot). The median Ti/Ttot over the breaths estimates the drive's inspiratory
+//! +-0.32 s for Ttot), and a depth (the breath's inspiratory swing over the median swing).
+//! The median Ti/Ttot over the breaths estimates the drive's inspiratory
 //! fraction: the model's lung volume follows its drive's Ti/Ttot within 0.014 over
 //! 0.3-0.5 (docs/drive.md).
 
@@ -23,8 +24,22 @@ pub struct RecordingBreaths {
     pub breaths: Vec<Breath>,
     /// Time of each breath's onset (its starting minimum) [s], relative to the first frame.
     pub onsets: Vec<f64>,
+    /// Each breath's depth: its inspiratory swing of the principal displacement over the
+    /// median swing (1: a median breath).
+    pub depths: Vec<f64>,
     /// Median Ti/Ttot over the breaths; NaN without a whole breath.
     pub ti_ttot: f64,
+}
+
+/// Median of `x` (sorted in place); NaN when empty.
+fn median(x: &mut [f64]) -> f64 {
+    x.sort_by(f64::total_cmp);
+    let n = x.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => x[n / 2],
+        _ => 0.5 * (x[n / 2 - 1] + x[n / 2]),
+    }
 }
 
 /// Segments `signal` (the principal displacement, signed so that inspiration is positive)
@@ -37,17 +52,13 @@ pub fn breaths_of_signal(times: &[f64], signal: &[f64], frequency: f64) -> Recor
     };
     let breaths = segment_breaths(times, signal, &detector);
     let onsets = breaths.iter().map(|b| times[b.start]).collect();
-    let mut fractions: Vec<f64> = breaths.iter().map(|b| b.ti_ttot).collect();
-    fractions.sort_by(f64::total_cmp);
-    let n = fractions.len();
-    let ti_ttot = match n {
-        0 => f64::NAN,
-        _ if n % 2 == 1 => fractions[n / 2],
-        _ => 0.5 * (fractions[n / 2 - 1] + fractions[n / 2]),
-    };
+    let ti_ttot = median(&mut breaths.iter().map(|b| b.ti_ttot).collect::<Vec<_>>());
+    let swing = median(&mut breaths.iter().map(|b| b.tidal_volume).collect::<Vec<_>>());
+    let depths = breaths.iter().map(|b| b.tidal_volume / swing).collect();
     RecordingBreaths {
         breaths,
         onsets,
+        depths,
         ti_ttot,
     }
 }

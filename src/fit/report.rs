@@ -82,6 +82,7 @@ pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Pat
             "ti_s": fit.breathing.breaths.iter().map(|b| b.ti).collect::<Vec<_>>(),
             "te_s": fit.breathing.breaths.iter().map(|b| b.te).collect::<Vec<_>>(),
             "ttot_s": fit.breathing.breaths.iter().map(|b| b.ttot).collect::<Vec<_>>(),
+            "depth_relative_to_median": fit.breathing.depths,
         },
         "lung_volume_csv": volume_csv.display().to_string(),
         "method": fit.method.name(),
