@@ -79,6 +79,16 @@ int main(void) {
     drive.frequency = 10.0;
     rc = bt_set_drive(torso, &drive);
     expect(rc == BT_ERR_INVALID && strstr(bt_last_error(torso), "drive.frequency"), "drive at 10 Hz rejected", bt_last_error(torso));
+    expect(bt_get_drive(torso, &drive) == BT_OK && drive.frequency == 0.25 && drive.inspiratory_fraction == 0.5,
+           "drive unchanged by the refused set, inspiratory fraction 0.5 (the sine)", "");
+    drive.inspiratory_fraction = 0.9;
+    rc = bt_set_drive(torso, &drive);
+    expect(rc == BT_ERR_INVALID && strstr(bt_last_error(torso), "drive.inspiratory_fraction"), "Ti/Ttot 0.9 rejected", bt_last_error(torso));
+    drive.inspiratory_fraction = 0.4;
+    expect(bt_set_drive(torso, &drive) == BT_OK, "Ti/Ttot 0.4 accepted", bt_last_error(torso));
+    double fraction = 0;
+    expect(bt_read(torso, BT_VR_DRIVE_INSPIRATORY_FRACTION, &fraction) == BT_OK && fraction == 0.4,
+           "drive.inspiratory_fraction reads back 0.4", "");
 
     /* Reading by value reference and by name. */
     double v = 0;

@@ -142,6 +142,11 @@ typedef struct BtDrive {
    * `drive.enabled`).
    */
   int enabled;
+  /**
+   * Inspiratory fraction Ti/Ttot of every family's wave, 0.2-0.8; 0.5 is the sine of
+   * thesis eq. 2.4 (FMI `drive.inspiratory_fraction`).
+   */
+  double inspiratory_fraction;
 } BtDrive;
 
 /**
@@ -503,7 +508,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{b5b114c5-0d46-20e7-b876-f3c022dd9e88}"
+#define BT_FMI_GUID "{5b791663-d03f-235a-7d53-18449d124202}"
 #define BT_MARKER_SLOTS 256
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -523,6 +528,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_POSTURE 201u
 #define BT_VR_DRIVE_ENABLED 400u
 #define BT_VR_DRIVE_FREQUENCY 110u
+#define BT_VR_DRIVE_INSPIRATORY_FRACTION 401u
 #define BT_VR_DRIVE_RIBS_AMPLITUDE 111u
 #define BT_VR_DRIVE_RIBS_PHASE 112u
 #define BT_VR_DRIVE_DIAPHRAGM_AMPLITUDE 113u

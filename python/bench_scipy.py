@@ -60,7 +60,7 @@ class Wave(ctypes.Structure):
 
 class Drive(ctypes.Structure):
     _fields_ = [("frequency", ctypes.c_double), ("ribs", Wave), ("diaphragm", Wave), ("abdominals", Wave),
-                ("enabled", ctypes.c_int)]
+                ("enabled", ctypes.c_int), ("inspiratory_fraction", ctypes.c_double)]
 
 
 class Subject(ctypes.Structure):

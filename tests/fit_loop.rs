@@ -113,6 +113,7 @@ fn drive(f: f64, ar: f64, ad: f64, dphi: f64) -> Drive {
     Drive {
         enabled: true,
         frequency: f,
+        inspiratory_fraction: 0.5,
         ribs: Wave {
             amplitude: ar,
             phase: 0.4,

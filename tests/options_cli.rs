@@ -113,6 +113,24 @@ fn negative_numbers_are_values_and_errors_name_the_flag() {
         (&["simulate", "--scenario", "panting"], "--scenario"),
         (&["simulate", "--duration", "-3"], "--duration"),
         (&["fit", "--slp", "missing.csv", "--mass", "500"], "--mass"),
+        (&["simulate", "--ti-ttot", "0.9"], "--ti-ttot"),
+        (
+            &[
+                "synth",
+                "--out",
+                "r.csv",
+                "--truth",
+                "t.json",
+                "--ti-ttot",
+                "-0.4",
+            ],
+            "--ti-ttot",
+        ),
+        (
+            &["fit", "--slp", "missing.csv", "--ti-ttot", "often"],
+            "--ti-ttot",
+        ),
+        (&["bench", "core", "--ti-ttot", "0.1"], "--ti-ttot"),
     ] {
         let (code, _, err) = torso(args);
         assert_eq!(code, 1, "{args:?}: {err}");

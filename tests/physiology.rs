@@ -31,6 +31,7 @@ fn only(group: &str, amplitude: f64) -> Drive {
         "ribs" => Drive {
             enabled: true,
             frequency: 0.25,
+            inspiratory_fraction: 0.5,
             ribs: w,
             diaphragm: z,
             abdominals: z,
@@ -38,6 +39,7 @@ fn only(group: &str, amplitude: f64) -> Drive {
         "diaphragm" => Drive {
             enabled: true,
             frequency: 0.25,
+            inspiratory_fraction: 0.5,
             ribs: z,
             diaphragm: w,
             abdominals: z,
@@ -45,6 +47,7 @@ fn only(group: &str, amplitude: f64) -> Drive {
         _ => Drive {
             enabled: true,
             frequency: 0.25,
+            inspiratory_fraction: 0.5,
             ribs: z,
             diaphragm: z,
             abdominals: w,

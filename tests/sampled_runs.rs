@@ -17,6 +17,7 @@ fn drive(f: f64, ribs: f64, diaphragm: f64) -> Drive {
     Drive {
         enabled: true,
         frequency: f,
+        inspiratory_fraction: 0.5,
         ribs: Wave {
             amplitude: ribs,
             phase: -1.6,
@@ -195,6 +196,7 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
     let d = Drive {
         enabled: true,
         frequency: 0.4,
+        inspiratory_fraction: 0.5,
         ribs: Wave {
             amplitude: 0.8,
             phase: 0.0,

@@ -396,6 +396,7 @@ pub fn random_scene(rng: &mut Pcg64, lod: u32) -> Result<Config> {
     let drive = Drive {
         enabled: true,
         frequency: draw(rng, (0.05, 2.0)),
+        inspiratory_fraction: crate::model::drive::SINE_FRACTION,
         ribs: wave(rng),
         diaphragm: wave(rng),
         abdominals: wave(rng),

@@ -95,6 +95,9 @@ pub struct BtDrive {
     /// 1: the drive runs; 0: off, the muscles follow the activation inputs alone (FMI
     /// `drive.enabled`).
     pub enabled: c_int,
+    /// Inspiratory fraction Ti/Ttot of every family's wave, 0.2-0.8; 0.5 is the sine of
+    /// thesis eq. 2.4 (FMI `drive.inspiratory_fraction`).
+    pub inspiratory_fraction: f64,
 }
 
 /// Everything needed to build a model. Fill it with `bt_config_default`, then change fields
@@ -275,6 +278,7 @@ fn drive_to_c(d: &Drive) -> BtDrive {
         diaphragm: w(d.diaphragm),
         abdominals: w(d.abdominals),
         enabled: c_int::from(d.enabled),
+        inspiratory_fraction: d.inspiratory_fraction,
     }
 }
 
@@ -286,6 +290,7 @@ fn drive_from_c(d: &BtDrive) -> Drive {
     Drive {
         enabled: d.enabled != 0,
         frequency: d.frequency,
+        inspiratory_fraction: d.inspiratory_fraction,
         ribs: w(d.ribs),
         diaphragm: w(d.diaphragm),
         abdominals: w(d.abdominals),

@@ -58,6 +58,10 @@ pub struct CoreArgs {
     /// its former name, --method).
     #[arg(long = "solver", alias = "method", default_value = "dopri5")]
     pub method: String,
+    /// Inspiratory fraction Ti/Ttot of the quiet drive (0.2-0.8; 0.5 is the sine of thesis
+    /// eq. 2.4).
+    #[arg(long, default_value_t = 0.5)]
+    pub ti_ttot: f64,
     /// Also write the figures as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -182,6 +186,12 @@ fn core(args: &CoreArgs) -> Result<()> {
         drive: Drive::quiet(),
         ..Config::default()
     };
+    crate::model::check(
+        "--ti-ttot",
+        args.ti_ttot,
+        crate::model::drive::INSPIRATORY_FRACTION_RANGE,
+    )?;
+    config.drive.inspiratory_fraction = args.ti_ttot;
     config.scene.level_of_detail = args.lod;
     config.solver.method = Method::from_name(&args.method).ok_or_else(|| {
         Error::invalid(
@@ -192,7 +202,12 @@ fn core(args: &CoreArgs) -> Result<()> {
     })?;
     config.validate()?;
     println!(
-        "quiet breathing, default subject, level of detail {}, {} rtol {:e}, {} frames at 56 Hz, median of {}",
+        "quiet breathing{}, default subject, level of detail {}, {} rtol {:e}, {} frames at 56 Hz, median of {}",
+        if args.ti_ttot == crate::model::drive::SINE_FRACTION {
+            String::new()
+        } else {
+            format!(" (Ti/Ttot {})", args.ti_ttot)
+        },
         args.lod,
         config.solver.method.name(),
         config.solver.rtol,

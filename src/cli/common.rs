@@ -124,6 +124,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",
+        "drive.inspiratory_fraction" => "--ti-ttot",
         "drive.ribs.amplitude" => "--ribs-amplitude",
         "drive.ribs.phase" => "--ribs-phase",
         "drive.diaphragm.amplitude" => "--diaphragm-amplitude",
@@ -216,7 +217,8 @@ fn missing_folder(dir: &Path) -> Error {
     ))
 }
 
-/// The sinusoidal drive: a named scenario, with optional overrides (thesis eq. 2.4).
+/// The built-in drive: a named scenario, with optional overrides (thesis eq. 2.4; with
+/// `--ti-ttot`, the raised-cosine wave of docs/drive.md).
 #[derive(Args, Debug, Clone)]
 pub struct DriveArgs {
     /// Scenario: quiet, forced or rest.
@@ -225,6 +227,10 @@ pub struct DriveArgs {
     /// Breathing frequency [Hz].
     #[arg(long)]
     pub frequency: Option<f64>,
+    /// Inspiratory fraction Ti/Ttot of the drive (0.2-0.8; 0.5, the default, is the sine of
+    /// thesis eq. 2.4).
+    #[arg(long, allow_hyphen_values = true)]
+    pub ti_ttot: Option<f64>,
     /// Rib-cage amplitude (0-1).
     #[arg(long)]
     pub ribs_amplitude: Option<f64>,
@@ -257,6 +263,7 @@ impl DriveArgs {
                 *dst = v;
             }
         };
+        set(&mut d.inspiratory_fraction, self.ti_ttot);
         set(&mut d.ribs.amplitude, self.ribs_amplitude);
         set(&mut d.ribs.phase, self.ribs_phase);
         set(&mut d.diaphragm.amplitude, self.diaphragm_amplitude);

@@ -88,6 +88,11 @@ pub struct FitArgs {
     /// and a polish from the first optimum follows (both within --max-evals).
     #[arg(long)]
     pub skin_fit: bool,
+    /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search: a number
+    /// (0.2-0.8; 0.5 is the sine of thesis eq. 2.4) or `auto`, the median Ti/Ttot of the
+    /// recording's breaths (docs/drive.md).
+    #[arg(long, default_value = "0.5", allow_hyphen_values = true)]
+    pub ti_ttot: String,
 }
 
 /// A progress bar on a terminal; silent when stdout is not one.
@@ -200,12 +205,29 @@ pub fn main(args: &FitArgs) -> Result<()> {
         max_evals: args.max_evals,
         seed: args.seed,
         threads: args.threads.unwrap_or_else(default_threads),
+        inspiratory_fraction: inspiratory_fraction(&args.ti_ttot)?,
         ..FitOptions::default()
     };
     if !(1..=2).contains(&options.threads) {
         return Err(Error::invalid("--threads", options.threads, "1 or 2"));
     }
     fit_file(&args.slp, &args.model, &args.out, &options, args.skin_fit).map(|_| ())
+}
+
+/// `--ti-ttot`: `auto` (None) or a number in the drive's range.
+fn inspiratory_fraction(text: &str) -> Result<Option<f64>> {
+    let (lo, hi) = crate::model::drive::INSPIRATORY_FRACTION_RANGE;
+    if text == "auto" {
+        return Ok(None);
+    }
+    match text.parse::<f64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(Some(v)),
+        _ => Err(Error::invalid(
+            "--ti-ttot",
+            text,
+            format!("auto or a number in [{lo}, {hi}]"),
+        )),
+    }
 }
 
 /// 2 threads for a fit's search when the machine has two or more cores, otherwise 1.

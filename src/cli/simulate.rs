@@ -118,8 +118,13 @@ pub fn describe_drive(d: &Drive) -> String {
     ]
     .map(|(n, w)| format!("{n} {:.3} at {:+.3} rad", w.amplitude, w.phase))
     .join(", ");
+    let shape = if d.inspiratory_fraction == crate::model::drive::SINE_FRACTION {
+        String::new()
+    } else {
+        format!(", Ti/Ttot {}", d.inspiratory_fraction)
+    };
     format!(
-        "{} Hz ({:.1} breaths/min){}; amplitude and phase: {waves}",
+        "{} Hz ({:.1} breaths/min){shape}{}; amplitude and phase: {waves}",
         d.frequency,
         60.0 * d.frequency,
         if d.enabled { "" } else { ", off" }

@@ -39,8 +39,9 @@ pub struct SynthArgs {
     /// Camera frame: random or identity.
     #[arg(long, default_value = "random")]
     pub camera: String,
-    /// Breath-to-breath variability of period and amplitude (relative standard deviation).
-    #[arg(long, default_value_t = 0.0)]
+    /// Breath-to-breath variability of period and amplitude (relative standard deviation,
+    /// the coefficient of variation of Ttot and depth; alias --breath-cv).
+    #[arg(long, visible_alias = "breath-cv", default_value_t = 0.0)]
     pub variability: f64,
     /// Probability that a point is untracked in a frame.
     #[arg(long, default_value_t = 0.0)]

@@ -14,6 +14,7 @@
 //! phases at the recording's first frame; the synthetic recordings use the same convention.
 
 use super::Recording;
+use super::breathing::{RecordingBreaths, breaths_of_signal};
 use super::optimize::{
     Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
 };
@@ -82,6 +83,10 @@ pub struct FitOptions {
     /// Abdominal muscles' wave, held fixed (not fitted; amplitude 0 by default as in the
     /// thesis's three-parameter fits).
     pub abdominals: Wave,
+    /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search (0.5: the
+    /// sine of thesis eq. 2.4); `None`: the median Ti/Ttot of the recording's breaths
+    /// ([`super::breathing`]), clamped to the drive's range.
+    pub inspiratory_fraction: Option<f64>,
     /// Starting points of the multi-start method.
     pub starts: usize,
     /// Seed of the randomised methods.
@@ -105,6 +110,7 @@ impl Default for FitOptions {
             linearised_start: true,
             start_amplitudes: (0.3, 0.3),
             abdominals: Wave::default(),
+            inspiratory_fraction: Some(crate::model::drive::SINE_FRACTION),
             starts: 4,
             seed: 1,
             start: None,
@@ -155,6 +161,8 @@ pub struct Fit {
     pub method: Method,
     /// Grid (rows, columns).
     pub grid: (usize, usize),
+    /// The recording's breaths, read off its principal displacement.
+    pub breathing: RecordingBreaths,
 }
 
 /// Wraps an angle to (-pi, pi].
@@ -287,6 +295,7 @@ fn linearised_start(
     f: f64,
     psi: f64,
     abdominals: Wave,
+    inspiratory_fraction: f64,
     rate: f64,
 ) -> Result<[f64; 4]> {
     let period = 1.0 / f;
@@ -305,6 +314,7 @@ fn linearised_start(
         let drive = Drive {
             enabled: true,
             frequency: f,
+            inspiratory_fraction,
             ribs: wave(family == 0),
             diaphragm: wave(family == 1),
             abdominals,
@@ -506,6 +516,21 @@ pub fn fit_recording(
     let times: Vec<f64> = recording.times.iter().map(|t| t - t0).collect();
     let signal: Vec<f64> = pd.signal.iter().map(|v| sign * v).collect();
     let psi = fundamental_phase(&times, &signal, f);
+    let breathing = breaths_of_signal(&times, &signal, f);
+    let inspiratory_fraction = match options.inspiratory_fraction {
+        Some(v) => v,
+        None if breathing.ti_ttot.is_finite() => {
+            let (lo, hi) = crate::model::drive::INSPIRATORY_FRACTION_RANGE;
+            breathing.ti_ttot.clamp(lo, hi)
+        }
+        None => {
+            return Err(Error::invalid(
+                "Ti/Ttot from the recording",
+                "no whole breath",
+                "a recording with at least one whole breath (minimum, maximum, minimum), or a given Ti/Ttot",
+            ));
+        }
+    };
 
     // The search over (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm).
     let settle = 1.0 / f;
@@ -514,6 +539,7 @@ pub fn fit_recording(
     let drive_of = |x: &[f64]| Drive {
         enabled: true,
         frequency: f,
+        inspiratory_fraction,
         ribs: Wave {
             amplitude: x[0],
             phase: x[2],
@@ -536,6 +562,7 @@ pub fn fit_recording(
             f,
             psi,
             options.abdominals,
+            inspiratory_fraction,
             recording.rate(),
         )?
     } else {
@@ -649,6 +676,7 @@ pub fn fit_recording(
         fitted,
         method: options.method,
         grid: recording.grid,
+        breathing,
     })
 }
 

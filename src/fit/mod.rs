@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
+//! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
@@ -13,6 +14,7 @@
 //! | [`sweep`] | the acceptance sweep: six synthetic recordings fitted back, errors against truth |
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
+pub mod breathing;
 pub mod fitting;
 pub mod optimize;
 pub mod principal;

@@ -16,6 +16,10 @@ use std::path::{Path, PathBuf};
 pub fn drive_fmi(drive: &Drive) -> serde_json::Map<String, Value> {
     let mut m = serde_json::Map::new();
     m.insert("drive.frequency".into(), json!(drive.frequency));
+    m.insert(
+        "drive.inspiratory_fraction".into(),
+        json!(drive.inspiratory_fraction),
+    );
     for (name, w) in [
         ("ribs", drive.ribs),
         ("diaphragm", drive.diaphragm),
@@ -71,6 +75,15 @@ pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Pat
         "converged": fit.converged,
         "wall_s": fit.wall_s,
         "delta_phase": fit.delta_phase,
+        "breaths": {
+            "source": "principal displacement of the recording (onsets at its minima)",
+            "median_ti_ttot": fit.breathing.ti_ttot,
+            "onset_s": fit.breathing.onsets,
+            "ti_s": fit.breathing.breaths.iter().map(|b| b.ti).collect::<Vec<_>>(),
+            "te_s": fit.breathing.breaths.iter().map(|b| b.te).collect::<Vec<_>>(),
+            "ttot_s": fit.breathing.breaths.iter().map(|b| b.ttot).collect::<Vec<_>>(),
+            "depth_relative_to_median": fit.breathing.depths,
+        },
         "lung_volume_csv": volume_csv.display().to_string(),
         "method": fit.method.name(),
         "recording": recording.display().to_string(),
@@ -289,6 +302,11 @@ pub fn truth_json(
         "model_start_time_s": s.start_time,
         "nominal_drive": drive_fmi(&options.drive),
         "breaths": s.schedule.len().saturating_sub(1),
+        "breath_schedule": s.breaths.0.iter().map(|b| json!({
+            "start_s": b.start - s.start_time,
+            "period_s": b.period,
+            "depth": b.depth,
+        })).collect::<Vec<_>>(),
     });
     if let Value::Object(e) = extra {
         m.extend(e);

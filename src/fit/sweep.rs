@@ -97,6 +97,7 @@ pub fn case_drive(forced: bool) -> Drive {
     Drive {
         enabled: true,
         frequency,
+        inspiratory_fraction: crate::model::drive::SINE_FRACTION,
         ribs: Wave {
             amplitude: ribs,
             phase: 0.0,

@@ -7,15 +7,16 @@
 //! after the first rib-cage activation minimum past one period), as the thesis's recordings
 //! start (figure 3.4); the true phases are the drive's phases at that first frame.
 //! Variability: from the second breath on, each breath's period and amplitudes are scaled
-//! by 1 + v N(0, 1) (clamped to [0.5, 1.5]); the drive changes at the breath boundaries
-//! (rib-cage activation minima) with phases chosen so the waves are continuous.
+//! by 1 + v N(0, 1) (clamped to [0.5, 1.5]), a [`Breaths`] schedule; the drive changes at
+//! the breath boundaries (rib-cage inspiration onsets) with phases chosen so the waves are
+//! continuous ([`Breaths::schedule`]).
 
 use super::Recording;
 use super::fitting::wrap_angle;
 use super::recording::Units;
 use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::RigidTransform;
-use crate::model::Drive;
+use crate::model::{Breath, Breaths, Drive};
 use crate::stats::rng::Pcg64;
 use crate::{Error, Result};
 use nalgebra::{Point3, Rotation3, Unit, UnitQuaternion, Vector3};
@@ -34,7 +35,7 @@ pub enum Camera {
 /// Settings of a synthetic recording.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SynthOptions {
-    /// Nominal drive (thesis eq. 2.4).
+    /// Nominal drive (thesis eq. 2.4, with its inspiratory fraction).
     pub drive: Drive,
     /// Frame rate [Hz] (SLP: 56).
     pub rate: f64,
@@ -84,6 +85,8 @@ pub struct Synthetic {
     pub start_time: f64,
     /// The drive schedule applied (model time, drive).
     pub schedule: Vec<(f64, Drive)>,
+    /// The breaths of the schedule (model time; empty without variability).
+    pub breaths: Breaths,
 }
 
 impl SynthOptions {
@@ -147,33 +150,28 @@ fn first_activation_minimum(d: &Drive) -> f64 {
     settle + (-PI / 2.0 - phase_at).rem_euclid(2.0 * PI) / (2.0 * PI * f)
 }
 
-/// The drive schedule: the nominal drive, then (with variability) one drive per breath
-/// from `first_boundary` on, each breath starting at a rib-cage activation minimum with its
-/// own period and amplitude scale.
-fn schedule(o: &SynthOptions, rng: &mut Pcg64, first_boundary: f64, end: f64) -> Vec<(f64, Drive)> {
-    let d = o.drive;
-    let f = d.frequency;
-    let mut segments = vec![(0.0, d)];
+/// The breaths of the recording (with variability; none without): from `first_boundary`
+/// on, each breath starts at a rib-cage inspiration onset with its own period and depth,
+/// both the nominal ones scaled by 1 + v N(0, 1) clamped to [0.5, 1.5] (the period drawn
+/// first, through the frequency, which stays in the drive's [0.05, 2] Hz).
+fn breaths(o: &SynthOptions, rng: &mut Pcg64, first_boundary: f64, end: f64) -> Breaths {
+    let f = o.drive.frequency;
+    let mut out = Vec::new();
     if o.variability > 0.0 {
         let mut t = first_boundary;
         while t < end {
             let scale = |rng: &mut Pcg64| (1.0 + o.variability * rng.normal()).clamp(0.5, 1.5);
             let fk = (f / scale(rng)).clamp(0.05, 2.0);
-            let ak = scale(rng);
-            let mut b = d;
-            b.frequency = fk;
-            // Rib-cage wave at -pi/2 at time t; the other waves keep their offsets.
-            b.ribs.phase = wrap_angle(-PI / 2.0 - 2.0 * PI * fk * t);
-            b.diaphragm.phase = wrap_angle(b.ribs.phase + d.diaphragm.phase - d.ribs.phase);
-            b.abdominals.phase = wrap_angle(b.ribs.phase + d.abdominals.phase - d.ribs.phase);
-            b.ribs.amplitude = (d.ribs.amplitude * ak).min(1.0);
-            b.diaphragm.amplitude = (d.diaphragm.amplitude * ak).min(1.0);
-            b.abdominals.amplitude = (d.abdominals.amplitude * ak).min(1.0);
-            segments.push((t, b));
+            let depth = scale(rng);
+            out.push(Breath {
+                start: t,
+                period: 1.0 / fk,
+                depth,
+            });
             t += 1.0 / fk;
         }
     }
-    segments
+    Breaths(out)
 }
 
 /// End-expiration: the time of the smallest lung volume within one period from the first
@@ -203,12 +201,13 @@ pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synt
     let mut rng = Pcg64::new(o.seed, 3);
     let start = end_expiration(model, o)?;
     let f = o.drive.frequency;
-    let segments = schedule(
+    let breaths = breaths(
         o,
         &mut rng,
         first_activation_minimum(&o.drive) + 1.0 / f,
         start + o.duration + 1.0 / f,
     );
+    let segments = breaths.schedule(&o.drive);
     let n = (o.duration * o.rate).round() as usize + 1;
     let times: Vec<f64> = (0..n).map(|i| i as f64 / o.rate).collect();
     let model_times: Vec<f64> = times.iter().map(|t| start + t).collect();
@@ -264,5 +263,6 @@ pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synt
         },
         start_time: start,
         schedule: segments,
+        breaths,
     })
 }

@@ -160,6 +160,8 @@ pub enum Parameter {
     DriveEnabled,
     /// `drive.frequency` [Hz].
     DriveFrequency,
+    /// `drive.inspiratory_fraction`: Ti/Ttot of every family's wave.
+    DriveInspiratoryFraction,
     /// `drive.<family>.amplitude`.
     DriveAmplitude(Family),
     /// `drive.<family>.phase` [rad].
@@ -212,6 +214,7 @@ impl Parameter {
             self,
             Parameter::DriveEnabled
                 | Parameter::DriveFrequency
+                | Parameter::DriveInspiratoryFraction
                 | Parameter::DriveAmplitude(_)
                 | Parameter::DrivePhase(_)
         )
@@ -230,6 +233,7 @@ impl Parameter {
             Posture => Value::Integer(s.posture.code()),
             DriveEnabled => Value::Boolean(config.drive.enabled),
             DriveFrequency => Value::Real(config.drive.frequency),
+            DriveInspiratoryFraction => Value::Real(config.drive.inspiratory_fraction),
             DriveAmplitude(f) => Value::Real(f.wave(config).amplitude),
             DrivePhase(f) => Value::Real(f.wave(config).phase),
             LungRatio => Value::Real(config.lung_ratio),
@@ -281,6 +285,7 @@ impl Parameter {
             }
             (DriveEnabled, Value::Boolean(v)) => config.drive.enabled = v,
             (DriveFrequency, Value::Real(v)) => config.drive.frequency = v,
+            (DriveInspiratoryFraction, Value::Real(v)) => config.drive.inspiratory_fraction = v,
             (DriveAmplitude(f), Value::Real(v)) => f.wave_mut(config).amplitude = v,
             (DrivePhase(f), Value::Real(v)) => f.wave_mut(config).phase = v,
             (LungRatio, Value::Real(v)) => config.lung_ratio = v,
@@ -822,6 +827,14 @@ fn build() -> Vec<Variable> {
         )
         .unit("Hz")
         .range(0.05, 2.0),
+        par(
+            "drive.inspiratory_fraction",
+            401,
+            Real,
+            P::DriveInspiratoryFraction,
+            "Inspiratory fraction Ti/Ttot of the built-in drive's waves (raised-cosine rise and fall, docs/drive.md); 0.5 is the sine of thesis eq. 2.4",
+        )
+        .range(0.2, 0.8),
     ];
     for (k, f) in Family::ALL.into_iter().enumerate() {
         let vr = 111 + 2 * k as u32;

@@ -1,4 +1,5 @@
-//! The built-in sinusoidal drive (thesis eq. 2.4), so that a fit can run on parameters alone.
+//! The built-in periodic drive, so that a fit can run on parameters alone: the sine of
+//! thesis eq. 2.4, or the same wave with a shorter inspiration (an inspiratory fraction).
 //!
 //! Thesis eq. 2.4 modulates each element's rest-length ratio as
 //! r(t) = alpha - beta/2 (sin(2 pi f t + phi) + 1). Here the same wave is expressed as an
@@ -6,6 +7,24 @@
 //! maximal reachable activation (the thesis's A_ribs, A_diaphragm, Table 4.3); the element
 //! then contracts as r = 1 - beta_max g a (see `dynamics`). The applied activation of a
 //! group is clamp(input + drive, 0, 1).
+//!
+//! Real breathing is not a sine: quiet inspiration takes about 0.4 of the breath (Tobin et
+//! al. 1983, "Breathing patterns. 1. Normal subjects", Chest 84:202; see docs/drive.md). The
+//! drive therefore has an inspiratory fraction F = Ti/Ttot. With the cycle phase
+//! u = ((2 pi f t + phi + pi/2) / 2 pi) mod 1 (u = 0 where the sine is at its minimum), the
+//! waveform is two raised-cosine halves joined at the peak u = F:
+//! w(u) = (1 - cos(pi u / F)) / 2 on [0, F] and w(u) = (1 + cos(pi (u - F) / (1 - F))) / 2
+//! on [F, 1), so that a(t) = A w(u). Both halves have zero slope at their ends, so w is C1
+//! (its second derivative jumps at u = 0 and u = F unless F = 1/2). At F = 1/2 the halves are
+//! the two halves of (1 + sin(2 pi f t + phi)) / 2, which is then evaluated as that sine
+//! itself, so the default drive is eq. 2.4 bit for bit. The expiratory groups take 1 - w(u),
+//! which at F = 1/2 is the sine in antiphase (phi + pi) of eq. 2.4.
+//!
+//! Depth and rate also change from breath to breath. [`Breaths`] is a schedule of breaths
+//! (start time, period, depth scale): time -> breath index -> cycle phase within the breath.
+//! It is turned into a piecewise-constant drive, one [`Drive`] per breath
+//! ([`Breaths::schedule`]), whose waves start each breath at their inspiration onset, so the
+//! dynamics only ever see a fixed-shape drive.
 
 use crate::anatomy::MuscleGroup;
 use crate::{Error, Result};
@@ -32,6 +51,11 @@ pub struct Drive {
     pub enabled: bool,
     /// Breathing frequency f_b [Hz], in [0.05, 2].
     pub frequency: f64,
+    /// Inspiratory fraction Ti/Ttot of every family's wave (FMI
+    /// `drive.inspiratory_fraction`), in [0.2, 0.8]; 0.5 is the sine of eq. 2.4. Saved
+    /// states without the field had the sine.
+    #[serde(default = "sine_fraction")]
+    pub inspiratory_fraction: f64,
     /// Rib-cage family.
     pub ribs: Wave,
     /// Diaphragm.
@@ -44,12 +68,36 @@ fn drive_on() -> bool {
     true
 }
 
+fn sine_fraction() -> f64 {
+    SINE_FRACTION
+}
+
+/// The inspiratory fraction at which the waveform is the sine of eq. 2.4.
+pub const SINE_FRACTION: f64 = 0.5;
+/// Allowed range of the inspiratory fraction Ti/Ttot: wide enough for quiet breathing
+/// (about 0.4, Tobin et al. 1983) and the short inspirations of exercise or obstruction,
+/// narrow enough that neither raised-cosine half becomes a step for the solver.
+pub const INSPIRATORY_FRACTION_RANGE: (f64, f64) = (0.2, 0.8);
+
+/// The periodic waveform w in [0, 1] at cycle phase `u` (any real; taken modulo 1, u = 0 the
+/// start of inspiration) with inspiratory fraction `fraction` in (0, 1): a raised-cosine
+/// rise over [0, F] to 1 at u = F, then a raised-cosine fall over [F, 1) (module doc).
+pub fn waveform(u: f64, fraction: f64) -> f64 {
+    let u = u.rem_euclid(1.0);
+    if u < fraction {
+        0.5 * (1.0 - (PI * u / fraction).cos())
+    } else {
+        0.5 * (1.0 + (PI * (u - fraction) / (1.0 - fraction)).cos())
+    }
+}
+
 /// No drive: every amplitude 0 (the `rest` scenario).
 impl Default for Drive {
     fn default() -> Self {
         Drive {
             enabled: true,
             frequency: 0.25,
+            inspiratory_fraction: SINE_FRACTION,
             ribs: Wave::default(),
             diaphragm: Wave::default(),
             abdominals: Wave::default(),
@@ -79,6 +127,7 @@ impl Drive {
         Drive {
             enabled: true,
             frequency: 0.25,
+            inspiratory_fraction: SINE_FRACTION,
             ribs: Wave {
                 amplitude: 0.096,
                 phase: 0.0,
@@ -103,6 +152,7 @@ impl Drive {
         Drive {
             enabled: true,
             frequency: 0.2,
+            inspiratory_fraction: SINE_FRACTION,
             ribs: Wave {
                 amplitude: 0.28,
                 phase: 0.0,
@@ -131,6 +181,11 @@ impl Drive {
     /// Checks every field; the error names the FMI parameter.
     pub fn validate(&self) -> Result<()> {
         check("drive.frequency", self.frequency, FREQUENCY_RANGE)?;
+        check(
+            "drive.inspiratory_fraction",
+            self.inspiratory_fraction,
+            INSPIRATORY_FRACTION_RANGE,
+        )?;
         for (family, w) in [
             ("ribs", self.ribs),
             ("diaphragm", self.diaphragm),
@@ -146,9 +201,10 @@ impl Drive {
         Ok(())
     }
 
-    /// Drive activation of `group` at time `t`: A/2 (sin(2 pi f t + phi) + 1) for the family's
-    /// wave, in antiphase (phi + pi) for the expiratory groups (internal intercostals,
-    /// abdominal wall muscles); 0 when the drive is off.
+    /// Drive activation of `group` at time `t`: A w(u) for the family's wave (module doc),
+    /// A (1 - w(u)) for the expiratory groups (internal intercostals, abdominal wall muscles);
+    /// with the inspiratory fraction 1/2, A/2 (sin(2 pi f t + phi) + 1) and its antiphase
+    /// (phi + pi) exactly as eq. 2.4; 0 when the drive is off.
     pub fn activation(&self, group: MuscleGroup, t: f64) -> f64 {
         let (wave, antiphase) = match group {
             MuscleGroup::ExternalIntercostals | MuscleGroup::Scalenes => (self.ribs, false),
@@ -162,9 +218,76 @@ impl Drive {
         if !self.enabled || wave.amplitude == 0.0 {
             return 0.0;
         }
-        let shift = if antiphase { PI } else { 0.0 };
-        0.5 * wave.amplitude * ((2.0 * PI * self.frequency * t + wave.phase + shift).sin() + 1.0)
+        let theta = 2.0 * PI * self.frequency * t + wave.phase;
+        if self.inspiratory_fraction == SINE_FRACTION {
+            let shift = if antiphase { PI } else { 0.0 };
+            return 0.5 * wave.amplitude * ((theta + shift).sin() + 1.0);
+        }
+        let w = waveform(self.cycle_phase(theta), self.inspiratory_fraction);
+        wave.amplitude * if antiphase { 1.0 - w } else { w }
     }
+
+    /// Cycle phase u in [0, 1) of a wave at angle `theta` = 2 pi f t + phi: 0 at the start of
+    /// inspiration (where the sine of eq. 2.4 is at its minimum, theta = -pi/2 mod 2 pi).
+    pub fn cycle_phase(&self, theta: f64) -> f64 {
+        ((theta + 0.5 * PI) / (2.0 * PI)).rem_euclid(1.0)
+    }
+}
+
+/// One breath of a [`Breaths`] schedule.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Breath {
+    /// Time at which the breath starts [s]: the rib-cage family's inspiration onset.
+    pub start: f64,
+    /// Its period Ttot [s].
+    pub period: f64,
+    /// Its depth: every family's amplitude scale (1: the nominal drive's).
+    pub depth: f64,
+}
+
+/// A schedule of consecutive breaths, each with its own period and depth, in increasing
+/// start time; each breath ends where the next starts, the last one repeats with its period.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Breaths(pub Vec<Breath>);
+
+impl Breaths {
+    /// The breath running at time `t` and the cycle phase u in [0, 1) within it (u = 0 at its
+    /// start); `None` before the first breath or for an empty schedule. After the last
+    /// breath, the last breath repeats (u wraps).
+    pub fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        let k = self.0.partition_point(|b| b.start <= t).checked_sub(1)?;
+        let b = self.0[k];
+        let u = ((t - b.start) / b.period).rem_euclid(1.0);
+        Some((k, u))
+    }
+
+    /// The piecewise-constant drive of the schedule, `(start time, drive)` segments: `base`
+    /// until the first breath, then per breath `base` with frequency 1 / period, every
+    /// amplitude times the depth (at most 1), the rib-cage phase set so that its wave starts
+    /// inspiration (u = 0) at the breath's start, and the other families keeping their
+    /// phase offsets from the rib cage.
+    pub fn schedule(&self, base: &Drive) -> Vec<(f64, Drive)> {
+        let mut segments = vec![(0.0, *base)];
+        for b in &self.0 {
+            let fk = 1.0 / b.period;
+            let mut d = *base;
+            d.frequency = fk;
+            d.ribs.phase = wrap(-PI / 2.0 - 2.0 * PI * fk * b.start);
+            d.diaphragm.phase = wrap(d.ribs.phase + base.diaphragm.phase - base.ribs.phase);
+            d.abdominals.phase = wrap(d.ribs.phase + base.abdominals.phase - base.ribs.phase);
+            d.ribs.amplitude = (base.ribs.amplitude * b.depth).min(1.0);
+            d.diaphragm.amplitude = (base.diaphragm.amplitude * b.depth).min(1.0);
+            d.abdominals.amplitude = (base.abdominals.amplitude * b.depth).min(1.0);
+            segments.push((b.start, d));
+        }
+        segments
+    }
+}
+
+/// An angle wrapped to (-pi, pi].
+fn wrap(a: f64) -> f64 {
+    let w = (a + PI).rem_euclid(2.0 * PI) - PI;
+    if w <= -PI { w + 2.0 * PI } else { w }
 }
 
 /// Range check with a message naming the variable.
@@ -173,5 +296,142 @@ pub(crate) fn check(name: &str, v: f64, (lo, hi): (f64, f64)) -> Result<()> {
         Ok(())
     } else {
         Err(Error::invalid(name, v, format!("[{lo}, {hi}]")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// At F = 1/2 the raised-cosine halves are the sine of eq. 2.4 (to rounding), and the
+    /// drive evaluates that sine itself, bit for bit.
+    #[test]
+    fn half_fraction_is_the_sine() {
+        let mut worst: f64 = 0.0;
+        for k in 0..=4000 {
+            let theta = -PI + 2.0 * PI * k as f64 / 4000.0;
+            let d = Drive::default();
+            let w = waveform(d.cycle_phase(theta), 0.5);
+            worst = worst.max((w - 0.5 * (theta.sin() + 1.0)).abs());
+        }
+        assert!(worst <= 1e-15, "raised cosine against sine: {worst:e}");
+        let d = Drive::forced();
+        for k in 0..500 {
+            let t = 0.037 * k as f64;
+            for (g, wave, shift) in [
+                (MuscleGroup::Diaphragm, d.diaphragm, 0.0),
+                (MuscleGroup::InternalIntercostals, d.ribs, PI),
+                (MuscleGroup::RectusAbdominis, d.abdominals, PI),
+            ] {
+                let sine = 0.5
+                    * wave.amplitude
+                    * ((2.0 * PI * d.frequency * t + wave.phase + shift).sin() + 1.0);
+                assert_eq!(d.activation(g, t).to_bits(), sine.to_bits());
+            }
+        }
+    }
+
+    /// The waveform peaks at u = F with value 1, is 0 at u = 0, stays in [0, 1], and is C1:
+    /// its one-sided slopes agree at both joins (both are 0).
+    #[test]
+    fn waveform_shape() {
+        for f in [0.2, 0.38, 0.42, 0.5, 0.8] {
+            assert_eq!(waveform(f, f), 1.0);
+            assert_eq!(waveform(0.0, f), 0.0);
+            let h = 1e-6;
+            for join in [0.0, f] {
+                let left = (waveform(join, f) - waveform(join - h, f)) / h;
+                let right = (waveform(join + h, f) - waveform(join, f)) / h;
+                assert!(left.abs() < 1e-4 && right.abs() < 1e-4, "F {f} join {join}");
+            }
+            let mut peak = (0.0, -1.0);
+            for k in 0..10000 {
+                let u = k as f64 / 10000.0;
+                let w = waveform(u, f);
+                assert!((0.0..=1.0).contains(&w));
+                if w > peak.1 {
+                    peak = (u, w);
+                }
+            }
+            assert!((peak.0 - f).abs() <= 1e-4, "F {f}: peak at {}", peak.0);
+        }
+    }
+
+    /// Expiratory groups take 1 - w; inspiration starts where the sine had its minimum.
+    #[test]
+    fn expiratory_groups_mirror_and_phase_keeps_its_meaning() {
+        let mut d = Drive::forced();
+        d.inspiratory_fraction = 0.4;
+        d.ribs.phase = 0.0;
+        let f = d.frequency;
+        // theta = -pi/2 at t = 3/4 period: inspiration onset; peak 0.4 period later.
+        let onset = 0.75 / f;
+        let peak = onset + 0.4 / f;
+        let a = d.ribs.amplitude;
+        assert!(d.activation(MuscleGroup::ExternalIntercostals, onset).abs() < 1e-12);
+        assert!((d.activation(MuscleGroup::ExternalIntercostals, peak) - a).abs() < 1e-12);
+        for t in [0.3, 1.7, onset, peak] {
+            let ext = d.activation(MuscleGroup::ExternalIntercostals, t);
+            let int = d.activation(MuscleGroup::InternalIntercostals, t);
+            assert!((ext + int - a).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn fraction_is_range_checked() {
+        let mut d = Drive::quiet();
+        d.inspiratory_fraction = 0.9;
+        let e = d.validate().unwrap_err().to_string();
+        assert!(e.contains("drive.inspiratory_fraction"), "{e}");
+        d.inspiratory_fraction = f64::NAN;
+        assert!(d.validate().is_err());
+    }
+
+    /// Time -> breath index -> cycle phase, and each breath's drive starts its rib-cage
+    /// inspiration at the breath's start with the breath's period and depth.
+    #[test]
+    fn breaths_locate_and_schedule() {
+        let mut base = Drive::forced();
+        base.inspiratory_fraction = 0.4;
+        let breaths = Breaths(vec![
+            Breath {
+                start: 2.0,
+                period: 4.0,
+                depth: 1.0,
+            },
+            Breath {
+                start: 6.0,
+                period: 5.0,
+                depth: 1.2,
+            },
+        ]);
+        assert_eq!(breaths.locate(1.0), None);
+        assert_eq!(breaths.locate(3.0), Some((0, 0.25)));
+        assert_eq!(breaths.locate(8.5), Some((1, 0.5)));
+        let (k, u) = breaths.locate(12.0).unwrap();
+        assert!(k == 1 && (u - 0.2).abs() < 1e-15, "{k} {u}");
+        let segments = breaths.schedule(&base);
+        assert_eq!(segments.len(), 3);
+        for (k, b) in breaths.0.iter().enumerate() {
+            let d = segments[k + 1].1;
+            assert_eq!(segments[k + 1].0, b.start);
+            assert!((d.frequency - 1.0 / b.period).abs() < 1e-15);
+            let ext = MuscleGroup::ExternalIntercostals;
+            let amp = base.ribs.amplitude * b.depth;
+            assert!(d.activation(ext, b.start).abs() < 1e-12);
+            let peak = b.start + 0.4 * b.period;
+            assert!((d.activation(ext, peak) - amp).abs() < 1e-12);
+            let offset = wrap(d.diaphragm.phase - d.ribs.phase);
+            assert!((offset - wrap(base.diaphragm.phase - base.ribs.phase)).abs() < 1e-12);
+        }
+    }
+
+    /// States saved before the field existed read as the sine.
+    #[test]
+    fn old_states_read_as_the_sine() {
+        let mut v = serde_json::to_value(Drive::quiet()).unwrap();
+        v.as_object_mut().unwrap().remove("inspiratory_fraction");
+        let d: Drive = serde_json::from_value(v).unwrap();
+        assert_eq!(d, Drive::quiet());
     }
 }

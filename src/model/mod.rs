@@ -15,7 +15,7 @@
 
 pub mod bounds;
 mod config;
-mod drive;
+pub mod drive;
 mod quantity;
 pub mod run;
 mod snapshot;
@@ -23,7 +23,7 @@ mod torso;
 
 pub use config::{Config, GroupGains, Scene, SolverConfig};
 pub(crate) use drive::check;
-pub use drive::{Drive, Wave};
+pub use drive::{Breath, Breaths, Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::{Checkpoint, Snapshot};
 pub use torso::{AIRWAY_OPENING_RANGE, AdvanceStats, Compiled, Sample, Torso};
