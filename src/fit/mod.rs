@@ -5,6 +5,7 @@
 //! | file | owns |
 //! |---|---|
 //! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
+//! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
@@ -14,6 +15,7 @@
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
 pub mod fitting;
+pub mod markers;
 pub mod optimize;
 pub mod principal;
 pub mod recording;
@@ -23,6 +25,7 @@ pub mod sweep;
 pub mod synth;
 
 pub use fitting::{Fit, FitOptions, Method, fit_recording};
+pub use markers::{Format, Markers, ReadOptions};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

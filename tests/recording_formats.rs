@@ -1,0 +1,320 @@
+//! Marker recordings in C3D, TRC and CSV: write -> read round trips, missing samples stay
+//! missing, malformed files give errors naming file, row and column, provenance survives.
+
+use breathing_torso::fit::markers::{
+    Format, Markers, ReadOptions, parse_named_csv, parse_trc, read_c3d,
+};
+use breathing_torso::fit::{Recording, Units};
+use nalgebra::Point3;
+use std::path::PathBuf;
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("recording_formats_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// Three markers over 20 frames at 100 Hz, every 7th sample missing, with provenance.
+fn sample(units: Units) -> Markers {
+    let labels = vec![
+        "STRN".to_string(),
+        "marker[2]".to_string(),
+        "T10 back".to_string(),
+    ];
+    let frames = (0..20)
+        .map(|i| {
+            (0..3)
+                .map(|k| {
+                    ((i * 3 + k) % 7 != 3).then(|| {
+                        Point3::new(
+                            0.123_456_7 * k as f64 - 0.05,
+                            1.234_567 + 0.001 * i as f64,
+                            -0.2 + 0.000_37 * (i * k) as f64,
+                        )
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    Markers {
+        labels,
+        times: (0..20).map(|i| i as f64 / 100.0).collect(),
+        frames,
+        units,
+        format: Format::MarkerCsv,
+        provenance: vec![
+            ("lod".to_string(), "0".to_string()),
+            ("subject.sex".to_string(), "female".to_string()),
+        ],
+    }
+}
+
+fn assert_same(a: &Markers, b: &Markers, tol: f64) {
+    assert_eq!(a.labels, b.labels);
+    assert_eq!(a.times.len(), b.times.len());
+    for (x, y) in a.times.iter().zip(&b.times) {
+        assert!((x - y).abs() < 1e-6, "time {x} vs {y}");
+    }
+    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+        for (pa, pb) in fa.iter().zip(fb) {
+            match (pa, pb) {
+                (None, None) => {}
+                (Some(p), Some(q)) => {
+                    for (u, v) in p.coords.iter().zip(q.coords.iter()) {
+                        assert!((u - v).abs() <= tol * u.abs().max(1e-3), "{u} vs {v}");
+                    }
+                }
+                _ => panic!("missing sample changed: {pa:?} vs {pb:?}"),
+            }
+        }
+    }
+    for (k, v) in &a.provenance {
+        assert_eq!(b.provenance_value(k), Some(v.as_str()), "provenance {k}");
+    }
+}
+
+#[test]
+fn csv_round_trip_keeps_missing_and_provenance() {
+    let m = sample(Units::Millimetres);
+    let path = tmp("named.csv");
+    m.write(&path).unwrap();
+    let back = Markers::read(&path, &ReadOptions::default()).unwrap();
+    assert_eq!(back.format, Format::MarkerCsv);
+    assert_same(&m, &back, 1e-12);
+    assert_eq!(back.missing_per_marker(), m.missing_per_marker());
+    assert!(m.missing_per_marker().iter().all(|&c| c > 0));
+}
+
+#[test]
+fn trc_round_trip_keeps_missing_and_provenance() {
+    let m = sample(Units::Millimetres);
+    let path = tmp("markers.trc");
+    m.write(&path).unwrap();
+    let back = Markers::read(&path, &ReadOptions::default()).unwrap();
+    assert_eq!(back.format, Format::Trc);
+    assert_eq!(back.units, Units::Millimetres);
+    assert_same(&m, &back, 1e-12);
+}
+
+#[test]
+fn c3d_round_trip_is_exact_in_float32() {
+    for units in [Units::Millimetres, Units::Metres] {
+        let m = sample(units);
+        let path = tmp("markers.c3d");
+        m.write(&path).unwrap();
+        let back = Markers::read(&path, &ReadOptions::default()).unwrap();
+        assert_eq!(back.format, Format::C3d);
+        assert_eq!(back.units, units);
+        assert_same(&m, &back, 1e-6);
+        // Bit for bit within float32: each coordinate is the f32 of the file's value.
+        let s = 1.0 / units.to_metres();
+        for (fa, fb) in m.frames.iter().zip(&back.frames) {
+            for (p, q) in fa.iter().zip(fb) {
+                if let (Some(p), Some(q)) = (p, q) {
+                    for (u, v) in p.coords.iter().zip(q.coords.iter()) {
+                        assert_eq!((u * s) as f32, (v * s) as f32);
+                    }
+                }
+            }
+        }
+        assert_eq!(back.missing_per_marker(), m.missing_per_marker());
+    }
+}
+
+#[test]
+fn grid_csv_reads_unchanged_and_converts() {
+    let rec = Recording::read(std::path::Path::new("data/recordings/demo_quiet.csv")).unwrap();
+    let m = Markers::read(
+        std::path::Path::new("data/recordings/demo_quiet.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(m.format, Format::GridCsv);
+    assert_eq!(m.markers(), 60);
+    let back = m.to_recording((10, 6)).unwrap();
+    assert_eq!(back.frames, rec.frames);
+    assert_eq!(back.times, rec.times);
+    // The same markers through C3D and TRC come back as the grid recording.
+    for ext in ["c3d", "trc"] {
+        let mut mm = m.clone();
+        mm.units = Units::Millimetres;
+        let path = tmp(&format!("grid.{ext}"));
+        mm.write(&path).unwrap();
+        let read = Markers::read(&path, &ReadOptions::default()).unwrap();
+        let r = read.to_recording((10, 6)).unwrap();
+        assert_eq!(r.grid, (10, 6));
+        for (fa, fb) in rec.frames.iter().zip(&r.frames) {
+            for (p, q) in fa.iter().zip(fb) {
+                assert!((p.unwrap() - q.unwrap()).norm() < 1e-6);
+            }
+        }
+    }
+    let err = sample(Units::Metres)
+        .to_recording((10, 6))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("not the model's 10x6 grid")
+            && err.contains("STRN")
+            && err.contains("marker[1]"),
+        "{err}"
+    );
+}
+
+#[test]
+fn named_csv_variants_units_and_rate() {
+    let text = "Frame,Time,STRN X,STRN Y,STRN Z,xiph.x,xiph.y,xiph.z\n1,0,1,2,3,4,5,6\n2,0.01,NaN,2,3,,,\n3,0.02,1,2,3,4,5,6\n";
+    let err = parse_named_csv(text, "a.csv", &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("a.csv:1:1:") && err.contains("--units mm|cm|m"),
+        "{err}"
+    );
+    let opts = ReadOptions {
+        units: Some(Units::Centimetres),
+        rate: None,
+    };
+    let m = parse_named_csv(text, "a.csv", &opts).unwrap();
+    assert_eq!(m.labels, ["STRN", "xiph"]);
+    assert_eq!(m.frames[1], vec![None, None]);
+    assert_eq!(m.frames[0][1], Some(Point3::new(0.04, 0.05, 0.06)));
+    let no_time = "# units: mm\nA_x,A_y,A_z\n1,2,3\n1,2,4\n";
+    let err = parse_named_csv(no_time, "b.csv", &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("b.csv:2:1:") && err.contains("--rate HZ"),
+        "{err}"
+    );
+    let m = parse_named_csv(
+        no_time,
+        "b.csv",
+        &ReadOptions {
+            units: None,
+            rate: Some(50.0),
+        },
+    )
+    .unwrap();
+    assert_eq!(m.times, [0.0, 0.02]);
+    let clash = parse_named_csv(
+        no_time,
+        "b.csv",
+        &ReadOptions {
+            units: Some(Units::Metres),
+            rate: Some(50.0),
+        },
+    );
+    assert!(clash.unwrap_err().to_string().contains("--units says m"));
+}
+
+fn err_of(r: breathing_torso::Result<Markers>) -> String {
+    r.expect_err("a malformed file must not read").to_string()
+}
+
+#[test]
+fn malformed_csv_names_file_row_and_column() {
+    let o = ReadOptions {
+        units: Some(Units::Millimetres),
+        rate: None,
+    };
+    let e = err_of(parse_named_csv(
+        "time,A X,A Y,A Z\n0,1,2,3\n0.1,1,two,3\n",
+        "m.csv",
+        &o,
+    ));
+    assert!(
+        e.starts_with("m.csv:3:7:")
+            && e.contains("column 3 `A Y`")
+            && e.contains("`two` is not a number"),
+        "{e}"
+    );
+    let e = err_of(parse_named_csv(
+        "time,A X,A Y,A Z,B X\n0,1,2,3,4\n",
+        "m.csv",
+        &o,
+    ));
+    assert!(
+        e.starts_with("m.csv:1:") && e.contains("marker `B` has no y column"),
+        "{e}"
+    );
+    let e = err_of(parse_named_csv(
+        "time,A X,A Y,A Z,speed\n0,1,2,3,4\n",
+        "m.csv",
+        &o,
+    ));
+    assert!(
+        e.starts_with("m.csv:1:18:") && e.contains("column 5 `speed`"),
+        "{e}"
+    );
+    let e = err_of(parse_named_csv(
+        "time,A X,A Y,A Z\n0,1,2,3\n0.1,1,2\n",
+        "m.csv",
+        &o,
+    ));
+    assert!(e.starts_with("m.csv:3:") && e.contains("ragged row"), "{e}");
+    let e = err_of(parse_named_csv(
+        "time,A X,A Y,A Z\n0,1,2,3\n0,1,2,3\n",
+        "m.csv",
+        &o,
+    ));
+    assert!(
+        e.starts_with("m.csv:3:1:") && e.contains("does not increase"),
+        "{e}"
+    );
+    let e = err_of(parse_named_csv(
+        "time,A X,A Y,A Z\n0,1,2,3\n0.1,inf,2,3\n",
+        "m.csv",
+        &o,
+    ));
+    assert!(e.starts_with("m.csv:3:5:") && e.contains("`A X`"), "{e}");
+}
+
+const TRC_HEAD: &str = "PathFileType\t4\t(X/Y/Z)\tt.trc\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n100\t100\t2\t2\tmm\t100\t1\t2\nFrame#\tTime\tA\t\t\tB\t\t\n\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n\n";
+
+#[test]
+fn trc_missing_cells_and_errors() {
+    let ok = format!("{TRC_HEAD}1\t0\t1\t2\t3\t\t\t\n2\t0.01\t1\t2\t3\t4\t5\t6\n");
+    let m = parse_trc(&ok, "t.trc").unwrap();
+    assert_eq!(m.frames[0][1], None);
+    assert_eq!(m.frames[1][1], Some(Point3::new(0.004, 0.005, 0.006)));
+    let e = err_of(parse_trc(
+        &format!("{TRC_HEAD}1\t0\t1\t2\t3\t4\t5\t6\n2\t0.01\t1\tx\t3\t4\t5\t6\n"),
+        "t.trc",
+    ));
+    assert!(
+        e.starts_with("t.trc:8:")
+            && e.contains("column 4 `A Y`")
+            && e.contains("`x` is not a number"),
+        "{e}"
+    );
+    let e = err_of(parse_trc(&ok.replace("\tmm\t", "\tinch\t"), "t.trc"));
+    assert!(
+        e.starts_with("t.trc:3:") && e.contains("Units: `inch`"),
+        "{e}"
+    );
+    let e = err_of(parse_trc(
+        &ok.replace("100\t100\t2\t2", "100\t100\t3\t2"),
+        "t.trc",
+    ));
+    assert!(e.contains("2 frames of data, NumFrames says 3"), "{e}");
+    let e = err_of(parse_trc("hello\n", "t.trc"));
+    assert!(
+        e.starts_with("t.trc:1:1:") && e.contains("PathFileType"),
+        "{e}"
+    );
+}
+
+#[test]
+fn c3d_errors_name_the_file() {
+    let e = err_of(read_c3d(&[0u8; 100], "bad.c3d"));
+    assert!(
+        e.starts_with("bad.c3d:") && e.contains("not a readable C3D file"),
+        "{e}"
+    );
+    let e = err_of(Markers::read(
+        std::path::Path::new("x.mat"),
+        &ReadOptions::default(),
+    ));
+    assert!(e.contains(".c3d, .trc or .csv"), "{e}");
+}
