@@ -318,3 +318,204 @@ fn c3d_errors_name_the_file() {
     ));
     assert!(e.contains(".c3d, .trc or .csv"), "{e}");
 }
+
+// ---------------------------------------------------------------------------------------
+// The binary: synth into each format, inspect, fit, provenance and the level of detail.
+
+fn torso(dir: &std::path::Path, args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("torso runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn workdir(name: &str) -> PathBuf {
+    let d = tmp(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The fitted amplitudes' relative errors (ribs, diaphragm) against the truth JSON.
+fn amplitude_errors(dir: &std::path::Path, result: &str) -> [f64; 2] {
+    let read = |f: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(f)).unwrap()).unwrap()
+    };
+    let (fit, truth) = (read(result), read("truth.json"));
+    ["drive.ribs.amplitude", "drive.diaphragm.amplitude"].map(|k| {
+        let t = truth[k].as_f64().unwrap();
+        (fit[k].as_f64().unwrap() - t).abs() / t
+    })
+}
+
+#[test]
+fn c3d_synth_with_dropped_samples_fits_as_well_as_csv() {
+    let dir = workdir("fit_c3d");
+    let synth = |out: &str| {
+        let (ok, _, err) = torso(
+            &dir,
+            &[
+                "synth",
+                "--lod",
+                "0",
+                "--duration",
+                "8",
+                "--rate",
+                "30",
+                "--dropout",
+                "0.02",
+                "--seed",
+                "3",
+                "--out",
+                out,
+                "--truth",
+                "truth.json",
+            ],
+        );
+        assert!(ok, "{err}");
+    };
+    synth("rec.c3d");
+    synth("rec.csv");
+    let (ok, info, err) = torso(&dir, &["inspect", "rec.c3d"]);
+    assert!(ok, "{err}");
+    for want in [
+        "format: C3D",
+        "markers: 60",
+        "frames: 241",
+        "units: mm",
+        "scene.level_of_detail: 0",
+        "subject.stature: 1.75",
+        "marker[60]\t",
+    ] {
+        assert!(info.contains(want), "inspect lacks `{want}`:\n{info}");
+    }
+    let dropped: usize = info
+        .lines()
+        .find_map(|l| l.strip_prefix("missing samples: "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("a missing-sample count");
+    assert!(
+        (150..=400).contains(&dropped),
+        "2 % of 14,460 samples dropped, got {dropped}"
+    );
+    let mut errors = Vec::new();
+    for rec in ["rec.c3d", "rec.csv"] {
+        let out = format!("{rec}.fit/result.json");
+        let (ok, stdout, err) = torso(
+            &dir,
+            &["fit", "--slp", rec, "--out", &out, "--threads", "1"],
+        );
+        assert!(ok, "{err}");
+        assert!(stdout.contains("cost"), "{stdout}");
+        assert!(err.contains("fitting at level of detail 0"), "{err}");
+        errors.push(amplitude_errors(&dir, &out));
+    }
+    let (c3d, csv) = (errors[0], errors[1]);
+    for k in 0..2 {
+        assert!(c3d[k] < 0.03, "C3D fit off the truth: {c3d:?}");
+        // float32 millimetres against 0.1 um text: the same optimum within 0.1 %.
+        assert!(c3d[k] <= csv[k] + 1e-3, "C3D {c3d:?} against CSV {csv:?}");
+    }
+}
+
+#[test]
+fn provenance_sets_the_level_of_detail_and_warns_on_a_different_model() {
+    let dir = workdir("provenance");
+    for out in ["rec.trc", "rec.csv"] {
+        let (ok, _, err) = torso(
+            &dir,
+            &[
+                "synth",
+                "--lod",
+                "0",
+                "--duration",
+                "4",
+                "--rate",
+                "20",
+                "--stature",
+                "1.62",
+                "--sex",
+                "female",
+                "--out",
+                out,
+                "--truth",
+                "truth.json",
+            ],
+        );
+        assert!(ok, "{err}");
+        let fit = |extra: &[&str]| {
+            let mut args = vec![
+                "fit",
+                "--slp",
+                out,
+                "--out",
+                "f/r.json",
+                "--max-evals",
+                "10",
+                "--threads",
+                "1",
+            ];
+            args.extend_from_slice(extra);
+            torso(&dir, &args)
+        };
+        // Same model: the level of detail comes from the file, no warning.
+        let (ok, _, err) = fit(&["--stature", "1.62", "--sex", "female"]);
+        assert!(ok, "{err}");
+        assert!(err.contains("note: fitting at level of detail 0"), "{err}");
+        assert!(!err.contains("warning"), "{err}");
+        // An explicit --lod wins, with one warning line naming the difference.
+        let (ok, _, err) = fit(&["--lod", "1", "--stature", "1.62", "--sex", "female"]);
+        assert!(ok, "{err}");
+        let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+        assert_eq!(warnings.len(), 1, "{err}");
+        assert!(
+            warnings[0].contains("scene.level_of_detail 0 (fit: 1)"),
+            "{err}"
+        );
+        assert!(!err.contains("note: fitting at level"), "{err}");
+        // Another subject: the warning lists each difference.
+        let (ok, _, err) = fit(&[]);
+        assert!(ok, "{err}");
+        assert!(
+            err.contains("subject.sex female (fit: male)")
+                && err.contains("subject.stature 1.62 (fit: 1.75)"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn fit_refuses_other_marker_sets_and_names_what_is_expected() {
+    let dir = workdir("other_set");
+    std::fs::write(
+        dir.join("lab.csv"),
+        "# units: mm\ntime,STRN X,STRN Y,STRN Z,XIPH X,XIPH Y,XIPH Z\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n",
+    )
+    .unwrap();
+    let (ok, _, err) = torso(&dir, &["fit", "--slp", "lab.csv", "--out", "f/r.json"]);
+    assert!(!ok);
+    assert!(
+        err.contains("lab.csv")
+            && err.contains("STRN, XIPH")
+            && err.contains("marker[1]..marker[60]"),
+        "{err}"
+    );
+    let (ok, _, err) = torso(&dir, &["inspect", "lab.csv", "--units", "furlong"]);
+    assert!(
+        !ok && err.contains("--units") && err.contains("mm, cm or m"),
+        "{err}"
+    );
+    let (ok, info, err) = torso(&dir, &["inspect", "lab.csv"]);
+    assert!(ok, "{err}");
+    assert!(
+        info.contains("format: CSV of named markers") && info.contains("provenance: none"),
+        "{info}"
+    );
+}
