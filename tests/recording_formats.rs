@@ -519,3 +519,55 @@ fn fit_refuses_other_marker_sets_and_names_what_is_expected() {
         "{info}"
     );
 }
+
+/// docs/recordings.md's shell block, run as written from the repository's root with the
+/// built `torso` first on the PATH.
+#[test]
+fn the_recordings_doc_example_runs_as_written() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(root.join("docs/recordings.md")).unwrap();
+    let mut blocks = Vec::new();
+    let mut current: Option<String> = None;
+    for line in doc.lines() {
+        match (&mut current, line.trim_end()) {
+            (None, "```sh") => current = Some(String::new()),
+            (Some(b), "```") => {
+                blocks.push(std::mem::take(b));
+                current = None;
+            }
+            (Some(b), l) => {
+                b.push_str(l);
+                b.push('\n');
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(blocks.len(), 1, "docs/recordings.md holds one ```sh block");
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_torso"));
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let out = std::process::Command::new("bash")
+        .arg("-c")
+        .arg(&blocks[0])
+        .current_dir(&root)
+        .env("PATH", path)
+        .output()
+        .expect("bash runs");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{}\n{stdout}\n{stderr}", blocks[0]);
+    for want in [
+        "format: C3D",
+        "markers: 60",
+        "frames: 181",
+        "drive.diaphragm.amplitude",
+    ] {
+        assert!(stdout.contains(want), "no `{want}` in:\n{stdout}");
+    }
+    assert!(stderr.contains("fitting at level of detail 0"), "{stderr}");
+}
