@@ -1251,7 +1251,8 @@ fn c3d_bytes(m: &Markers) -> Result<Vec<u8>> {
         p.param(1, "LABELS", Value::Texts(&m.labels));
         p.param(1, "DESCRIPTIONS", Value::Texts(&m.labels));
         p.param(2, "USED", Value::Int(0));
-        p.param(2, "RATE", Value::Float(rate));
+        // No analog channels: ANALOG:RATE / POINT:RATE = 0 analog samples per frame (header).
+        p.param(2, "RATE", Value::Float(0.0));
         if !keys.is_empty() {
             p.group(3, C3D_GROUP);
             p.param(3, "KEYS", Value::Texts(&keys));
