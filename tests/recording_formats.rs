@@ -571,3 +571,27 @@ fn the_recordings_doc_example_runs_as_written() {
     }
     assert!(stderr.contains("fitting at level of detail 0"), "{stderr}");
 }
+
+/// A valid point whose residual byte is 128 or more (word 0x01C8: camera 1, residual 200)
+/// stays present; a negative residual word (-1) is missing.
+#[test]
+fn c3d_residual_sign_is_the_whole_words() {
+    let m = sample(Units::Millimetres);
+    let path = tmp("residual.c3d");
+    m.write(&path).unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let block = u16::from_le_bytes([bytes[16], bytes[17]]) as usize;
+    let residual_at =
+        |frame: usize, marker: usize| (block - 1) * 512 + (frame * 3 + marker) * 16 + 12;
+    assert!(m.frames[0][1].is_some() && m.frames[1][1].is_some());
+    let at = residual_at(0, 1);
+    bytes[at..at + 4].copy_from_slice(&(0x01C8 as f32).to_le_bytes());
+    let at = residual_at(1, 1);
+    bytes[at..at + 4].copy_from_slice(&(-1.0f32).to_le_bytes());
+    let back = read_c3d(&bytes, "residual.c3d").unwrap();
+    assert!(back.frames[0][1].is_some(), "residual 200 is a valid point");
+    assert!(
+        back.frames[1][1].is_none(),
+        "residual word -1 is a missing point"
+    );
+}

@@ -1058,6 +1058,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
     }
     labels.truncate(count);
     let scale = units.to_metres();
+    let invalid = invalid_points(bytes, points.rows(), count);
     let first = f64::from(points.first_frame.max(1)) - 1.0;
     let mut times = Vec::with_capacity(points.rows());
     let mut frames = Vec::with_capacity(points.rows());
@@ -1065,7 +1066,10 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
         let mut frame = Vec::with_capacity(count);
         for (k, label) in labels.iter().enumerate() {
             let p = &points[i][k];
-            let present = p.residual >= 0.0;
+            let present = match &invalid {
+                Some(inv) => !inv[i * count + k],
+                None => p.residual >= 0.0,
+            };
             let finite = p.point.iter().all(|v| v.is_finite());
             if present && !finite {
                 return Err(parse_err(
@@ -1130,6 +1134,53 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
         format: Format::C3d,
         provenance,
     })
+}
+
+/// Per frame and point (frame-major), whether the point's residual word is negative (the
+/// C3D mark of an invalid point), read off the raw data section; `None` when the header does
+/// not describe a data section inside `bytes` (the caller then uses `c3dio`'s residual).
+///
+/// `c3dio` 0.8 reads the residual as the low byte taken as signed, so a valid point with a
+/// residual byte of 128 or more would read as negative; the sign of the whole word is what
+/// the format defines. Only the sign is needed, so the three processor types are one test:
+/// the sign bit of a 32-bit float is in byte 3 (Intel), byte 1 (DEC) or byte 0 (MIPS), of a
+/// 16-bit integer in byte 1 (Intel, DEC) or byte 0 (MIPS).
+fn invalid_points(bytes: &[u8], frames: usize, points: usize) -> Option<Vec<bool>> {
+    let header = bytes.get(..512)?;
+    let processor = *bytes.get((usize::from(header[0]).checked_sub(1)?) * 512 + 3)?;
+    let word = |w: usize| -> [u8; 2] { [header[2 * w], header[2 * w + 1]] };
+    let u16_of: fn([u8; 2]) -> u16 = match processor {
+        84 | 85 => u16::from_le_bytes,
+        86 => u16::from_be_bytes,
+        _ => return None,
+    };
+    if usize::from(u16_of(word(1))) != points {
+        return None;
+    }
+    let analog = usize::from(u16_of(word(2)));
+    let scale_bytes = [header[12], header[13], header[14], header[15]];
+    let float = match processor {
+        84 => f32::from_le_bytes(scale_bytes) < 0.0,
+        86 => f32::from_be_bytes(scale_bytes) < 0.0,
+        // DEC: the sign is bit 7 of the second byte.
+        _ => scale_bytes[1] & 0x80 != 0,
+    };
+    let start = (usize::from(u16_of(word(8))).checked_sub(1)?) * 512;
+    let size = if float { 4 } else { 2 };
+    let frame_bytes = (4 * points + analog) * size;
+    let sign_byte = match (float, processor) {
+        (_, 86) => 0,
+        (true, 84) => 3,
+        _ => 1,
+    };
+    let mut out = Vec::with_capacity(frames * points);
+    for i in 0..frames {
+        for k in 0..points {
+            let at = start + i * frame_bytes + (4 * k + 3) * size + sign_byte;
+            out.push(bytes.get(at)? & 0x80 != 0);
+        }
+    }
+    Some(out)
 }
 
 /// Little-endian (Intel) writer of the parameter section's records.
