@@ -595,3 +595,30 @@ fn c3d_residual_sign_is_the_whole_words() {
         "residual word -1 is a missing point"
     );
 }
+
+/// Corrupted C3D bytes (each byte of the header block in turn, and a
+/// truncated file) give an error or a recording, never a panic out of the reader.
+#[test]
+fn corrupted_c3d_never_panics() {
+    let m = sample(Units::Millimetres);
+    let path = tmp("corrupt.c3d");
+    m.write(&path).unwrap();
+    let good = std::fs::read(&path).unwrap();
+    let quiet = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let mut errors = 0;
+    for at in 0..512 {
+        for v in [0x00u8, 0xFF, 0x80, 0x7F] {
+            let mut b = good.clone();
+            b[at] = v;
+            if read_c3d(&b, "c.c3d").is_err() {
+                errors += 1;
+            }
+        }
+    }
+    for len in [0, 10, 511, 513, 1024, good.len() - 1] {
+        let _ = read_c3d(&good[..len], "c.c3d");
+    }
+    std::panic::set_hook(quiet);
+    assert!(errors > 0, "some corruptions must be reported");
+}

@@ -1009,8 +1009,23 @@ pub const C3D_GROUP: &str = "BREATHING_TORSO";
 /// Reads C3D bytes with `c3dio`. `name` is used in error messages (the "line" of a C3D
 /// error is the frame, 1-based; the column the marker).
 pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
-    let c3d = c3dio::C3d::from_bytes(bytes)
-        .map_err(|e| parse_err(name, 0, 0, format!("not a readable C3D file: {e:?}")))?;
+    check_c3d_size(bytes, name)?;
+    // c3dio indexes by header fields without checking all of them: a malformed file may
+    // panic inside it, which becomes the same error as a parse failure.
+    let parsed =
+        std::panic::catch_unwind(|| c3dio::C3d::from_bytes(bytes).map_err(|e| format!("{e:?}")))
+            .map_err(|p| {
+                parse_err(
+                    name,
+                    0,
+                    0,
+                    format!(
+                        "not a readable C3D file (the parser stopped: {})",
+                        crate::error::panic_message(p.as_ref())
+                    ),
+                )
+            })?;
+    let c3d = parsed.map_err(|e| parse_err(name, 0, 0, format!("not a readable C3D file: {e}")))?;
     let points = &c3d.points;
     let count = points.cols();
     let units_text: String = points
@@ -1134,6 +1149,41 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
         format: Format::C3d,
         provenance,
     })
+}
+
+/// Refuses a C3D file whose header promises more point data than the file holds (before
+/// `c3dio` allocates for it): the frames, points and analog samples per frame of the header
+/// against the bytes after the data start.
+fn check_c3d_size(bytes: &[u8], name: &str) -> Result<()> {
+    let err = |m: String| parse_err(name, 0, 0, format!("not a readable C3D file: {m}"));
+    let header = bytes.get(..512).ok_or_else(|| {
+        err(format!(
+            "{} bytes, shorter than the 512-byte header",
+            bytes.len()
+        ))
+    })?;
+    let processor = usize::from(header[0])
+        .checked_sub(1)
+        .and_then(|b| bytes.get(b * 512 + 3).copied());
+    let u16_of = |w: usize| {
+        let b = [header[2 * w], header[2 * w + 1]];
+        if processor == Some(86) {
+            usize::from(u16::from_be_bytes(b))
+        } else {
+            usize::from(u16::from_le_bytes(b))
+        }
+    };
+    let (points, analog, first, last) = (u16_of(1), u16_of(2), u16_of(3), u16_of(4));
+    let frames = (last + 1).saturating_sub(first.max(1));
+    let start = u16_of(8).saturating_sub(1) * 512;
+    let need = start + frames * (4 * points + analog) * 2;
+    if need > bytes.len() {
+        return Err(err(format!(
+            "the header promises {frames} frames of {points} points from byte {start}, at least {need} bytes, but the file has {}",
+            bytes.len()
+        )));
+    }
+    Ok(())
 }
 
 /// Per frame and point (frame-major), whether the point's residual word is negative (the
