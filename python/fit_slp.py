@@ -3,7 +3,8 @@
 
 The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface:
 
-1. the recording (CSV: `# grid: RxC`, `# units: m|mm`, `time,marker[i].x,...`) is read;
+1. the recording (CSV: `# grid: RxC`, `# units: m|cm|mm`, `time,marker[i].x,...`) is read
+   (a .c3d or .trc recording of the grid: `torso convert IN.c3d OUT.csv` first);
 2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`); with
    `--slp-reference` a first fit gives the rest-pose grid the recording implies, written as
    `<out stem>_reference.csv`, and the FMU registers its grid and fits its skin to it
@@ -51,6 +52,11 @@ class RecordingError(ValueError):
 def read_recording(path: Path):
     """Reads the recording format of the project (see the module doc). Returns
     (grid, times [s], points [frames, P, 3] in metres with NaN for untracked points)."""
+    if path.suffix.lower() != ".csv":
+        raise RecordingError(
+            f"{path}:0:0: this script reads the grid CSV; convert a .c3d or .trc first with "
+            f"`torso convert {path} {path.with_suffix('.csv')}`"
+        )
     grid, scale = None, 1.0
     lines = path.read_text(encoding="utf-8").splitlines()
     k = 0
@@ -62,9 +68,10 @@ def read_recording(path: Path):
                 r, c = value.lower().split("x")
                 grid = (int(r), int(c))
             elif key.lower() == "units":
-                if value not in ("m", "mm"):
+                scales = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
+                if value.lower() not in scales:
                     raise RecordingError(f"{path}:{k + 1}:1: unknown units `{value}`")
-                scale = 1e-3 if value == "mm" else 1.0
+                scale = scales[value.lower()]
         k += 1
     if k >= len(lines):
         raise RecordingError(f"{path}:0:0: no header row")

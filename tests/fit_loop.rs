@@ -389,6 +389,7 @@ fn recordings_without_motion_are_rejected() {
         times: (0..100).map(|i| i as f64 / 56.0).collect(),
         frames: vec![rest.iter().map(|p| Some(*p)).collect(); 100],
         units: breathing_torso::fit::Units::Metres,
+        provenance: Vec::new(),
     };
     let e = fit_recording(&mut model, &rec, &FitOptions::default(), &mut |_, _| {})
         .unwrap_err()

@@ -128,6 +128,7 @@ fn recording_file(frames: usize, mm: bool) -> String {
         } else {
             Units::Metres
         },
+        provenance: Vec::new(),
     };
     rec.to_csv().expect("a valid recording writes")
 }

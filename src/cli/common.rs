@@ -8,6 +8,9 @@ use crate::{Error, Result};
 use clap::Args;
 use std::path::{Component, Path};
 
+/// The level of detail when `--lod` is not given.
+pub const DEFAULT_LOD: u32 = 1;
+
 /// Who the model is built for, and the level of detail it is built at.
 #[derive(Args, Debug, Clone)]
 pub struct SubjectArgs {
@@ -29,9 +32,10 @@ pub struct SubjectArgs {
     /// Posture: standing, sitting or supine.
     #[arg(long, default_value = "standing")]
     pub posture: String,
-    /// Level of detail 0, 1 or 2.
-    #[arg(long, default_value_t = 1)]
-    pub lod: u32,
+    /// Level of detail 0, 1 or 2 [default: 1; `torso fit`: the recording's, when it names
+    /// one].
+    #[arg(long)]
+    pub lod: Option<u32>,
 }
 
 impl SubjectArgs {
@@ -62,7 +66,7 @@ impl SubjectArgs {
             drive,
             ..Config::default()
         };
-        c.scene.level_of_detail = self.lod;
+        c.scene.level_of_detail = self.lod.unwrap_or(DEFAULT_LOD);
         c.solver.method = Method::from_name(&solver.solver).ok_or_else(|| {
             Error::invalid(
                 "--solver",

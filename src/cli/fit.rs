@@ -5,8 +5,10 @@ use super::common::{
     SolverArgs, SubjectArgs, flag_error, parse_grid_flag, prepare_output_dir, prepare_output_file,
 };
 use crate::fit::fitting::fit_with_skin;
-use crate::fit::report::{summary, write_fit};
-use crate::fit::{FitOptions, Method, Recording, TorsoMarkers, fit_recording};
+use crate::fit::report::{LOD_KEY, model_provenance, provenance_differences, summary, write_fit};
+use crate::fit::{
+    FitOptions, Markers, Method, ReadOptions, Recording, TorsoMarkers, Units, fit_recording,
+};
 use crate::model::Drive;
 use crate::{Error, Result};
 use clap::Args;
@@ -57,9 +59,13 @@ pub const FIT_ATOL_PER_RTOL: f64 = 1e-2;
 /// Options of `torso fit`.
 #[derive(Args, Debug)]
 pub struct FitArgs {
-    /// The SLP recording (CSV).
+    /// The recording: `.c3d`, `.trc` or `.csv` (the grid CSV or named markers) whose markers
+    /// are the model's grid, labelled `marker[1]`..`marker[R*C]` (docs/recordings.md).
     #[arg(long)]
     pub slp: PathBuf,
+    /// Units and frame rate of a recording that does not state them.
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// The subject and the model.
     #[command(flatten)]
     pub model: ModelArgs,
@@ -93,6 +99,100 @@ pub struct FitArgs {
     /// recording's breaths (docs/drive.md).
     #[arg(long, default_value = "0.5", allow_hyphen_values = true)]
     pub ti_ttot: String,
+}
+
+/// What a CSV of named markers may leave unsaid.
+#[derive(Args, Debug, Clone, Default)]
+pub struct ReadArgs {
+    /// Length unit of a CSV of named markers without a `# units:` line: mm, cm or m.
+    #[arg(long)]
+    pub units: Option<String>,
+    /// Frame rate [Hz] of a CSV of named markers without a time column.
+    #[arg(long)]
+    pub rate: Option<f64>,
+}
+
+impl ReadArgs {
+    /// The reader's options; an error names the flag.
+    pub fn options(&self) -> Result<ReadOptions> {
+        let units = match &self.units {
+            None => None,
+            Some(u) => {
+                Some(Units::parse(u).ok_or_else(|| Error::invalid("--units", u, "mm, cm or m"))?)
+            }
+        };
+        if let Some(r) = self.rate
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(Error::invalid("--rate", r, "a frame rate in Hz > 0"));
+        }
+        Ok(ReadOptions {
+            units,
+            rate: self.rate,
+        })
+    }
+}
+
+/// Reads a recording of the model's grid and the configuration to fit it with. When the
+/// recording names the level of detail it was made at and `--lod` is not given, the fit runs
+/// at the recording's (a note on stderr says so); any other difference between the model
+/// that made the recording and the fitting model is one warning line on stderr.
+pub fn read_for_fit(
+    path: &Path,
+    read: &ReadOptions,
+    model: &ModelArgs,
+) -> Result<(Recording, crate::Config)> {
+    // The flags are checked before the file is read, so that a bad flag is named first.
+    model.config(Drive::default())?;
+    let markers = Markers::read(path, read)?;
+    let mut model = model.clone();
+    let recorded_lod = match markers.provenance_value(LOD_KEY) {
+        None => None,
+        Some(v) => Some(v.trim().parse::<u32>().map_err(|_| {
+            Error::State(format!(
+                "{}: provenance `{LOD_KEY}: {v}` is not a level of detail 0, 1 or 2",
+                path.display()
+            ))
+        })?),
+    };
+    if let (Some(lod), None) = (recorded_lod, model.subject.lod) {
+        model.subject.lod = Some(lod);
+        eprintln!(
+            "note: fitting at level of detail {lod}, the one {} was made at; pass --lod to choose another",
+            path.display()
+        );
+    }
+    let config = model.config(Drive::default())?;
+    let differences = provenance_differences(
+        &markers.provenance,
+        &model_provenance(&config.subject, config.scene.level_of_detail),
+    );
+    if !differences.is_empty() {
+        eprintln!(
+            "warning: {} was made with another model than this fit's: {}",
+            path.display(),
+            differences.join(", ")
+        );
+    }
+    let grid = (config.scene.grid_rows, config.scene.grid_cols);
+    if let Some((r, c)) = markers.grid_shape()
+        && (r, c) != grid
+        && r * c == markers.markers()
+    {
+        return Err(Error::State(format!(
+            "{} has a {r}x{c} grid ({} points), the model's marker grid is {}x{} ({} points); \
+             pass --grid {r}x{c}",
+            path.display(),
+            r * c,
+            grid.0,
+            grid.1,
+            grid.0 * grid.1
+        )));
+    }
+    let recording = markers
+        .to_recording(grid)
+        .map_err(|e| Error::State(format!("{}: {e}", path.display())))?;
+    Ok((recording, config))
 }
 
 /// A progress bar on a terminal; silent when stdout is not one.
@@ -143,28 +243,15 @@ impl Progress {
 /// Fits `recording_path` with a model from `model` and writes the outputs at `out`.
 pub fn fit_file(
     recording_path: &Path,
+    read: &ReadOptions,
     model: &ModelArgs,
     out: &Path,
     options: &FitOptions,
     skin_fit: bool,
 ) -> Result<crate::fit::Fit> {
-    let mut config = model.config(Drive::default())?;
-    let recording = Recording::read(recording_path)?;
+    let (recording, mut config) = read_for_fit(recording_path, read, model)?;
     prepare_output_file(out)?;
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
-    let grid = (config.scene.grid_rows, config.scene.grid_cols);
-    if recording.grid != grid {
-        let (r, c) = recording.grid;
-        return Err(Error::State(format!(
-            "{} has a {r}x{c} grid ({} points), the model's marker grid is {}x{} ({} points); \
-             pass --grid {r}x{c}",
-            recording_path.display(),
-            r * c,
-            grid.0,
-            grid.1,
-            grid.0 * grid.1
-        )));
-    }
     let subject = config.subject.clone();
     let mut bar = Progress::new(options.max_evals);
     let fit = if skin_fit {
@@ -211,7 +298,16 @@ pub fn main(args: &FitArgs) -> Result<()> {
     if !(1..=2).contains(&options.threads) {
         return Err(Error::invalid("--threads", options.threads, "1 or 2"));
     }
-    fit_file(&args.slp, &args.model, &args.out, &options, args.skin_fit).map(|_| ())
+    let read = args.read.options()?;
+    fit_file(
+        &args.slp,
+        &read,
+        &args.model,
+        &args.out,
+        &options,
+        args.skin_fit,
+    )
+    .map(|_| ())
 }
 
 /// `--ti-ttot`: `auto` (None) or a number in the drive's range.
@@ -322,7 +418,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             mass: 75.0,
             breast_size: 0.0,
             posture: "standing".into(),
-            lod: 0,
+            lod: Some(0),
         },
         solver: SolverArgs {
             solver: "dopri5".into(),
@@ -360,6 +456,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
     }
     let fit = fit_file(
         &recording,
+        &ReadOptions::default(),
         &model,
         &args.out.join("fit.json"),
         &FitOptions {

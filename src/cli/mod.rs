@@ -4,6 +4,7 @@ pub mod bench;
 pub mod bench_stress;
 pub mod common;
 pub mod fit;
+pub mod inspect;
 pub mod mesh;
 pub mod simulate;
 pub mod skin;
@@ -40,6 +41,11 @@ pub enum Command {
     Synth(synth::SynthArgs),
     /// Fit the model to an SLP recording (registration, frequency, amplitudes and phases).
     Fit(fit::FitArgs),
+    /// Describe a marker recording (.c3d, .trc, .csv): markers, frames, rate, units,
+    /// missing samples per marker, how it was made.
+    Inspect(inspect::InspectArgs),
+    /// Convert a marker recording between .c3d, .trc and .csv.
+    Convert(inspect::ConvertArgs),
     /// Synthesise the six acceptance recordings, fit each, print truth against fit.
     FitSweep(fit::SweepArgs),
     /// Package the FMU, simulate the default subject and fit the bundled recording.
@@ -101,6 +107,8 @@ pub fn main() -> i32 {
         Command::SynthSpirometry(a) => validate::run_synth(&a),
         Command::Synth(a) => synth::main(&a),
         Command::Fit(a) => fit::main(&a),
+        Command::Inspect(a) => inspect::inspect(&a),
+        Command::Convert(a) => inspect::convert(&a),
         Command::FitSweep(a) => fit::sweep(&a),
         Command::Demo(a) => fit::demo(&a),
         Command::ExportObj(a) => skin::export_obj(&a),

@@ -3,8 +3,8 @@
 
 use super::common::{DriveArgs, prepare_output_file};
 use super::fit::ModelArgs;
-use crate::fit::report::truth_json;
-use crate::fit::{Camera, SynthOptions, TorsoMarkers, synthesize};
+use crate::fit::report::{drive_fmi, model_provenance, truth_json};
+use crate::fit::{Camera, Format, Markers, SynthOptions, TorsoMarkers, Units, synthesize};
 use crate::{Error, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -12,7 +12,8 @@ use std::path::PathBuf;
 /// Options of `torso synth`.
 #[derive(Args, Debug)]
 pub struct SynthArgs {
-    /// Recording to write (CSV, metres).
+    /// Recording to write: `.csv` (the grid CSV, metres), `.c3d` or `.trc` (millimetres);
+    /// markers labelled `marker[1]`..`marker[R*C]`, with how it was made (docs/recordings.md).
     #[arg(long)]
     pub out: PathBuf,
     /// Ground-truth JSON to write.
@@ -71,12 +72,46 @@ pub fn main(args: &SynthArgs) -> Result<()> {
     options.validate()?;
     let subject = config.subject.clone();
     let lod = config.scene.level_of_detail;
+    let config_solver = (config.solver.method.name(), config.solver.rtol);
     let start = std::time::Instant::now();
+    Format::from_path(&args.out)?;
     prepare_output_file(&args.out)?;
     prepare_output_file(&args.truth)?;
     let mut model = TorsoMarkers::new(config)?;
     let synthetic = synthesize(&mut model, &options)?;
-    synthetic.recording.write(&args.out)?;
+    let mut provenance = vec![(
+        "made_by".to_string(),
+        format!("torso synth {}", env!("CARGO_PKG_VERSION")),
+    )];
+    provenance.extend(model_provenance(&subject, lod));
+    provenance.extend(
+        drive_fmi(&options.drive)
+            .into_iter()
+            .map(|(k, v)| (k, v.to_string())),
+    );
+    for (k, v) in [
+        ("solver.method", config_solver.0.to_string()),
+        ("solver.rtol", config_solver.1.to_string()),
+        ("rate_hz", args.rate.to_string()),
+        ("duration_s", args.duration.to_string()),
+        ("noise_mm", args.noise_mm.to_string()),
+        ("seed", args.seed.to_string()),
+        ("camera", args.camera.clone()),
+        ("variability", args.variability.to_string()),
+        ("dropout", args.dropout.to_string()),
+    ] {
+        provenance.push((k.to_string(), v));
+    }
+    let mut recording = synthetic.recording.clone();
+    recording.provenance = provenance;
+    match Format::from_path(&args.out)? {
+        Format::C3d | Format::Trc => {
+            let mut markers = Markers::from_recording(&recording);
+            markers.units = Units::Millimetres;
+            markers.write(&args.out)?;
+        }
+        _ => recording.write(&args.out)?,
+    }
     let truth = truth_json(&synthetic, &subject, lod, &options);
     let text = serde_json::to_string_pretty(&truth)
         .map_err(|e| Error::State(format!("truth JSON: {e}")))?;

@@ -501,6 +501,7 @@ pub fn fit_recording(
         times: recording.times.clone(),
         frames: recorded.clone(),
         units: recording.units,
+        provenance: recording.provenance.clone(),
     };
     let pd = principal_displacement(&registered)?;
     let frequency = estimate_frequency(&pd.signal, recording.rate())?;
@@ -766,6 +767,7 @@ pub fn fit_with_skin(
         times: vec![t0, t0 + 1.0 / recording.rate().max(1.0)],
         frames: vec![frame.clone(), frame],
         units: super::Units::Metres,
+        provenance: Vec::new(),
     }
     .write(reference)?;
     let mut fitted = config.clone();

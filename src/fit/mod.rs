@@ -5,6 +5,7 @@
 //! | file | owns |
 //! |---|---|
 //! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
+//! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
@@ -16,6 +17,7 @@
 
 pub mod breathing;
 pub mod fitting;
+pub mod markers;
 pub mod optimize;
 pub mod principal;
 pub mod recording;
@@ -25,6 +27,7 @@ pub mod sweep;
 pub mod synth;
 
 pub use fitting::{Fit, FitOptions, Method, fit_recording};
+pub use markers::{Format, Markers, ReadOptions};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

@@ -2,7 +2,8 @@
 //! with errors naming the file, line and column of the first problem.
 //!
 //! Format (UTF-8): optional leading comment lines starting with `#`, among them
-//! `# grid: RxC` (rows x columns) and `# units: m` or `# units: mm`; a header row `time`
+//! `# grid: RxC` (rows x columns) and `# units: m`, `# units: cm` or `# units: mm`, and
+//! any other `# key: value` lines, kept as the recording's provenance; a header row `time`
 //! followed by `marker[i].x,marker[i].y,marker[i].z` for i = 1..R*C (row-major from the top
 //! row, column 1 on the subject's right); one row per frame, time in seconds, strictly
 //! increasing. An empty x, y, z triple means the point was not tracked in that frame.
@@ -24,6 +25,8 @@ pub enum Units {
     Metres,
     /// Millimetres.
     Millimetres,
+    /// Centimetres.
+    Centimetres,
 }
 
 impl Units {
@@ -32,6 +35,17 @@ impl Units {
         match self {
             Units::Metres => 1.0,
             Units::Millimetres => 1e-3,
+            Units::Centimetres => 1e-2,
+        }
+    }
+
+    /// The unit spelt `m`, `cm` or `mm` (case-insensitive, surrounding blanks ignored).
+    pub fn parse(s: &str) -> Option<Units> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "m" => Some(Units::Metres),
+            "cm" => Some(Units::Centimetres),
+            "mm" => Some(Units::Millimetres),
+            _ => None,
         }
     }
 
@@ -40,6 +54,7 @@ impl Units {
         match self {
             Units::Metres => "m",
             Units::Millimetres => "mm",
+            Units::Centimetres => "cm",
         }
     }
 }
@@ -56,6 +71,9 @@ pub struct Recording {
     pub frames: Vec<Vec<Option<Point3<f64>>>>,
     /// Unit of the file it was read from (or is to be written in).
     pub units: Units,
+    /// How the recording was made: the `# key: value` comment lines other than `grid` and
+    /// `units`, in file order (see [`crate::fit::markers`] for the keys `torso synth` writes).
+    pub provenance: Vec<(String, String)>,
 }
 
 fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
@@ -140,6 +158,7 @@ impl Recording {
         let mut grid: Option<(usize, usize)> = None;
         let mut grid_line = 0;
         let mut units = Units::Metres;
+        let mut provenance = Vec::new();
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
         // Leading comments, then the header.
         let (header_no, header) = loop {
@@ -180,20 +199,20 @@ impl Recording {
                         }
                     },
                     "units" => {
-                        units = match value.trim() {
-                            "m" => Units::Metres,
-                            "mm" => Units::Millimetres,
-                            other => {
+                        units = match Units::parse(value) {
+                            Some(u) => u,
+                            None => {
+                                let other = value.trim();
                                 return Err(parse_err(
                                     name,
                                     no,
                                     col_of(other),
-                                    format!("unknown units `{other}`: expected `m` or `mm`"),
+                                    format!("unknown units `{other}`: expected `m`, `cm` or `mm`"),
                                 ));
                             }
                         }
                     }
-                    _ => {}
+                    _ => provenance.push((key.trim().to_string(), value.trim().to_string())),
                 }
             }
         };
@@ -372,6 +391,7 @@ impl Recording {
             times,
             frames,
             units,
+            provenance,
         })
     }
 
@@ -398,6 +418,16 @@ impl Recording {
                     format!("recording time of frame {}", i + 2),
                     w[1],
                     format!("finite and > {}", w[0]),
+                ));
+            }
+        }
+        for (k, v) in &self.provenance {
+            let bad_key = k.trim().is_empty() || k.contains([':', '\n', '\r', '\t']);
+            if bad_key || v.contains(['\n', '\r', '\t']) {
+                return Err(Error::invalid(
+                    "recording provenance",
+                    format!("{k:?}: {v:?}"),
+                    "a non-empty key without `:`, tabs or line breaks; a value on one line without tabs",
                 ));
             }
         }
@@ -429,6 +459,7 @@ impl Recording {
         let scale = 1.0 / self.units.to_metres();
         let digits = match self.units {
             Units::Metres => 7,
+            Units::Centimetres => 5,
             Units::Millimetres => 4,
         };
         let mut s = String::new();
@@ -436,6 +467,9 @@ impl Recording {
         // Writing to a String cannot fail.
         let _ = writeln!(s, "# grid: {r}x{c}");
         let _ = writeln!(s, "# units: {}", self.units.name());
+        for (k, v) in &self.provenance {
+            let _ = writeln!(s, "# {k}: {v}");
+        }
         s.push_str("time");
         for k in 1..=3 * self.points() {
             s.push(',');

@@ -43,6 +43,47 @@ pub fn subject_fmi(subject: &Subject) -> Value {
     })
 }
 
+/// The provenance key of the level of detail a recording was made at.
+pub const LOD_KEY: &str = "scene.level_of_detail";
+
+/// The model a recording was made with, as the provenance entries `torso synth` writes and
+/// `torso fit` compares: the level of detail and the subject under their FMI names (sex
+/// and posture spelt as the command line takes them).
+pub fn model_provenance(subject: &Subject, level_of_detail: u32) -> Vec<(String, String)> {
+    let name = |d: &dyn std::fmt::Debug| format!("{d:?}").to_ascii_lowercase();
+    vec![
+        (LOD_KEY.into(), level_of_detail.to_string()),
+        ("subject.sex".into(), name(&subject.sex)),
+        ("subject.age".into(), subject.age.to_string()),
+        ("subject.stature".into(), subject.stature.to_string()),
+        ("subject.mass".into(), subject.mass.to_string()),
+        (
+            "subject.breast_size".into(),
+            subject.breast_size.to_string(),
+        ),
+        ("posture".into(), name(&subject.posture)),
+    ]
+}
+
+/// The entries of `model` (from [`model_provenance`]) that `recorded` names with another
+/// value, as `key recorded (fit: value)`; numbers compare as numbers.
+pub fn provenance_differences(
+    recorded: &[(String, String)],
+    model: &[(String, String)],
+) -> Vec<String> {
+    model
+        .iter()
+        .filter_map(|(k, v)| {
+            let r = recorded.iter().find(|(rk, _)| rk == k)?.1.as_str();
+            let same = match (r.parse::<f64>(), v.parse::<f64>()) {
+                (Ok(a), Ok(b)) => a == b,
+                _ => r.eq_ignore_ascii_case(v),
+            };
+            (!same).then(|| format!("{k} {r} (fit: {v})"))
+        })
+        .collect()
+}
+
 /// Where a fit's outputs went.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitOutputs {

@@ -253,6 +253,7 @@ pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synt
             times,
             frames,
             units: Units::Metres,
+            provenance: Vec::new(),
         },
         truth,
         camera,
