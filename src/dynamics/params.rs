@@ -1,12 +1,18 @@
 //! Physical constants of the model, with their sources. Stiffness and damping are physical
 //! (N/m per element, Pa, N m/rad) rather than the thesis's unit gains, so that the default
-//! activations produce physiological volumes.
+//! activations produce physiological volumes. Each constant's doc comment gives where its
+//! value comes from: a literature source, the measurement it was calibrated against (with the
+//! commit that set it), or "set by hand; no source". How much each hand-set passive stiffness
+//! changes the relaxed chest wall's compliance is measured by `cargo run --release --example
+//! chest_wall_sensitivity` (docs/dynamics.md, "What sets the passive chest wall").
 
 use crate::anatomy::Posture;
 use serde::{Deserialize, Serialize};
 
 /// Largest contraction of the diaphragm's fibres from their standing rest length: they can
-/// shorten by 30-40 % (seed thesis 2.3, after Hamid et al.).
+/// shorten by 30-40 % (seed thesis 2.3, after Hamid, Shannon & Martin 2006, Physiologic Basis
+/// of Respiratory Disease, BC Decker); the model takes the upper end, set in the calibration
+/// commit aeb7bbe against the tidal volumes and diaphragm excursions of `tests/physiology.rs`.
 pub const DIAPHRAGM_CONTRACTION_UPRIGHT: f64 = 0.4;
 
 /// Total rest length of the diaphragm's muscle fibres at end-expiration in `posture`, relative
@@ -53,7 +59,8 @@ pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.
 
 /// Abdominal wall compliance sitting relative to standing: a small factor of the model, not a
 /// measured ratio (the seed thesis 2.3 only orders the postures: supine is more compliant than
-/// seated); sitting is the reference posture of [`SEATED_SUPINE_COMPLIANCES`].
+/// seated); sitting is the reference posture of [`SEATED_SUPINE_COMPLIANCES`]. Set by hand;
+/// no source: the value of the first dynamics (commit cfbd824), unchanged since.
 pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 
 /// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
@@ -61,7 +68,9 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// ([`SEATED_SUPINE_COMPLIANCES`]), but that soft a generated wall is folded in by forced
 /// expiratory abdominal contraction and the integration stalls (forced supine breathing at
 /// x3.08 stops advancing near t = 3 s: `cargo run --release --example posture_breathing --
-/// --probe 1 1.711`), so the model keeps the smaller increase.
+/// --probe 1 1.711`), so the model keeps the smaller increase. The 1.8 itself is set by hand
+/// (no source): it is the factor of the first dynamics (commit cfbd824), kept when commit
+/// a69b5a9 found the measured x2.8 unusable; it is not fitted to a measurement.
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
 /// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
@@ -159,17 +168,24 @@ fn default_pleural_barrier_margin() -> f64 {
 pub struct Params {
     /// Largest contraction of a muscle element's rest length at full activation and unit
     /// gain: r = 1 - beta_max a g >= 0.7 (thesis 2.4 after Klute et al.: r in [0.7, 1.2]).
+    /// The default 0.3 is the contraction to that lower bound, 1 - 0.7 (Klute, Czerniecki &
+    /// Hannaford 2002, Int J Robot Res 21:295, the artificial-muscle range the thesis adopts). It also sets
+    /// the relaxed muscles' stiffness, F_max / (beta_max l0): doubling both betas raises the
+    /// relaxed chest wall's compliance by 10 % at +5 cmH2O and 26 % at -5 cmH2O
+    /// (docs/dynamics.md, "What sets the passive chest wall").
     pub beta_max: f64,
     /// The same for the diaphragm, which can shorten by 30-40 % from its upright rest length
-    /// (seed thesis 2.3, after Hamid et al.): r >= 0.6 standing. In the other postures the
-    /// fibres start longer and reach the same shortest length (see
-    /// [`diaphragm_length_ratio`]), so their fraction is larger.
+    /// (seed thesis 2.3, after Hamid et al. 2006; [`DIAPHRAGM_CONTRACTION_UPRIGHT`]): r >= 0.6
+    /// standing. In the other postures the fibres start longer and reach the same shortest
+    /// length (see [`diaphragm_length_ratio`]), so their fraction is larger.
     pub beta_max_diaphragm: f64,
     /// Damping ratio zeta of the model's inertial modes at the inertia frequency
     /// ([`Params::inertia_frequency`]): every spring-damper element, vector spring and rib
     /// joint has the damping coefficient beta k of its stiffness k, beta = 2 zeta /
     /// (2 pi f_inertia) (stiffness-proportional damping, Rayleigh; thesis 2.4 asks for
-    /// critically damped elements, zeta = 1).
+    /// critically damped elements, zeta = 1). The default 1 is that aim; the thesis set its
+    /// gains empirically, to avoid oscillation when elements are activated (section 2.4). It
+    /// is a numerical choice, not a tissue measurement.
     pub damping_ratio: f64,
     /// Inertia frequency f_i [Hz]: the masses and inertias of the ribs, the sternum and the
     /// cavity vertices gain the local stiffness over (pi f_i)^2 (selective mass scaling,
@@ -203,9 +219,20 @@ pub struct Params {
     #[serde(default = "default_transverse_fraction")]
     pub transverse_fraction: f64,
     /// Bulk modulus K of the abdominal contents [Pa] (thesis eq. 2.5: P = K (V0/V - 1)).
+    /// Default 3e5 Pa, calibrated, not measured: raised from 1e5 in the calibration commit
+    /// aeb7bbe against the checks of `tests/physiology.rs` it added (the quiet breath moves
+    /// the abdominal volume by under 1 %, with tidal volumes and diaphragm excursions in
+    /// range). The thesis's own value, 0.3 "satisfactory" (section 2.4.2), is in its animation
+    /// package's units and does not carry over. For scale: 3e5 Pa is the compressibility of
+    /// 4.4 L of gas at 1 atm in the default man's 13.0 L abdominal cavity, where the abdomen
+    /// holds 100-300 mL (thesis 2.3), so the model's contents are far softer than real ones
+    /// (`cargo run --release --example chest_wall_sensitivity` prints both figures); halving
+    /// it moves the relaxed chest wall's compliance by 0-2 %.
     pub bulk_modulus: f64,
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the lungs (the
-    /// thorax's, one to one), 1 / (0.2 L/cmH2O) (lung compliance, physiology reference).
+    /// thorax's, one to one), 1 / (0.2 L/cmH2O) (lung compliance, physiology reference). The
+    /// default 1 / (2.0e-6 m^3/Pa) is 1 / (0.196 L/cmH2O), which `cargo run --release
+    /// --example relaxation` measures back as C_L = 0.195-0.196 L/cmH2O.
     pub lung_elastance: f64,
     /// The lungs' elastic recoil at rest, the functional residual capacity [Pa]
     /// ([`LUNG_RECOIL_AT_FRC`]): the pleural pressure read out is minus it at rest. The
@@ -227,24 +254,57 @@ pub struct Params {
     /// configurations written before it existed read [`PLEURAL_BARRIER_MARGIN`].
     #[serde(default = "default_pleural_barrier_margin")]
     pub pleural_barrier_margin: f64,
-    /// Stiffness of a cartilage ball joint [N/m].
+    /// Stiffness of a cartilage ball joint [N/m]: the zero-length spring that joins the end
+    /// of a costal cartilage to the sternum (ribs 1-7) or to the cartilage above (ribs
+    /// 8-10). Default 1e4 N/m, set by hand; no source: lowered from 3e4 in the first
+    /// calibration (commit 16087cb, whose message names no target). With the rib joints and
+    /// the relaxed muscles it makes the rib cage's passive stiffness. The model's relaxed
+    /// chest wall is 0.050 L/cmH2O at -5 cmH2O and 0.086 at +5 against about 0.2 in adults;
+    /// halving this constant raises it by 13 % and 3 % (docs/dynamics.md, "What sets the
+    /// passive chest wall").
     pub cartilage_stiffness: f64,
     /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
-    /// [N m/rad].
+    /// [N m/rad]. Default 2 N m/rad upright, set by hand; no source: 20 in the first dynamics
+    /// (commit cfbd824), lowered to 2 in the first calibration (commit 16087cb, whose message
+    /// names no target). Supine it is multiplied by the measured fall of rib-cage compliance
+    /// (x1.60, `SEATED_SUPINE_COMPLIANCES`). The model's relaxed chest wall is 0.050
+    /// L/cmH2O at -5 cmH2O and 0.086 at +5 against about 0.2 in adults; halving this constant
+    /// raises it by only 6 % and 2 % (docs/dynamics.md, "What sets the passive chest wall").
     pub rib_joint_stiffness: f64,
     /// In-plane stiffness of an abdominal membrane edge [N/m] (2D modulus about 1.15 k).
+    /// Default 400 N/m, set by hand; no source (the value of the first dynamics, commit
+    /// cfbd824): the in-plane tension of the abdominal wall's surface, in parallel with the
+    /// wall's foundation ([`Params::abdominal_wall_compliance`]). Halving it raises the
+    /// relaxed chest wall's compliance by 10 % at +5 cmH2O and 3 % at -5 cmH2O.
     pub membrane_stiffness: f64,
     /// In-plane stiffness of a membrane edge of the diaphragm dome [N/m]: the dome's passive
     /// stiffness is low along its fibres, so that their shortening can lower it like a piston.
+    /// Default 40 N/m (a tenth of the abdominal membrane's), set by hand; no source (first
+    /// calibration, commit 16087cb). Halving it raises the relaxed chest wall's compliance by
+    /// 2-3 %.
     pub dome_membrane_stiffness: f64,
     /// In-plane stiffness of a membrane edge of the central tendon [N/m] (stiff: it carries the
-    /// radial fibres' pull across the top of the dome).
+    /// radial fibres' pull across the top of the dome). Default 2000 N/m (fifty times the
+    /// muscular dome's), set by hand; no source (first calibration, commit 16087cb). Halving it
+    /// lowers the relaxed chest wall's compliance by 3 % at +5 cmH2O and raises it by 2 % at
+    /// -5 cmH2O.
     pub tendon_stiffness: f64,
     /// Horizontal support of the diaphragm dome by the rib cage and lungs [N/m^3] (foundation
-    /// stiffness per area of dome).
+    /// stiffness per area of dome). Default 2e5 N/m^3, set by hand; no source (first
+    /// calibration, commit 16087cb). Halving it raises the relaxed chest wall's compliance by
+    /// 15 % at -5 cmH2O and 3 % at +5 cmH2O.
     pub dome_support: f64,
     /// Compliance of the abdominal wall [m^3/Pa] (elastic support of the wall by its muscles,
     /// fascia and skin), spread over the free wall vertices as a foundation stiffness.
+    /// Default 2.0e-6 m^3/Pa standing (0.196 L/cmH2O; x1.1 sitting and x1.8 supine,
+    /// `SITTING_WALL_COMPLIANCE`, `SUPINE_WALL_COMPLIANCE`), calibrated, not measured: raised from 1.5e-6 in
+    /// the calibration commit aeb7bbe against the checks of `tests/physiology.rs` it added
+    /// (tidal volumes, diaphragm excursion, rib-cage share). The only measured compliance of
+    /// the abdomen in the sources, Estenne et al. 1985's diaphragm-abdomen compartment
+    /// (0.025 L/cmH2O seated, `SEATED_SUPINE_COMPLIANCES`), is not the same quantity: the
+    /// model's wall has its membrane and relaxed muscles in parallel with this foundation.
+    /// Doubling it raises the relaxed chest wall's compliance by 31 % at +5 cmH2O and 5 % at
+    /// -5 cmH2O, the largest effect at +5 cmH2O of any single passive constant.
     pub abdominal_wall_compliance: f64,
     /// Tissue resistance of the abdominal wall [Pa s/m^3]: the viscous counterpart of its
     /// compliance, spread over the free wall vertices the same way (a uniform pressure P moves
@@ -252,7 +312,11 @@ pub struct Params {
     /// [`ABDOMINAL_WALL_RESISTANCE`].
     #[serde(default = "default_abdominal_wall_resistance")]
     pub abdominal_wall_resistance: f64,
-    /// Gravitational acceleration [m/s^2].
+    /// Gravitational acceleration [m/s^2]. Default 9.81: standard gravity, 9.80665 m/s^2
+    /// (3rd CGPM, 1901), rounded. It acts on the true masses, and constant preloads hold the
+    /// rest pose against it (the rest state is the generated anatomy, not an equilibrium
+    /// found under gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture
+    /// effects come from the tables above.
     pub gravity: f64,
 }
 
