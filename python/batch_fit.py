@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import glob as globmod
 import hashlib
+import importlib.util
 import json
 import logging
 import math
@@ -335,9 +336,7 @@ def cmd_fit(args) -> int:
     client = make_client(args)
     try:
         say(f"Dask dashboard: {client.dashboard_link}")
-        try:
-            import bokeh  # noqa: F401  (the dashboard's web pages need it)
-        except ImportError:
+        if importlib.util.find_spec("bokeh") is None:  # the dashboard's web pages need it
             say("  (the dashboard needs bokeh: `pip install dask[diagnostics]`, as python/requirements.txt does)")
         nworkers = len(client.scheduler_info()["workers"])
         say(f"{nworkers} workers ({'scheduler ' + args.scheduler if args.scheduler else 'LocalCluster'})")

@@ -1,11 +1,13 @@
-"""python/batch_fit.py on a small study (4 synthetic 6 s recordings at LOD 0, fits bounded to a
-few evaluations) on a LocalCluster of 2 worker processes: the table is complete, a rerun fits
-nothing, a worker killed mid-run and then the driver killed lose no finished fit and the rerun
-completes the rest once each, a corrupt recording is recorded as failed with its error text
-after three attempts, and the report files are written. The recordings are made once."""
+"""python/batch_fit.py on a small study (the README's block, run as written: 4 synthetic 6 s
+recordings at LOD 0, fits bounded to a few evaluations) on a LocalCluster of 2 worker
+processes: the table is complete, a rerun fits nothing, a worker killed mid-run and then the
+driver killed lose no finished fit and the rerun completes the rest once each, a corrupt
+recording is recorded as failed with its error text after three attempts, the report files are
+written, and `--engine fmu` fits one recording. The recordings are made once (the README's)."""
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -17,9 +19,13 @@ import pandas as pd
 import psutil
 import pytest
 
+from test_fmu_calls import fmu_path
+
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "python" / "batch_fit.py"
 TORSO = Path(os.environ.get("TORSO", ROOT / "target" / "release" / "torso"))  # the tool under test
+#: cost / noise floor of a good fit of these synthetic recordings (batch_fit flags 1.3)
+BAD = 1.3
 FIT_ARGS = "--lod 0 --rtol 1e-4 --max-evals 10 --threads 1"
 
 
@@ -36,12 +42,35 @@ def fit(folder, out, *extra, check=True):
                  *extra, check=check)
 
 
+def readme_commands():
+    """The commands of the README's ```sh block that runs batch_fit.py (continuations joined)."""
+    text = (ROOT / "README.md").read_text()
+    blocks = [b for b in re.findall(r"^```sh\n(.*?)^```$", text, flags=re.S | re.M) if "batch_fit.py" in b]
+    assert len(blocks) == 1, f"README.md: expected one ```sh block running batch_fit.py, found {len(blocks)}"
+    return [c.strip() for c in blocks[0].replace("\\\n", " ").splitlines() if c.strip()]
+
+
 @pytest.fixture(scope="module")
-def study(tmp_path_factory):
+def readme_run():
+    """The README's block, run as written from the repository's root (its out/ folder)."""
     if not os.access(TORSO, os.X_OK):
         pytest.fail(f"{TORSO} is missing: build it with `cargo build --release`")
-    folder = tmp_path_factory.mktemp("study")
-    batch("make-synthetic", 4, folder, "--duration", 6, "--seed", 5, "--torso", TORSO)
+    for d in ("out/study", "out/study-fit"):
+        shutil.rmtree(ROOT / d, ignore_errors=True)
+    outputs = []
+    for cmd in readme_commands():
+        proc = subprocess.run(["bash", "-euo", "pipefail", "-c", cmd], cwd=ROOT, capture_output=True,
+                              text=True, timeout=300)
+        assert proc.returncode == 0, f"README command failed: {cmd}\n{proc.stdout}\n{proc.stderr}"
+        outputs.append(proc.stdout)
+    return ROOT / "out" / "study", ROOT / "out" / "study-fit", outputs
+
+
+@pytest.fixture(scope="module")
+def study(readme_run, tmp_path_factory):
+    """A copy of the README's 4 recordings for the tests that break things."""
+    folder = tmp_path_factory.mktemp("study") / "study"
+    shutil.copytree(readme_run[0], folder)
     assert len(list(folder.rglob("*.csv"))) == 4
     return folder
 
@@ -53,10 +82,9 @@ def table(out):
     return df
 
 
-def test_complete_table_resume_and_report(study, tmp_path):
-    out = tmp_path / "out"
-    first = fit(study, out, "--report")
-    assert "Dask dashboard: http" in first.stdout
+def test_readme_study_table_resume_and_report(readme_run):
+    study, out, (_, first) = readme_run
+    assert "Dask dashboard: http" in first
     df = table(out)
     assert sorted(df["recording"]) == sorted(str(p.relative_to(study)) for p in study.rglob("*.csv"))
     assert (df["status"] == "ok").all(), df[["recording", "status", "error"]]
@@ -65,16 +93,18 @@ def test_complete_table_resume_and_report(study, tmp_path):
     for col in ("tidal_volume_l", "rate_bpm", "ta_phase_deg", "cost_mm", "noise_floor_mm", "evaluations"):
         assert df[col].notna().all(), col
     assert df["tidal_volume_l"].between(0.05, 3.0).all()
-    assert (df["evaluations"] <= 10).all()
     assert df["fit_json"].map(lambda p: (out / p).is_file()).all()
-    assert first.stdout.count("ETA") == 4
+    assert first.count("ETA") == 4
     for name in ("report.png", "report.svg", "report.html"):
         assert (out / name).stat().st_size > 1000, name
     page = (out / "report.html").read_text()
     assert "data:image/png;base64," in page and "rec000.csv" in page
 
     rows = {p: p.stat().st_mtime_ns for p in (out / "rows").glob("*.json")}
-    second = fit(study, out)
+    fit_cmd = [c for c in readme_commands() if " fit " in c][0]
+    second = subprocess.run(["bash", "-euo", "pipefail", "-c", fit_cmd], cwd=ROOT, capture_output=True,
+                            text=True, timeout=300)
+    assert second.returncode == 0, second.stderr
     assert "4 already fitted, 0 to fit" in second.stdout, second.stdout
     assert "ETA" not in second.stdout
     assert {p: p.stat().st_mtime_ns for p in (out / "rows").glob("*.json")} == rows
@@ -148,3 +178,19 @@ def test_corrupt_recording_fails_after_three_attempts(study, tmp_path):
     again = fit(folder, out, check=False)
     assert "1 already fitted, 1 to fit" in again.stdout, again.stdout
     assert len(table(out)) == 2
+
+
+def test_fmu_engine_on_one_recording(study, tmp_path):
+    fmu = os.environ.get("FMU") or fmu_path()
+    folder = tmp_path / "one"
+    folder.mkdir()
+    rec = next(study.rglob("rec000.csv"))
+    for suffix in (".csv", ".args", ".truth.json"):
+        shutil.copy(rec.with_suffix(suffix), folder / ("rec000" + suffix))
+    out = tmp_path / "out"
+    proc = batch("fit", folder, "--out", out, "--workers", 1, "--engine", "fmu", "--fmu", fmu,
+                 "--fit-args", "--lod 0 --rtol 1e-4 --max-evals 10")
+    assert "[1/1] rec000.csv: tidal" in proc.stdout, proc.stdout
+    row = table(out).iloc[0]
+    assert row["status"] == "ok" and row["engine"] == "fmu" and row["evaluations"] <= 10
+    assert 0.05 < row["tidal_volume_l"] < 3.0 and row["cost_ratio"] < BAD
