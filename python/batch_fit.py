@@ -188,6 +188,8 @@ def fit_one(recording: str, key: str, sha: str, out: str, engine: str, options: 
             torso: str, fmu: str, group: str, rel: str) -> dict:
     """Fit one recording (runs on a worker): the fit's JSON to `out/fits/<key>.json`, its row
     to `out/rows/<key>.json`; raises with the fit's error text when it fails."""
+    import psutil  # a dependency of dask.distributed
+
     out = Path(out)
     rec = Path(recording)
     fit_json = out / "fits" / f"{key}.json"
@@ -202,10 +204,22 @@ def fit_one(recording: str, key: str, sha: str, out: str, engine: str, options: 
         cmd = [sys.executable, str(ROOT / "python" / "fit_slp.py"), "--fmu", fmu, "--slp", str(rec),
                "--out", str(fit_json), *options]
     start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    peak_rss = 0
+    with tempfile.TemporaryFile("w+") as log_out, tempfile.TemporaryFile("w+") as log_err:
+        proc = subprocess.Popen(cmd, stdout=log_out, stderr=log_err, text=True)
+        child = psutil.Process(proc.pid)
+        while proc.poll() is None:  # the fit's peak resident memory, sampled every 50 ms
+            try:
+                peak_rss = max(peak_rss, child.memory_info().rss)
+            except psutil.Error:
+                pass
+            time.sleep(0.05)
+        log_out.seek(0)
+        log_err.seek(0)
+        stdout, stderr = log_out.read(), log_err.read()
     wall = time.perf_counter() - start
     if proc.returncode != 0 or not fit_json.is_file():
-        text = (proc.stderr.strip() or proc.stdout.strip() or f"exit status {proc.returncode}")
+        text = (stderr.strip() or stdout.strip() or f"exit status {proc.returncode}")
         raise RuntimeError(f"{rel}: {text[-2000:]}")
     fit = json.loads(fit_json.read_text())
     row = {"recording": rel, "group": group, "key": key, "sha256": sha, "options": shlex.join(options),
@@ -216,6 +230,9 @@ def fit_one(recording: str, key: str, sha: str, out: str, engine: str, options: 
     if math.isnan(row["wall_s"]):
         row["wall_s"] = wall
     row["task_wall_s"] = wall
+    # memory: the fit's process (sampled while it ran) and the worker process itself
+    row["fit_peak_rss_mib"] = peak_rss / 2**20
+    row["worker_rss_mib"] = psutil.Process().memory_info().rss / 2**20
     write_atomic(out / "rows" / f"{key}.json", json.dumps(row, indent=1, allow_nan=True))
     return row
 
@@ -380,6 +397,10 @@ def cmd_fit(args) -> int:
                 last_table = time.perf_counter()
         say(f"done: {finished - failed} fitted, {failed} failed in {time.perf_counter() - start:.1f} s wall; "
             f"table {out / 'results.parquet'}")
+        df = write_table(out)
+        if "worker_rss_mib" in df.columns and df["worker_rss_mib"].notna().any():
+            say(f"memory: worker process RSS up to {df['worker_rss_mib'].max():.0f} MiB, "
+                f"a fit's process peak RSS (sampled every 50 ms) up to {df['fit_peak_rss_mib'].max():.0f} MiB")
     finally:
         cluster = getattr(client, "cluster", None)
         client.close()

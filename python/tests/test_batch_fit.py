@@ -93,6 +93,8 @@ def test_readme_study_table_resume_and_report(readme_run):
     for col in ("tidal_volume_l", "rate_bpm", "ta_phase_deg", "cost_mm", "noise_floor_mm", "evaluations"):
         assert df[col].notna().all(), col
     assert df["tidal_volume_l"].between(0.05, 3.0).all()
+    assert (df["worker_rss_mib"] > 20).all() and (df["fit_peak_rss_mib"] > 1).all()
+    assert "memory: worker process RSS up to" in first
     assert df["fit_json"].map(lambda p: (out / p).is_file()).all()
     assert first.count("ETA") == 4
     for name in ("report.png", "report.svg", "report.html"):
