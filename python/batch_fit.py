@@ -8,6 +8,8 @@ Subcommands:
   thread each, default one per core) or on an existing cluster (`--scheduler ADDRESS`). A task
   runs the native `torso fit` (`--torso PATH`) or, with `--engine fmu`, `python/fit_slp.py`
   on the FMU (`--fmu PATH`) as a subprocess, so a worker needs only the binary or the FMU.
+  Paths are passed as the driver sees them: on an existing cluster, the recordings, the output
+  folder and the binary must be at the same paths on every worker (a shared file system).
   `--fit-args "..."` pass through to every fit; a file `<stem>.args` beside a recording adds
   that recording's own options (its subject, say).
 * `report OUT`: the cohort report of a finished (or partial) run.
