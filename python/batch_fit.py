@@ -168,13 +168,16 @@ def figures(fit: dict, recording: Path, fit_json: Path) -> dict:
                 noise = pick(json.loads(truth.read_text()), "noise_floor_m")
             except ValueError:
                 pass
+    if math.isnan(noise):
+        # A real recording: the floor torso fit estimates from the recording itself.
+        noise = pick(fit, "noise_floor_estimate_m")
     cost = pick(fit, "cost_m")
     return {
         "tidal_volume_l": tidal,
         "rate_bpm": rate,
         "ti_ttot": pick(fit, "breaths/median_ti_ttot", "ti_ttot", "Ti/Ttot", "timing/ti_ttot", "breath_timing/ti_ttot"),
-        "ribcage_share": pick(fit, "ribcage_share", "share.ribcage", "shares/ribcage", "shares/rib_cage",
-                              "share/ribcage"),
+        "ribcage_share": pick(fit, "fitted_breath/rib_cage_share", "ribcage_share", "share.ribcage",
+                              "shares/ribcage", "shares/rib_cage", "share/ribcage"),
         "ta_phase_deg": phase,
         "cost_mm": cost * 1e3,
         "noise_floor_mm": noise * 1e3,

@@ -436,7 +436,7 @@ fn outputs_are_written() {
     )
     .unwrap();
     let subject = breathing_torso::anatomy::Subject::default();
-    let out = write_fit(&fit, &dir.join("result.json"), &rec_path, &subject).unwrap();
+    let out = write_fit(&fit, &dir.join("result.json"), &rec_path, &subject, None).unwrap();
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out.json).unwrap()).unwrap();
     for key in [

@@ -90,8 +90,10 @@ def test_readme_study_table_resume_and_report(readme_run):
     assert (df["status"] == "ok").all(), df[["recording", "status", "error"]]
     assert df["key"].is_unique
     assert set(df["group"]) == {"standing", "sitting", "supine"}
-    for col in ("tidal_volume_l", "rate_bpm", "ta_phase_deg", "cost_mm", "noise_floor_mm", "evaluations"):
+    for col in ("tidal_volume_l", "rate_bpm", "ta_phase_deg", "ribcage_share", "cost_mm", "noise_floor_mm",
+                "evaluations"):
         assert df[col].notna().all(), col
+    assert df["ribcage_share"].between(0.0, 1.0).all()
     assert df["tidal_volume_l"].between(0.05, 3.0).all()
     assert (df["worker_rss_mib"] > 20).all() and (df["fit_peak_rss_mib"] > 1).all()
     assert "memory: worker process RSS up to" in first

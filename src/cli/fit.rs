@@ -263,13 +263,14 @@ pub fn fit_file(
         println!("rest-pose reference grid: {}", reference.display());
         fit
     } else {
-        let mut source = TorsoMarkers::new(config)?;
+        let mut source = TorsoMarkers::new(config.clone())?;
         fit_recording(&mut source, &recording, options, &mut |n, b| {
             bar.update(n, b)
         })?
     };
     bar.finish();
-    let outputs = write_fit(&fit, out, recording_path, &subject)?;
+    let breath = fitted_breath(&config, &fit)?;
+    let outputs = write_fit(&fit, out, recording_path, &subject, Some(&breath))?;
     println!("{}", summary(&fit));
     let svg = outputs.png.with_extension("svg");
     let mut files = vec![
@@ -283,6 +284,21 @@ pub fn fit_file(
     let last = files.pop().unwrap_or_default();
     println!("wrote {} and {last}", files.join(", "));
     Ok(fit)
+}
+
+/// The fitted model breathing its fitted drive: three breaths from rest, the last two
+/// summarised (tidal volume, compartment shares, excursion) for the result JSON.
+fn fitted_breath(
+    config: &crate::Config,
+    fit: &crate::fit::Fit,
+) -> Result<crate::model::run::BreathSummary> {
+    let mut c = config.clone();
+    c.drive = fit.drive;
+    c.drive.enabled = true;
+    let period = 1.0 / c.drive.frequency;
+    let mut torso = crate::Torso::new(c)?;
+    let frames = crate::model::run::run(&mut torso, 3.0 * period, 28.0)?;
+    Ok(crate::model::run::summarise(&frames, period))
 }
 
 /// Runs `torso fit`.

@@ -6,6 +6,7 @@
 use super::{Fit, Synthetic};
 use crate::anatomy::Subject;
 use crate::model::Drive;
+use crate::model::run::BreathSummary;
 use crate::stats::plot::{BLUE, DARK, Mark, Panel, RED, Trace, write_figure};
 use crate::{Error, Result};
 use serde_json::{Value, json};
@@ -96,11 +97,20 @@ pub struct FitOutputs {
 }
 
 /// The result JSON of a fit.
-pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Path) -> Value {
+pub fn fit_json(
+    fit: &Fit,
+    recording: &Path,
+    subject: &Subject,
+    volume_csv: &Path,
+    breath: Option<&BreathSummary>,
+) -> Value {
     let mut m = drive_fmi(&fit.drive);
+    let noise_floor = super::fitting::estimated_noise_floor(&fit.times, &fit.recorded);
     let rot = fit.to_model.rotation.angle().to_degrees();
     let extra = json!({
         "cost_m": fit.cost_m,
+        "noise_floor_estimate_m": noise_floor,
+        "cost_over_noise_floor_estimate": fit.cost_m / noise_floor,
         "initial_cost_m": fit.initial_cost_m,
         "skin_fit_error_m": match fit.skin_fit {
             Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
@@ -125,6 +135,14 @@ pub fn fit_json(fit: &Fit, recording: &Path, subject: &Subject, volume_csv: &Pat
             "ttot_s": fit.breathing.breaths.iter().map(|b| b.ttot).collect::<Vec<_>>(),
             "depth_relative_to_median": fit.breathing.depths,
         },
+        "fitted_breath": breath.map(|b| json!({
+            "source": "the fitted model breathing its fitted drive, three breaths from rest, the last two summarised",
+            "tidal_volume_l": b.tidal_volume,
+            "end_expiratory_volume_l": b.end_expiratory_volume,
+            "rib_cage_share": b.rib_cage_share,
+            "abdominal_share": 1.0 - b.rib_cage_share,
+            "dome_excursion_m": b.dome_excursion,
+        })),
         "lung_volume_csv": volume_csv.display().to_string(),
         "method": fit.method.name(),
         "recording": recording.display().to_string(),
@@ -162,6 +180,7 @@ pub fn write_fit(
     json_path: &Path,
     recording: &Path,
     subject: &Subject,
+    breath: Option<&BreathSummary>,
 ) -> Result<FitOutputs> {
     create_parent(json_path)?;
     let dir = json_path
@@ -188,7 +207,7 @@ pub fn write_fit(
     }
     w.flush().map_err(io(&volume_csv))?;
 
-    let value = fit_json(fit, recording, subject, &volume_csv);
+    let value = fit_json(fit, recording, subject, &volume_csv, breath);
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Error::State(format!("result JSON: {e}")))?;
     std::fs::write(json_path, text + "\n").map_err(io(json_path))?;
