@@ -175,7 +175,7 @@ def figures(fit: dict, recording: Path, fit_json: Path) -> dict:
     return {
         "tidal_volume_l": tidal,
         "rate_bpm": rate,
-        "ti_ttot": pick(fit, "breaths/median_ti_ttot", "ti_ttot", "Ti/Ttot", "timing/ti_ttot", "breath_timing/ti_ttot"),
+        "ti_ttot": pick(fit, "recording_breaths/median_ti_ttot", "breaths/median_ti_ttot", "ti_ttot", "Ti/Ttot", "timing/ti_ttot", "breath_timing/ti_ttot"),
         "ribcage_share": pick(fit, "fitted_breath/rib_cage_share", "ribcage_share", "share.ribcage",
                               "shares/ribcage", "shares/rib_cage", "share/ribcage"),
         "ta_phase_deg": phase,

@@ -760,7 +760,12 @@ fn soak(args: &SoakArgs) -> Result<()> {
     let mut rng = Pcg64::new(args.seed, 6);
     let (mut ok, mut numerical, mut bounds) = (0, 0, 0);
     let start = std::time::Instant::now();
+    let bar = super::progress::Progress::new("soak", args.scenes, "scenes");
     for i in 0..args.scenes {
+        bar.update(
+            i,
+            format!("{ok} ok, {numerical} numerical failures, {bounds} out of bounds"),
+        );
         let config = random_scene(&mut rng, args.lod)?;
         match stress_scene(&config, args.seconds, args.rate)? {
             SceneOutcome::Ok { .. } => ok += 1,
@@ -781,6 +786,9 @@ fn soak(args: &SoakArgs) -> Result<()> {
             );
         }
     }
+    bar.finish(format!(
+        "{ok} ok, {numerical} numerical failures, {bounds} out of bounds"
+    ));
     println!(
         "soak: {} scenes x {} s (seed {}, level of detail {}): {ok} ok, {numerical} numerical failures, {bounds} out of bounds, {:.0} s wall",
         args.scenes,

@@ -4,15 +4,18 @@
 use super::common::{
     SolverArgs, SubjectArgs, flag_error, parse_grid_flag, prepare_output_dir, prepare_output_file,
 };
+use super::progress::Progress;
+use crate::fit::clinical::BreathReport;
 use crate::fit::fitting::fit_with_skin;
-use crate::fit::report::{LOD_KEY, model_provenance, provenance_differences, summary, write_fit};
+use crate::fit::report::{
+    LOD_KEY, model_provenance, provenance_differences, summary, write_fit_report,
+};
 use crate::fit::{
     FitOptions, Markers, Method, ReadOptions, Recording, TorsoMarkers, Units, fit_recording,
 };
 use crate::model::Drive;
 use crate::{Error, Result};
 use clap::Args;
-use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 /// The subject and the model built for a fit or a synthetic recording.
@@ -195,51 +198,6 @@ pub fn read_for_fit(
     Ok((recording, config))
 }
 
-/// A progress bar on a terminal; silent when stdout is not one.
-pub struct Progress {
-    total: usize,
-    enabled: bool,
-    last: std::time::Instant,
-}
-
-impl Progress {
-    /// A bar for `total` evaluations.
-    pub fn new(total: usize) -> Progress {
-        Progress {
-            total,
-            enabled: std::io::stdout().is_terminal(),
-            last: std::time::Instant::now(),
-        }
-    }
-
-    /// Draws evaluation `n` with the best cost so far.
-    pub fn update(&mut self, n: usize, best: f64) {
-        if !self.enabled || (n < self.total && self.last.elapsed().as_millis() < 100) {
-            return;
-        }
-        self.last = std::time::Instant::now();
-        let width = 30;
-        let done = (n * width / self.total.max(1)).min(width);
-        let mut out = std::io::stdout();
-        let _ = write!(
-            out,
-            "\r[{}{}] {n:>4}/{} best {:.3} mm ",
-            "#".repeat(done),
-            ".".repeat(width - done),
-            self.total,
-            best * 1e3
-        );
-        let _ = out.flush();
-    }
-
-    /// Ends the bar's line.
-    pub fn finish(&self) {
-        if self.enabled {
-            println!();
-        }
-    }
-}
-
 /// Fits `recording_path` with a model from `model` and writes the outputs at `out`.
 pub fn fit_file(
     recording_path: &Path,
@@ -253,25 +211,39 @@ pub fn fit_file(
     prepare_output_file(out)?;
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let subject = config.subject.clone();
-    let mut bar = Progress::new(options.max_evals);
+    let bar = Progress::new("fit", options.max_evals, "evaluations");
     let fit = if skin_fit {
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
         let reference = out.with_file_name(format!("{stem}_reference.csv"));
         let fit = fit_with_skin(&config, &recording, &reference, options, &mut |n, b| {
-            bar.update(n, b)
+            bar.update(n, format!("best cost {:.3} mm", b * 1e3))
         })?;
         println!("rest-pose reference grid: {}", reference.display());
         fit
     } else {
         let mut source = TorsoMarkers::new(config.clone())?;
         fit_recording(&mut source, &recording, options, &mut |n, b| {
-            bar.update(n, b)
+            bar.update(n, format!("best cost {:.3} mm", b * 1e3))
         })?
     };
-    bar.finish();
+    // The search's count leaves out the linearised start's runs; the fit's count is whole.
+    bar.update(fit.evaluations, "");
+    bar.finish(format!("best cost {:.3} mm", fit.cost_m * 1e3));
     let breath = fitted_breath(&config, &fit)?;
-    let outputs = write_fit(&fit, out, recording_path, &subject, Some(&breath))?;
+    let breaths = BreathReport::of_fit(&config, &fit)?;
+    let outputs = write_fit_report(
+        &fit,
+        out,
+        recording_path,
+        &subject,
+        Some(&breath),
+        Some(&breaths),
+    )?;
     println!("{}", summary(&fit));
+    println!(
+        "breaths of the fitted model (phase: abdomen vs rib cage, + abdomen leads):\n{}",
+        breaths.table()
+    );
     let svg = outputs.png.with_extension("svg");
     let mut files = vec![
         outputs.json.display().to_string(),
@@ -559,7 +531,7 @@ pub struct SweepArgs {
 
 /// Runs `torso fit-sweep`.
 pub fn sweep(args: &SweepArgs) -> Result<()> {
-    use crate::fit::sweep::{SweepOptions, case_config, default_cases, run_sweep, table};
+    use crate::fit::sweep::{SweepOptions, case_config, default_cases, run_sweep_with, table};
     let options = SweepOptions {
         duration: args.duration,
         level_of_detail: args.lod,
@@ -596,16 +568,49 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
     }
     prepare_output_dir(&args.out)?;
     let start = std::time::Instant::now();
-    let rows = run_sweep(&cases, &options, &|r| {
-        eprintln!(
-            "{}: {} evaluations, {:.1} s, cost {:.3} mm (floor {:.3})",
-            r.case.label,
-            r.evaluations,
-            r.wall_s,
-            r.cost_m * 1e3,
-            r.synthetic.noise_floor_m * 1e3
+    // Progress over every case's evaluations; a finished case counts its whole budget.
+    let bar = Progress::new("fit-sweep", cases.len() * args.max_evals, "evaluations");
+    let counts = std::sync::Mutex::new(vec![0usize; cases.len()]);
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let show = |counts: &[usize]| {
+        bar.update(
+            counts.iter().sum(),
+            format!(
+                "{} of {} recordings fitted",
+                finished.load(std::sync::atomic::Ordering::SeqCst),
+                counts.len()
+            ),
         )
-    })?;
+    };
+    let rows = run_sweep_with(
+        &cases,
+        &options,
+        &|r| {
+            if let (Ok(mut c), Some(i)) = (
+                counts.lock(),
+                cases.iter().position(|c| c.label == r.case.label),
+            ) {
+                c[i] = args.max_evals;
+                finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                show(&c);
+            }
+            bar.message(&format!(
+                "{}: {} evaluations, {:.1} s, cost {:.3} mm (floor {:.3})",
+                r.case.label,
+                r.evaluations,
+                r.wall_s,
+                r.cost_m * 1e3,
+                r.synthetic.noise_floor_m * 1e3
+            ));
+        },
+        &|i, n| {
+            if let Ok(mut c) = counts.lock() {
+                c[i] = n.min(args.max_evals);
+                show(&c);
+            }
+        },
+    )?;
+    bar.finish(format!("{} recordings fitted", rows.len()));
     let mut json_rows = Vec::new();
     for (i, r) in rows.iter().enumerate() {
         let stem = format!("rec{}_{}", i + 1, r.case.label.replace(' ', "_"));

@@ -6,6 +6,7 @@ pub mod common;
 pub mod fit;
 pub mod inspect;
 pub mod mesh;
+pub mod progress;
 pub mod simulate;
 pub mod skin;
 

@@ -8,6 +8,8 @@
 //! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
+//! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
+//! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
@@ -16,6 +18,8 @@
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
 pub mod breathing;
+pub mod clinical;
+pub mod figure;
 pub mod fitting;
 pub mod markers;
 pub mod optimize;

@@ -1,13 +1,14 @@
 //! Outputs of a fit and of a synthetic recording: the result JSON (drive parameters under
-//! their FMI names), the fitted lung volume as CSV, a PNG/SVG figure (lung volume over time,
-//! a few markers recorded vs fitted), the ground-truth JSON of a synthetic recording, and
-//! the text summary printed by the CLI.
+//! their FMI names, and the per-breath report of [`super::clinical`] when it was made),
+//! the fitted lung volume (and compartment volumes) as CSV, a PNG/SVG figure (lung volume
+//! over time, a few markers recorded vs fitted), the ground-truth JSON of a synthetic
+//! recording, and the text summary printed by the CLI.
 
+use super::clinical::BreathReport;
 use super::{Fit, Synthetic};
 use crate::anatomy::Subject;
 use crate::model::Drive;
 use crate::model::run::BreathSummary;
-use crate::stats::plot::{BLUE, DARK, Mark, Panel, RED, Trace, write_figure};
 use crate::{Error, Result};
 use serde_json::{Value, json};
 use std::io::Write;
@@ -96,13 +97,16 @@ pub struct FitOutputs {
     pub png: PathBuf,
 }
 
-/// The result JSON of a fit.
+/// The result JSON of a fit. `breaths` (the per-breath report of the fitted model) fills
+/// the `breaths` array and `breaths_summary`; without it the array is empty and the
+/// summary null. The recording's own breath timing is `recording_breaths`.
 pub fn fit_json(
     fit: &Fit,
     recording: &Path,
     subject: &Subject,
     volume_csv: &Path,
     breath: Option<&BreathSummary>,
+    breaths: Option<&BreathReport>,
 ) -> Value {
     let mut m = drive_fmi(&fit.drive);
     let noise_floor = super::fitting::estimated_noise_floor(&fit.times, &fit.recorded);
@@ -126,7 +130,9 @@ pub fn fit_json(
         "converged": fit.converged,
         "wall_s": fit.wall_s,
         "delta_phase": fit.delta_phase,
-        "breaths": {
+        "breaths": breaths.map_or(json!([]), |r| r.json_breaths()),
+        "breaths_summary": breaths.map(|r| r.json_summary()),
+        "recording_breaths": {
             "source": "principal displacement of the recording (onsets at its minima)",
             "median_ti_ttot": fit.breathing.ti_ttot,
             "onset_s": fit.breathing.onsets,
@@ -182,6 +188,20 @@ pub fn write_fit(
     subject: &Subject,
     breath: Option<&BreathSummary>,
 ) -> Result<FitOutputs> {
+    write_fit_report(fit, json_path, recording, subject, breath, None)
+}
+
+/// [`write_fit`] with the per-breath report of the fitted model: its breaths in the JSON,
+/// the rib-cage and abdominal displaced volumes as two more columns of the CSV
+/// (`volume.rib_cage_displaced`, `volume.abdomen_displaced`, as the FMU names them).
+pub fn write_fit_report(
+    fit: &Fit,
+    json_path: &Path,
+    recording: &Path,
+    subject: &Subject,
+    breath: Option<&BreathSummary>,
+    breaths: Option<&BreathReport>,
+) -> Result<FitOutputs> {
     create_parent(json_path)?;
     let dir = json_path
         .parent()
@@ -201,129 +221,40 @@ pub fn write_fit(
     };
     let mut w =
         std::io::BufWriter::new(std::fs::File::create(&volume_csv).map_err(io(&volume_csv))?);
-    writeln!(w, "time,volume.lung").map_err(io(&volume_csv))?;
-    for (t, v) in fit.times.iter().zip(&fit.fitted.lung_volume) {
-        writeln!(w, "{t:.6},{v:.6}").map_err(io(&volume_csv))?;
+    match breaths.map(|r| &r.compartments) {
+        Some(c) => {
+            writeln!(
+                w,
+                "time,volume.lung,volume.rib_cage_displaced,volume.abdomen_displaced"
+            )
+            .map_err(io(&volume_csv))?;
+            for (k, t) in fit.times.iter().enumerate() {
+                let v = fit.fitted.lung_volume.get(k).copied().unwrap_or(f64::NAN);
+                let r = c.rib_cage.get(k).copied().unwrap_or(f64::NAN);
+                let a = c.abdomen.get(k).copied().unwrap_or(f64::NAN);
+                writeln!(w, "{t:.6},{v:.6},{r:.7},{a:.7}").map_err(io(&volume_csv))?;
+            }
+        }
+        None => {
+            writeln!(w, "time,volume.lung").map_err(io(&volume_csv))?;
+            for (t, v) in fit.times.iter().zip(&fit.fitted.lung_volume) {
+                writeln!(w, "{t:.6},{v:.6}").map_err(io(&volume_csv))?;
+            }
+        }
     }
     w.flush().map_err(io(&volume_csv))?;
 
-    let value = fit_json(fit, recording, subject, &volume_csv, breath);
+    let value = fit_json(fit, recording, subject, &volume_csv, breath, breaths);
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Error::State(format!("result JSON: {e}")))?;
     std::fs::write(json_path, text + "\n").map_err(io(json_path))?;
 
-    write_figure(
-        &dir,
-        &format!("{stem}_report"),
-        &figure_panels(fit)
-            .iter()
-            .map(|p| p.panel())
-            .collect::<Vec<_>>(),
-    )?;
+    super::figure::write_report_figure(&dir, &format!("{stem}_report"), fit, breaths)?;
     Ok(FitOutputs {
         json: json_path.to_path_buf(),
         volume_csv,
         png,
     })
-}
-
-/// One owned series: label, abscissae, ordinates, colour, mark.
-type Series = (String, Vec<f64>, Vec<f64>, (u8, u8, u8), Mark);
-
-/// Owned series of one panel (the plot helpers borrow slices).
-struct OwnedPanel {
-    title: String,
-    y_label: String,
-    series: Vec<Series>,
-}
-
-impl OwnedPanel {
-    fn panel(&self) -> Panel<'_> {
-        Panel {
-            title: self.title.clone(),
-            x_label: "time [s]".into(),
-            y_label: self.y_label.clone(),
-            traces: self
-                .series
-                .iter()
-                .map(|(label, x, y, color, mark)| Trace {
-                    label: label.clone(),
-                    x,
-                    y,
-                    color: *color,
-                    mark: *mark,
-                })
-                .collect(),
-            hlines: vec![],
-            bands: vec![],
-        }
-    }
-}
-
-/// Lung volume, then the ventral (x) displacement of three markers on the midline column:
-/// top row, middle row, bottom row; recorded (points, model frame after registration) and
-/// fitted (lines), relative to the fitted first frame.
-fn figure_panels(fit: &Fit) -> Vec<OwnedPanel> {
-    let mut panels = vec![OwnedPanel {
-        title: format!(
-            "Fitted lung volume ({}; cost {:.2} mm, {} evaluations)",
-            fit.method.name(),
-            fit.cost_m * 1e3,
-            fit.evaluations
-        ),
-        y_label: "lung volume [L]".into(),
-        series: vec![(
-            "fitted model".into(),
-            fit.times.clone(),
-            fit.fitted.lung_volume.clone(),
-            BLUE,
-            Mark::Line,
-        )],
-    }];
-    let Some(first) = fit.fitted.markers.first() else {
-        return panels;
-    };
-    let (rows, cols) = fit.grid;
-    let mut series = Vec::new();
-    let colors = [BLUE, RED, DARK];
-    let picks =
-        [0, rows / 2, rows.saturating_sub(1)].map(|r| (r * cols + cols / 2).min(first.len() - 1));
-    for (k, &j) in picks.iter().enumerate() {
-        let base = first[j].x;
-        let (mut tr, mut yr) = (Vec::new(), Vec::new());
-        for (t, f) in fit.times.iter().zip(&fit.recorded) {
-            if let Some(q) = f[j] {
-                tr.push(*t);
-                yr.push((q.x - base) * 1e3);
-            }
-        }
-        let yf: Vec<f64> = fit
-            .fitted
-            .markers
-            .iter()
-            .map(|m| (m[j].x - base) * 1e3)
-            .collect();
-        series.push((
-            format!("marker[{}] recorded", j + 1),
-            tr,
-            yr,
-            colors[k],
-            Mark::Points,
-        ));
-        series.push((
-            format!("marker[{}] fitted", j + 1),
-            fit.times.clone(),
-            yf,
-            colors[k],
-            Mark::Line,
-        ));
-    }
-    panels.push(OwnedPanel {
-        title: "Markers: ventral displacement, recorded vs fitted".into(),
-        y_label: "x displacement [mm]".into(),
-        series,
-    });
-    panels
 }
 
 /// The ground-truth JSON of a synthetic recording.

@@ -263,14 +263,19 @@ pub fn fit_case(
     synthetic: Synthetic,
     options: &SweepOptions,
 ) -> Result<SweepRow> {
+    fit_case_with(case, synthetic, options, &mut |_, _| {})
+}
+
+/// [`fit_case`] calling `progress(evaluations, best cost)` after each cost evaluation.
+pub fn fit_case_with(
+    case: &SweepCase,
+    synthetic: Synthetic,
+    options: &SweepOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<SweepRow> {
     let start = std::time::Instant::now();
     let mut source = TorsoMarkers::new(case_config(case, options)?)?;
-    let fit = fit_recording(
-        &mut source,
-        &synthetic.recording,
-        &options.fit,
-        &mut |_, _| {},
-    )?;
+    let fit = fit_recording(&mut source, &synthetic.recording, &options.fit, progress)?;
     Ok(SweepRow {
         case: case.clone(),
         synthetic,
@@ -290,6 +295,17 @@ pub fn run_sweep(
     options: &SweepOptions,
     done: &(dyn Fn(&SweepRow) + Sync),
 ) -> Result<Vec<SweepRow>> {
+    run_sweep_with(cases, options, done, &|_, _| {})
+}
+
+/// [`run_sweep`] calling `progress(case index, evaluations)` after each cost evaluation of
+/// a case's fit (from the worker running it).
+pub fn run_sweep_with(
+    cases: &[SweepCase],
+    options: &SweepOptions,
+    done: &(dyn Fn(&SweepRow) + Sync),
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<SweepRow>> {
     if options.jobs == 0 {
         return Err(Error::invalid("--jobs", 0, "at least 1"));
     }
@@ -302,8 +318,8 @@ pub fn run_sweep(
                 loop {
                     let i = next.fetch_add(1, Ordering::SeqCst);
                     let Some(case) = cases.get(i) else { break };
-                    let row =
-                        synthesize_case(case, options).and_then(|s| fit_case(case, s, options));
+                    let row = synthesize_case(case, options)
+                        .and_then(|s| fit_case_with(case, s, options, &mut |n, _| progress(i, n)));
                     if let Ok(r) = &row {
                         done(r);
                     }

@@ -24,6 +24,7 @@
 //! | [`special`] | gamma, incomplete beta, t, F, normal distributions |
 //! | [`rng`] | seeded PCG64 generator and variates |
 //! | [`synth`] | synthetic spirometry |
+//! | [`thoracoabdominal`] | rib-cage / abdomen phase angle (Lissajous) and rib-cage share |
 //! | [`montecarlo`] | size and power of the equality tests by simulation |
 //! | [`plot`] | PNG/SVG figures |
 //! | [`validation`] | the whole pipeline and its outputs |
@@ -43,6 +44,7 @@ pub mod resample;
 pub mod rng;
 pub mod special;
 pub mod synth;
+pub mod thoracoabdominal;
 pub mod validation;
 
 pub use frequency::{FrequencyEstimate, estimate_frequency};

@@ -15,7 +15,8 @@ use std::sync::Once;
 static FONT: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-fn ensure_font() {
+/// Registers the compiled-in font (once).
+pub fn ensure_font() {
     REGISTER.call_once(|| {
         // The font is compiled in and known to parse; a failure would only lose text.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
@@ -102,7 +103,8 @@ pub const DARK: (u8, u8, u8) = (30, 30, 30);
 /// Orange for highlighted fits.
 pub const ORANGE: (u8, u8, u8) = (230, 120, 0);
 
-fn rgb(c: (u8, u8, u8)) -> RGBColor {
+/// The plotters colour of an RGB triple.
+pub fn rgb(c: (u8, u8, u8)) -> RGBColor {
     RGBColor(c.0, c.1, c.2)
 }
 
@@ -151,7 +153,8 @@ fn range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
     ((x0, x1), (y0 - pad, y1 + 2.5 * pad))
 }
 
-fn draw_panel<DB: DrawingBackend>(
+/// Draws one panel into `area` (errors as text).
+pub fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
 ) -> std::result::Result<(), String> {
