@@ -3,8 +3,11 @@
 
 The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface:
 
-1. the recording (CSV: `# grid: RxC`, `# units: m|cm|mm`, `time,marker[i].x,...`) is read
-   (a .c3d or .trc recording of the grid: `torso convert IN.c3d OUT.csv` first);
+1. the recording is read as `torso fit` reads it (docs/recordings.md): the grid CSV
+   (`# grid: RxC`, `# units: m|cm|mm`, `time,marker[i].x,...`), a C3D file (the `c3d`
+   package; `POINT:UNITS`, `POINT:RATE`, residual < 0 missing), a TRC file or a CSV of
+   named markers (`NAME X` / `NAME.x` / `NAME_x`; `--units`, `--rate` when the file does not
+   say), the markers labelled `marker[1]`..`marker[R*C]`;
 2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`); with
    `--slp-reference` a first fit gives the rest-pose grid the recording implies, written as
    `<out stem>_reference.csv`, and the FMU registers its grid and fits its skin to it
@@ -21,6 +24,13 @@ The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface
    restores its fresh state), drive parameters as start values, one period of settling, then
    the recording window at the recording's frame times, one fmi2GetReal per frame.
 
+The drive's inspiratory fraction (`drive.inspiratory_fraction`, Ti/Ttot of its waves) is
+held at `--ti-ttot` (default 0.5, the sine of thesis eq. 2.4, as `torso fit`).
+
+Progress goes to stderr: a bar on a terminal, else a line at least every 5 s and a last one
+at 100 % (evaluations done over the budget, best cost, elapsed time, time left), as
+`torso fit`.
+
 Writes result.json with the FMI parameter names, `cost_m`, `initial_cost_m`,
 `skin_fit_error_m`, `evaluations`, `wall_s`, `delta_phase` and the fitted lung-volume CSV.
 
@@ -32,7 +42,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -49,14 +61,185 @@ class RecordingError(ValueError):
     """A malformed recording: the message names file, line and column."""
 
 
-def read_recording(path: Path):
-    """Reads the recording format of the project (see the module doc). Returns
-    (grid, times [s], points [frames, P, 3] in metres with NaN for untracked points)."""
-    if path.suffix.lower() != ".csv":
+UNIT_SCALES = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
+LABEL = re.compile(r"^marker\[(\d+)\]$")
+
+
+def _grid_points(path: Path, labels: list, coords: np.ndarray, grid) -> tuple:
+    """Orders named markers [frames, len(labels), 3] as the grid `marker[1]`..`marker[R*C]`
+    (grid from the provenance, else 60 markers -> 10x6)."""
+    n = len(labels)
+    if grid is None:
+        if n != 60:
+            raise RecordingError(f"{path}:0:0: {n} markers and no `grid` provenance entry: "
+                                 "the grid is known only for 60 markers (10x6)")
+        grid = (10, 6)
+    want = grid[0] * grid[1]
+    index = {}
+    unknown = []
+    for j, label in enumerate(labels):
+        m = LABEL.match(label.strip())
+        k = int(m.group(1)) if m else 0
+        if not 1 <= k <= want or k in index:
+            unknown.append(label)
+        else:
+            index[k] = j
+    missing = [f"marker[{k}]" for k in range(1, want + 1) if k not in index]
+    if unknown or missing:
         raise RecordingError(
-            f"{path}:0:0: this script reads the grid CSV; convert a .c3d or .trc first with "
-            f"`torso convert {path} {path.with_suffix('.csv')}`"
-        )
+            f"{path}:0:0: labels not of the {grid[0]}x{grid[1]} grid: unknown {unknown[:5]}, "
+            f"missing {missing[:5]} (expected marker[1]..marker[{want}])")
+    order = [index[k] for k in range(1, want + 1)]
+    return grid, coords[:, order, :]
+
+
+def _parse_grid(value: str):
+    r, c = value.lower().split("x")
+    return int(r), int(c)
+
+
+def _read_c3d(path: Path):
+    """A C3D recording (the `c3d` package): labels, rate, units, residual < 0 missing."""
+    import c3d
+
+    try:
+        with open(path, "rb") as handle:
+            reader = c3d.Reader(handle)
+            labels = [label.strip() for label in reader.point_labels]
+            rate = float(reader.point_rate)
+            units_param = reader.get("POINT:UNITS")
+            units = units_param.string_value.strip().lower() if units_param else ""
+            prov = {}
+            if reader.get("BREATHING_TORSO:KEYS") is not None:
+                keys = [k.strip() for k in reader.get("BREATHING_TORSO:KEYS").string_array]
+                values = [v.strip() for v in reader.get("BREATHING_TORSO:VALUES").string_array]
+                prov = dict(zip(keys, values))
+            frames = []
+            for _, points, _ in reader.read_frames():
+                xyz = points[:, :3].astype(float)
+                xyz[points[:, 3] < 0] = np.nan
+                frames.append(xyz)
+    except (OSError, ValueError, EOFError, KeyError) as e:
+        raise RecordingError(f"{path}:0:0: not a readable C3D file: {e}") from e
+    if units not in UNIT_SCALES:
+        raise RecordingError(f"{path}:0:0: POINT:UNITS `{units}` is not mm, cm or m")
+    coords = np.array(frames) * UNIT_SCALES[units]
+    grid = _parse_grid(prov["grid"]) if "grid" in prov else None
+    grid, pts = _grid_points(path, labels, coords, grid)
+    return grid, np.arange(len(frames)) / rate, pts
+
+
+def _read_trc(path: Path):
+    """A TRC recording: header fields (Units, extra provenance fields), the marker row, then
+    `Frame# Time X1 Y1 Z1 ...` rows with empty cells for missing samples."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    if len(lines) < 5:
+        raise RecordingError(f"{path}:1:1: a TRC file has five header lines")
+    keys, values = lines[1].split("\t"), lines[2].split("\t")
+    header = dict(zip((k.strip() for k in keys), (v.strip() for v in values)))
+    units = header.get("Units", "").lower()
+    if units not in UNIT_SCALES:
+        raise RecordingError(f"{path}:3:1: Units: `{units}` is not mm, cm or m")
+    names = lines[3].split("\t")[2::3]
+    labels = [n.strip() for n in names if n.strip()]
+    times, rows = [], []
+    for no, line in enumerate(lines[5:], start=6):
+        if not line.strip():
+            continue
+        cells = line.split("\t")
+        try:
+            times.append(float(cells[1]))
+            vals = [float(c) if c.strip() else np.nan for c in cells[2:2 + 3 * len(labels)]]
+        except (ValueError, IndexError) as e:
+            raise RecordingError(f"{path}:{no}:1: {e}") from e
+        vals += [np.nan] * (3 * len(labels) - len(vals))
+        rows.append(vals)
+    coords = np.array(rows).reshape(len(rows), len(labels), 3) * UNIT_SCALES[units]
+    coords[np.isnan(coords).any(axis=2)] = np.nan
+    grid = _parse_grid(header["grid"]) if "grid" in header else None
+    grid, pts = _grid_points(path, labels, coords, grid)
+    return grid, np.array(times), pts
+
+
+NAMED_AXIS = re.compile(r"^(.+?)(?: |\.|_)([xyzXYZ])$")
+
+
+def _read_named_csv(path: Path, lines: list, k: int, meta: dict, units=None, rate=None):
+    """A CSV of named markers (docs/recordings.md): `NAME X|.x|_x` columns, optional time
+    and frame columns; units and rate from `#` lines or the arguments."""
+    header = [c.strip() for c in lines[k].split(",")]
+    time_col, axes = None, {}
+    order = []
+    for j, cell in enumerate(header):
+        if cell.lower() in ("time", "t", "time (s)"):
+            time_col = j
+            continue
+        if cell.lower() == "frame":
+            continue
+        m = NAMED_AXIS.match(cell)
+        if not m:
+            raise RecordingError(f"{path}:{k + 1}:1: column {j + 1} `{cell}`: expected `time`, `frame` or "
+                                 "a marker coordinate `NAME X`, `NAME.x` or `NAME_x`")
+        name, axis = m.group(1).strip(), "xyz".index(m.group(2).lower())
+        if name not in axes:
+            axes[name] = [None] * 3
+            order.append(name)
+        axes[name][axis] = j
+    file_units = meta.get("units", "").lower() or None
+    if units and file_units and units != file_units:
+        raise RecordingError(f"{path}:0:0: the file says units {file_units}, --units says {units}")
+    units = units or file_units
+    if units not in UNIT_SCALES:
+        raise RecordingError(f"{path}:0:0: the file does not state its units: pass --units mm|cm|m")
+    rows = []
+    for no, line in enumerate(lines[k + 1:], start=k + 2):
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise RecordingError(f"{path}:{no}:1: ragged row")
+        try:
+            rows.append([float(c) if c.strip() and c.strip().lower() != "nan" else np.nan for c in cells])
+        except ValueError as e:
+            raise RecordingError(f"{path}:{no}:1: {e}") from e
+    data = np.array(rows)
+    if time_col is not None:
+        times = data[:, time_col]
+    else:
+        r = rate or (float(meta["rate"]) if "rate" in meta else None)
+        if not r:
+            raise RecordingError(f"{path}:0:0: no time column and no rate: pass --rate HZ")
+        times = np.arange(len(rows)) / r
+    coords = np.stack([data[:, axes[name]] if None not in axes[name] else np.full((len(rows), 3), np.nan)
+                       for name in order], axis=1) * UNIT_SCALES[units]
+    coords[np.isnan(coords).any(axis=2)] = np.nan
+    grid = _parse_grid(meta["grid"]) if "grid" in meta else None
+    grid, pts = _grid_points(path, order, coords, grid)
+    return grid, times, pts
+
+
+def read_recording(path: Path, units=None, rate=None):
+    """Reads a recording in any of the formats `torso fit` reads (see the module doc). Returns
+    (grid, times [s], points [frames, P, 3] in metres with NaN for untracked points)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".c3d":
+        return _read_c3d(path)
+    if suffix == ".trc":
+        return _read_trc(path)
+    if suffix != ".csv":
+        raise RecordingError(f"{path}:0:0: unknown extension `{suffix}`: expected .c3d, .trc or .csv")
+    head = path.read_text(encoding="utf-8").splitlines()
+    j = 0
+    meta = {}
+    while j < len(head) and (head[j].startswith("#") or not head[j].strip()):
+        body = head[j][1:].strip() if head[j].startswith("#") else ""
+        if ":" in body:
+            key, value = (x.strip() for x in body.split(":", 1))
+            meta[key.lower() if key.lower() in ("units", "rate", "grid") else key] = value
+        j += 1
+    if j < len(head) and not head[j].startswith("time,marker[1].x"):
+        return _read_named_csv(path, head, j, meta, units, rate)
     grid, scale = None, 1.0
     lines = path.read_text(encoding="utf-8").splitlines()
     k = 0
@@ -155,6 +338,102 @@ def wrap(a: float) -> float:
     """Wraps an angle to (-pi, pi]."""
     w = (a + math.pi) % (2 * math.pi) - math.pi
     return w + 2 * math.pi if w <= -math.pi else w
+
+
+
+def format_secs(secs: float) -> str:
+    """`12.3 s`, `4 min 05 s` or `1 h 02 min`, as `torso`'s progress."""
+    if not math.isfinite(secs):
+        return "?"
+    s = max(secs, 0.0)
+    if s < 60:
+        return f"{s:.1f} s"
+    if s < 3600:
+        return f"{int(s // 60)} min {int(s % 60):02d} s"
+    return f"{int(s // 3600)} h {int(s % 3600 // 60):02d} min"
+
+
+class Progress:
+    """Progress on `stream` (stderr): a bar redrawn in place on a terminal; otherwise a line
+    at the first update, then at least every `interval` seconds (a timer thread writes one
+    even when no update comes), and a last line at 100 %; the same text as `torso fit`."""
+
+    def __init__(self, label: str, total: int, unit: str, stream=None, interval: float = 5.0,
+                 terminal: bool | None = None):
+        self.label, self.total, self.unit = label, total, unit
+        self.stream = stream if stream is not None else sys.stderr
+        self.terminal = self.stream.isatty() if terminal is None else terminal
+        self.interval = interval
+        self.start = time.monotonic()
+        self.done, self.detail = 0, ""
+        self.last_line = None
+        self.last_draw = 0.0
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._tick, daemon=True)
+        self.thread.start()
+
+    def _text(self, end: bool = False) -> str:
+        elapsed = time.monotonic() - self.start
+        pct = 100.0 if self.total == 0 else min(100.0, 100.0 * self.done / self.total)
+        if self.done >= self.total:
+            eta = "0 s"
+        elif self.done == 0:
+            eta = "?"
+        else:
+            eta = format_secs(elapsed * (self.total - self.done) / self.done)
+        detail = f", {self.detail}" if self.detail else ""
+        if self.terminal:
+            filled = min(30, int(pct / 100 * 30))
+            return (f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {pct:3.0f} % {self.done}/{self.total} "
+                    f"{self.unit}{detail}, {format_secs(elapsed)} elapsed, ETA {eta}\x1b[K")
+        tail = "done" if end else f"ETA {eta}"
+        return (f"{self.label}: {self.done}/{self.total} {self.unit} ({pct:.0f} %){detail}, "
+                f"elapsed {format_secs(elapsed)}, {tail}\n")
+
+    def _write(self, text: str):
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except (OSError, ValueError):
+            pass  # progress is advisory
+
+    def _emit(self, force: bool):
+        with self.lock:
+            now = time.monotonic()
+            if self.terminal:
+                due = now - self.last_draw >= 0.1
+                if force or due:
+                    self.last_draw = now
+                    self._write(self._text())
+            else:
+                due = self.last_line is None or now - self.last_line >= self.interval
+                if force or due:
+                    self.last_line = now
+                    self._write(self._text())
+
+    def _tick(self):
+        step = 0.5 if self.terminal else max(0.01, self.interval / 10)
+        while not self.stop.wait(step):
+            since = self.last_line if self.last_line is not None else self.start
+            if self.terminal or time.monotonic() - since >= self.interval:
+                self._emit(True)
+
+    def update(self, done: int, detail: str = ""):
+        with self.lock:
+            self.done, self.detail = done, detail
+        self._emit(False)
+
+    def finish(self, detail: str = ""):
+        """The count becomes the total (a search that stops early has done all it will do)
+        and the last line, or the full bar, is written."""
+        self.stop.set()
+        self.thread.join()
+        with self.lock:
+            if self.done < self.total:
+                self.total = self.done
+            self.detail = detail
+            self._write(self._text(end=True) + ("\n" if self.terminal else ""))
 
 
 class FmuModel:
@@ -370,7 +649,7 @@ def write_reference(path: Path, grid, points: np.ndarray):
     path.write_text(f"# grid: {grid[0]}x{grid[1]}\n# units: m\n{head}\n0.0,{row}\n{1 / 56},{row}\n")
 
 
-def search(model, rec, tracked, times, f, x0, budget, step, history):
+def search(model, rec, tracked, times, f, x0, budget, step, history, progress=None):
     """Bounded Nelder-Mead (scipy, adaptive) from x0 in the unit box of the bounds (each
     phase within pi of its start), as the native search: initial simplex of `step` times each
     range, stop when the simplex spans less than 0.004 of each range and its costs agree
@@ -387,6 +666,8 @@ def search(model, rec, tracked, times, f, x0, budget, step, history):
         pts, _ = model.run(drive_dict(f, x), model_times)
         value = aligned_cost(pts, rec, tracked)
         history.append(value)
+        if progress is not None:
+            progress.update(len(history) + 2, f"best cost {min(history) * 1e3:.3f} mm")
         return value
 
     u0 = np.clip((np.array(x0, dtype=float) - lo) / span, 0.0, 1.0)
@@ -408,7 +689,7 @@ def search(model, rec, tracked, times, f, x0, budget, step, history):
 
 def fit(args) -> dict:
     start = time.perf_counter()
-    (rows, cols), times_abs, raw = read_recording(Path(args.slp))
+    (rows, cols), times_abs, raw = read_recording(Path(args.slp), args.units, args.rate)
     times = times_abs - times_abs[0]
     tracked = ~np.isnan(raw[..., 0])
     params = {
@@ -423,10 +704,14 @@ def fit(args) -> dict:
         "grid.cols": cols,
         "solver.rtol": args.rtol,
         "solver.atol": args.rtol / 100,  # as the native fit (FIT_ATOL_PER_RTOL)
+        "drive.inspiratory_fraction": args.ti_ttot,
     }
     out = Path(args.out)
+    if not 0.2 <= args.ti_ttot <= 0.8:
+        raise RecordingError(f"--ti-ttot {args.ti_ttot}: expected a number in [0.2, 0.8]")
     model = FmuModel(Path(args.fmu), params, {})
     history = []
+    progress = Progress("fit_slp", args.max_evals, "evaluations")
     skin = None
     try:
         n_model = model.rows * model.cols
@@ -451,7 +736,7 @@ def fit(args) -> dict:
         budget = args.max_evals - 2 - (SKIN_POLISH_EVALS if args.slp_reference else 0)
         x0 = linearised_start(model, rest, rec, tracked, times, f, psi, rate)
         x0[2], x0[3] = wrap(x0[2]), wrap(x0[3])
-        x = search(model, rec, tracked, times, f, x0, budget, 0.03, history)
+        x = search(model, rec, tracked, times, f, x0, budget, 0.03, history, progress)
         if args.slp_reference:
             # The rest-pose grid the first fit implies (each frame minus the fitted model's
             # displacement from rest, averaged over frames; as `torso fit --skin-fit`), in the
@@ -478,12 +763,15 @@ def fit(args) -> dict:
             rec = raw  # the FMU's markers are now in the recording's frame
             budget = args.max_evals - len(history) - 3
             x = search(model, rec, tracked, times, f, [x[0], x[1], wrap(x[2]), wrap(x[3])], budget, 0.01,
-                       history)
+                       history, progress)
         best = int(np.argmin(history))
         pts, vol = model.run(drive_dict(f, x), model_times, volumes=True)
         final_cost = aligned_cost(pts, rec, tracked)
         evaluations = len(history) + 2
+        progress.update(evaluations, f"best cost {min(history) * 1e3:.3f} mm")
+        progress.finish(f"cost {final_cost * 1e3:.3f} mm")
     finally:
+        progress.stop.set()
         model.close()
     out.parent.mkdir(parents=True, exist_ok=True)
     csv = out.with_name(out.stem + "_lung_volume.csv")
@@ -492,6 +780,7 @@ def fit(args) -> dict:
         for t, v in zip(times, vol):
             fh.write(f"{t:.6f},{v:.6f}\n")
     result = drive_dict(f, [x[0], x[1], wrap(x[2]), wrap(x[3])])
+    result["drive.inspiratory_fraction"] = args.ti_ttot
     result.update(
         {
             "cost_m": final_cost,
@@ -533,7 +822,7 @@ def bench(args) -> int:
             cmd = [args.torso, "fit", "--slp", str(args.slp), "--out", str(out), "--sex", args.sex,
                    "--age", str(args.age), "--stature", str(args.stature), "--mass", str(args.mass),
                    "--breast-size", str(args.breast_size), "--posture", args.posture, "--lod", str(args.lod),
-                   "--rtol", str(args.rtol), "--max-evals", str(args.max_evals)]
+                   "--rtol", str(args.rtol), "--max-evals", str(args.max_evals), "--ti-ttot", str(args.ti_ttot)]
             run = subprocess.run(cmd, capture_output=True, text=True)
             if run.returncode != 0:
                 print(run.stderr, file=sys.stderr)
@@ -574,6 +863,12 @@ def main(argv=None) -> int:
     p.add_argument("--max-evals", type=int, default=120)
     p.add_argument("--rtol", type=float, default=1e-6,
                    help="solver.rtol of the FMU (the native fit's default: as accurate for fitting as tighter ones)")
+    p.add_argument("--ti-ttot", type=float, default=0.5,
+                   help="drive.inspiratory_fraction held by the search, 0.2-0.8 (as `torso fit --ti-ttot`; "
+                        "for `auto` pass the value torso fit's JSON reports)")
+    p.add_argument("--units", choices=sorted(UNIT_SCALES),
+                   help="length unit of a CSV of named markers that does not state it")
+    p.add_argument("--rate", type=float, help="frame rate [Hz] of a CSV of named markers without a time column")
     p.add_argument("--slp-reference", action="store_true",
                    help="fit the FMU's skin to the rest-pose grid a first fit implies (slp.reference), "
                         "then polish, as `torso fit --skin-fit`")
