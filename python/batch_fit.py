@@ -222,6 +222,8 @@ def fit_one(recording: str, key: str, sha: str, out: str, engine: str, options: 
         log_out.seek(0)
         log_err.seek(0)
         stdout, stderr = log_out.read(), log_err.read()
+    # The fit's progress lines (`fit: ...`, `fit_slp: ...`) are not its error message.
+    stderr = "\n".join(line for line in stderr.splitlines() if not line.startswith(("fit: ", "fit_slp: ")))
     wall = time.perf_counter() - start
     if proc.returncode != 0 or not fit_json.is_file():
         text = (stderr.strip() or stdout.strip() or f"exit status {proc.returncode}")

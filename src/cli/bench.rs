@@ -761,11 +761,8 @@ fn soak(args: &SoakArgs) -> Result<()> {
     let (mut ok, mut numerical, mut bounds) = (0, 0, 0);
     let start = std::time::Instant::now();
     let bar = super::progress::Progress::new("soak", args.scenes, "scenes");
+    bar.update(0, "");
     for i in 0..args.scenes {
-        bar.update(
-            i,
-            format!("{ok} ok, {numerical} numerical failures, {bounds} out of bounds"),
-        );
         let config = random_scene(&mut rng, args.lod)?;
         match stress_scene(&config, args.seconds, args.rate)? {
             SceneOutcome::Ok { .. } => ok += 1,
@@ -778,6 +775,10 @@ fn soak(args: &SoakArgs) -> Result<()> {
                 println!("scene {i}: out of bounds at t = {time} s: {what}\n  {config:?}");
             }
         }
+        bar.update(
+            i + 1,
+            format!("{ok} ok, {numerical} numerical failures, {bounds} out of bounds"),
+        );
         if (i + 1) % 10 == 0 {
             println!(
                 "{} scenes, {:.0} s wall: {ok} ok, {numerical} numerical failures, {bounds} out of bounds",
