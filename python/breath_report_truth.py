@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""The per-breath report of a fit of a synthetic recording against the truth that made it.
+
+`torso simulate` runs the true drive (from the recording's `.truth.json`) at the recording's
+level of detail; its breaths after two settling breaths are measured independently of the
+Rust code (scipy.signal.find_peaks for the extrema, the Lissajous phase written afresh in
+python/tests/test_breath_report.py) and their means are set against the `breaths_summary`
+of the fit's result JSON.
+
+Usage: python breath_report_truth.py --truth rec.truth.json --fit result.json [--lod 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import find_peaks
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "python" / "tests"))
+
+from test_breath_report import _lissajous  # noqa: E402
+
+
+def truth_breaths(torso: str, truth: dict, lod: int, rtol: float) -> dict:
+    """Means of Ti, Te, VT, rib-cage share and phase angle of the true drive's breaths."""
+    f = truth["drive.frequency"]
+    args = [torso, "simulate", "--lod", str(lod), "--rtol", str(rtol), "--frequency", str(f),
+            "--ti-ttot", str(truth.get("drive.inspiratory_fraction", 0.5)), "--rate", "56",
+            "--duration", str(6.0 / f)]
+    for fam in ("ribs", "diaphragm", "abdominals"):
+        args += [f"--{fam}-amplitude", str(truth[f"drive.{fam}.amplitude"]),
+                 f"--{fam}-phase", str(truth[f"drive.{fam}.phase"])]
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "truth.csv"
+        subprocess.run(args + ["--out", str(out)], check=True, capture_output=True)
+        d = np.genfromtxt(out, delimiter=",", names=True)
+    t, lung = d["time"], d["volumelung"]
+    rc, ab = d["volumerib_cage_displaced"], d["volumeabdomen_displaced"]
+    settled = t >= 2.0 / f
+    span = lung[settled].max() - lung[settled].min()
+    troughs, _ = find_peaks(-lung, prominence=0.3 * span)
+    peaks, _ = find_peaks(lung, prominence=0.3 * span)
+    troughs = troughs[t[troughs] >= 2.0 / f]
+    rows = []
+    for a, b in zip(troughs[:-1], troughs[1:]):
+        p = peaks[(peaks > a) & (peaks < b)][0]
+        seg = slice(a, b)
+        swing = lambda x: x[seg].max() - x[seg].min()  # noqa: E731
+        rows.append({"ti_s": t[p] - t[a], "te_s": t[b] - t[p], "tidal_volume_l": lung[p] - lung[a],
+                     "rib_cage_share": swing(rc) / (swing(rc) + swing(ab)),
+                     "phase_angle_deg": _lissajous(rc[seg], ab[seg])})
+    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"breaths": len(rows)}
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--truth", required=True)
+    p.add_argument("--fit", required=True)
+    p.add_argument("--lod", type=int, default=0)
+    p.add_argument("--rtol", type=float, default=1e-4)
+    p.add_argument("--torso", default=str(ROOT / "target" / "release" / "torso"))
+    args = p.parse_args(argv)
+    truth = truth_breaths(args.torso, json.loads(Path(args.truth).read_text()), args.lod, args.rtol)
+    fit = json.loads(Path(args.fit).read_text())
+    mean = fit["breaths_summary"]["mean"]
+    print(f"{'index':<16} {'truth':>9} {'fit':>9} {'error':>9}   ({truth['breaths']} true breaths, "
+          f"{fit['breaths_summary']['count']} fitted, {fit['evaluations']} evaluations)")
+    for k in ("ti_s", "te_s", "tidal_volume_l", "rib_cage_share", "phase_angle_deg"):
+        print(f"{k:<16} {truth[k]:>9.4f} {mean[k]:>9.4f} {mean[k] - truth[k]:>+9.4f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
