@@ -252,7 +252,7 @@ pub fn fit_file(
     let (recording, mut config) = read_for_fit(recording_path, read, model)?;
     prepare_output_file(out)?;
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
-    let subject = config.subject.clone();
+    let mut model = config.clone();
     let mut bar = Progress::new(options.max_evals);
     let fit = if skin_fit {
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
@@ -261,6 +261,7 @@ pub fn fit_file(
             bar.update(n, b)
         })?;
         println!("rest-pose reference grid: {}", reference.display());
+        model.scene.slp_reference = Some(reference);
         fit
     } else {
         let mut source = TorsoMarkers::new(config.clone())?;
@@ -270,7 +271,7 @@ pub fn fit_file(
     };
     bar.finish();
     let breath = fitted_breath(&config, &fit)?;
-    let outputs = write_fit(&fit, out, recording_path, &subject, Some(&breath))?;
+    let outputs = write_fit(&fit, out, recording_path, &model, Some(&breath))?;
     println!("{}", summary(&fit));
     let svg = outputs.png.with_extension("svg");
     let mut files = vec![

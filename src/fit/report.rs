@@ -44,6 +44,27 @@ pub fn subject_fmi(subject: &Subject) -> Value {
     })
 }
 
+/// The model a fit ran, other than its subject and drive, under the FMI parameter names: the
+/// level of detail, the marker grid, the lung ratio, the skin reference (`slp.reference`: the
+/// rest-pose grid of a `--skin-fit`, empty otherwise) and the subject mesh folder
+/// (`subject.mesh_dir`, empty for the generated geometry). With `subject` and the drive this
+/// is what `torso fmu build --subject` bakes into a personalised FMU.
+pub fn model_fmi(config: &crate::Config) -> Value {
+    let path = |p: &Option<PathBuf>| {
+        p.as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default()
+    };
+    json!({
+        "scene.level_of_detail": config.scene.level_of_detail,
+        "grid.rows": config.scene.grid_rows,
+        "grid.cols": config.scene.grid_cols,
+        "lung.ratio": config.lung_ratio,
+        "slp.reference": path(&config.scene.slp_reference),
+        "subject.mesh_dir": path(&config.subject_mesh_dir),
+    })
+}
+
 /// The provenance key of the level of detail a recording was made at.
 pub const LOD_KEY: &str = "scene.level_of_detail";
 
@@ -96,11 +117,11 @@ pub struct FitOutputs {
     pub png: PathBuf,
 }
 
-/// The result JSON of a fit.
+/// The result JSON of a fit of the model configured by `model` (its drive aside).
 pub fn fit_json(
     fit: &Fit,
     recording: &Path,
-    subject: &Subject,
+    model: &crate::Config,
     volume_csv: &Path,
     breath: Option<&BreathSummary>,
 ) -> Value {
@@ -158,7 +179,8 @@ pub fn fit_json(
             "rotation_deg": rot,
             "translation_m": [fit.to_model.translation.x, fit.to_model.translation.y, fit.to_model.translation.z],
         },
-        "subject": subject_fmi(subject),
+        "subject": subject_fmi(&model.subject),
+        "model": model_fmi(model),
     });
     if let Value::Object(e) = extra {
         m.extend(e);
@@ -173,13 +195,14 @@ fn create_parent(path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes result JSON at `json_path`, the lung volume CSV and the figure beside it
-/// (`<stem>_lung_volume.csv`, `<stem>_report.png` / `.svg`).
+/// Writes result JSON at `json_path` of a fit of the model configured by `model`, the lung
+/// volume CSV and the figure beside it (`<stem>_lung_volume.csv`, `<stem>_report.png` /
+/// `.svg`).
 pub fn write_fit(
     fit: &Fit,
     json_path: &Path,
     recording: &Path,
-    subject: &Subject,
+    model: &crate::Config,
     breath: Option<&BreathSummary>,
 ) -> Result<FitOutputs> {
     create_parent(json_path)?;
@@ -207,7 +230,7 @@ pub fn write_fit(
     }
     w.flush().map_err(io(&volume_csv))?;
 
-    let value = fit_json(fit, recording, subject, &volume_csv, breath);
+    let value = fit_json(fit, recording, model, &volume_csv, breath);
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Error::State(format!("result JSON: {e}")))?;
     std::fs::write(json_path, text + "\n").map_err(io(json_path))?;
