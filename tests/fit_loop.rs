@@ -435,8 +435,8 @@ fn outputs_are_written() {
         &mut |_, _| {},
     )
     .unwrap();
-    let subject = breathing_torso::anatomy::Subject::default();
-    let out = write_fit(&fit, &dir.join("result.json"), &rec_path, &subject, None).unwrap();
+    let model = breathing_torso::Config::default();
+    let out = write_fit(&fit, &dir.join("result.json"), &rec_path, &model, None).unwrap();
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out.json).unwrap()).unwrap();
     for key in [
@@ -460,7 +460,7 @@ fn outputs_are_written() {
     assert_eq!(csv.lines().count(), back.frames.len() + 1);
     assert!(csv.starts_with("time,volume.lung\n"));
     assert!(std::fs::metadata(&out.png).unwrap().len() > 10_000);
-    let truth = truth_json(&s, &subject, 0, &synth);
+    let truth = truth_json(&s, &model.subject, 0, &synth);
     // The first frame is at end-expiration, after the rib-cage activation minimum (-pi/2)
     // by the response's lag; the phase difference is the drive's.
     let phi_r = truth["drive.ribs.phase"].as_f64().unwrap();

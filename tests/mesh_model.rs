@@ -473,3 +473,87 @@ fn c_abi_builds_on_a_mesh_directory_and_reports_a_bad_one() {
         bt_destroy(h);
     }
 }
+
+/// A fit on a subject mesh baked into a personalised FMU: the mesh folder goes to
+/// resources/subject/mesh/ and `subject.mesh_dir` reads `subject/mesh`, found in the FMU's
+/// resources when it is instantiated; the generic FMU's parameter set names the folder
+/// absolutely. The fit result is the JSON `torso fit` writes, reduced to the keys the
+/// personalisation reads.
+#[test]
+fn a_fit_on_a_subject_mesh_carries_the_mesh_in_the_fmus_resources() {
+    use breathing_torso::fmi::personal::{from_fit_json, table_in};
+    use breathing_torso::fmi::variables::Value;
+    let dir = scratch("personal");
+    let fit = dir.join("fit.json");
+    let subject = breathing_torso::fit::report::subject_fmi(&Subject::default());
+    let mut json = serde_json::json!({
+        "subject": subject,
+        "model": {
+            "scene.level_of_detail": LOD,
+            "grid.rows": 10,
+            "grid.cols": 6,
+            "slp.reference": "",
+            "subject.mesh_dir": prepared_dir().display().to_string(),
+        },
+    });
+    for (k, v) in breathing_torso::fit::report::drive_fmi(&Drive::quiet()) {
+        json[k] = v;
+    }
+    std::fs::write(&fit, json.to_string()).unwrap();
+    let personal = from_fit_json(&fit).unwrap();
+    let start = |name: &str| {
+        personal
+            .personalisation
+            .starts
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.clone())
+    };
+    assert_eq!(
+        start("subject.mesh_dir"),
+        Some(Value::String("subject/mesh".into()))
+    );
+    let generic = personal
+        .generic
+        .iter()
+        .find(|(n, _)| n == "subject.mesh_dir")
+        .unwrap();
+    assert_eq!(
+        generic.1,
+        Value::String(prepared_dir().canonicalize().unwrap().display().to_string())
+    );
+    // The entries as the FMU's resources/ holds them.
+    let root = dir.join("unpacked");
+    for (name, data) in &personal.entries {
+        let p = root.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, data).unwrap();
+    }
+    let resources = root.join("resources");
+    assert!(resources.join("subject/mesh/skin.obj").is_file());
+    let t = table_in(Some(&resources)).unwrap();
+    assert_ne!(t.guid(), table().guid());
+    let inst = Instance::with_table("mesh", Some(resources.clone()), None, false, t).unwrap();
+    assert_eq!(
+        inst.config().subject_mesh_dir,
+        Some(resources.join("subject/mesh"))
+    );
+    // The same relative folder in the generic FMU's resources.
+    let var = table().by_name("subject.mesh_dir").unwrap().vr;
+    let mut generic = Instance::new("g", Some(resources.clone()), None, false);
+    assert_eq!(
+        generic.set_string(&[var], &["subject/mesh".to_string()]),
+        fmi2OK
+    );
+    // Without resources, the relative folder is not there: an error naming the parameter.
+    let (mut bare, log) = instance();
+    assert_eq!(
+        bare.set_string(&[var], &["subject/mesh".to_string()]),
+        fmi2Error
+    );
+    let last = log.borrow().last().unwrap().1.clone();
+    assert!(
+        last.contains("subject.mesh_dir") && last.contains("resources"),
+        "{last}"
+    );
+}

@@ -142,6 +142,36 @@ fn negative_numbers_are_values_and_errors_name_the_flag() {
 }
 
 #[test]
+fn a_request_for_help_is_answered_wherever_it_stands() {
+    // A real-valued option takes values starting with '-', so these once read `--help` as the
+    // tolerance or the stature and reported it as not a number.
+    for (args, usage) in [
+        (
+            &["simulate", "--rtol", "--help"][..],
+            "Usage: torso simulate",
+        ),
+        (&["simulate", "--stature", "-h"], "Usage: torso simulate"),
+        (
+            &["fit", "--slp", "x.csv", "--ti-ttot", "--help"],
+            "Usage: torso fit",
+        ),
+        (
+            &["bench", "core", "--rtol", "--help"],
+            "Usage: torso bench core",
+        ),
+    ] {
+        let (code, out, err) = torso(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(out.contains(usage), "{args:?}:\n{out}\n{err}");
+        assert!(!err.contains("invalid value"), "{args:?}: {err}");
+    }
+    // A value that merely starts like a flag is still a value.
+    let (code, _, err) = torso(&["simulate", "--rtol", "-help"]);
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains("'-help' for '--rtol"), "{err}");
+}
+
+#[test]
 fn simulate_prints_a_readable_drive_and_warns_on_short_runs() {
     let dir = scratch("short");
     let args: Vec<&str> = ["simulate", "--duration", "2"]

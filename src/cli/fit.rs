@@ -210,7 +210,7 @@ pub fn fit_file(
     let (recording, mut config) = read_for_fit(recording_path, read, model)?;
     prepare_output_file(out)?;
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
-    let subject = config.subject.clone();
+    let mut model = config.clone();
     let bar = Progress::new("fit", options.max_evals, "evaluations");
     let fit = if skin_fit {
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
@@ -219,6 +219,7 @@ pub fn fit_file(
             bar.update(n, format!("best cost {:.3} mm", b * 1e3))
         })?;
         println!("rest-pose reference grid: {}", reference.display());
+        model.scene.slp_reference = Some(reference);
         fit
     } else {
         let mut source = TorsoMarkers::new(config.clone())?;
@@ -230,12 +231,13 @@ pub fn fit_file(
     bar.update(fit.evaluations, "");
     bar.finish(format!("best cost {:.3} mm", fit.cost_m * 1e3));
     let breath = fitted_breath(&config, &fit)?;
-    let breaths = BreathReport::of_fit(&config, &fit)?;
+    // The fitted model as fitted (with its skin fitted to the recording under --skin-fit).
+    let breaths = BreathReport::of_fit(&model, &fit)?;
     let outputs = write_fit_report(
         &fit,
         out,
         recording_path,
-        &subject,
+        &model,
         Some(&breath),
         Some(&breaths),
     )?;

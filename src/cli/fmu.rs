@@ -1,6 +1,8 @@
 //! `torso fmu`: packages the FMI 2.0 co-simulation FMU and writes its model description.
 
-use crate::fmi::package::{Binary, build_fmu_for, default_library, has_debug_info};
+use crate::fmi::package::{Binary, build_fmu_for, build_fmu_with, default_library, has_debug_info};
+use crate::fmi::personal::from_fit_json;
+use crate::fmi::ssv::write as write_ssv;
 use crate::fmi::xml::model_description;
 use crate::{Error, Result};
 use clap::{Args, Subcommand};
@@ -35,6 +37,16 @@ pub enum FmuCommand {
         /// A folder copied into the FMU's resources/.
         #[arg(long)]
         resources: Option<PathBuf>,
+        /// A fit result (the JSON `torso fit` writes) to bake into the FMU: its subject, drive
+        /// and model become the parameters' start values, its skin reference and mesh folder
+        /// go to resources/subject/, its report to documentation/, and only its grid's
+        /// markers are outputs (docs/fmi.md, "Personalised FMUs").
+        #[arg(long)]
+        subject: Option<PathBuf>,
+        /// Where to write the SSP parameter set of --subject for the generic FMU (default:
+        /// the FMU's path with the extension .ssv).
+        #[arg(long, requires = "subject")]
+        ssv: Option<PathBuf>,
     },
     /// Write modelDescription.xml (generated from the variable table).
     ModelDescription {
@@ -52,6 +64,8 @@ pub fn run(args: FmuArgs) -> Result<()> {
             lib,
             binaries,
             resources,
+            subject,
+            ssv,
         } => {
             let mut packaged = Vec::new();
             match lib {
@@ -74,12 +88,44 @@ pub fn run(args: FmuArgs) -> Result<()> {
                     );
                 }
             }
-            let p = build_fmu_for(&packaged, resources.as_deref(), &out)?;
+            let Some(fit) = subject else {
+                let p = build_fmu_for(&packaged, resources.as_deref(), &out)?;
+                println!(
+                    "wrote {} ({} bytes): {}",
+                    p.path.display(),
+                    p.bytes,
+                    p.entries.join(", ")
+                );
+                return Ok(());
+            };
+            let personal = from_fit_json(&fit)?;
+            let table = personal.table()?;
+            let p = build_fmu_with(
+                &packaged,
+                resources.as_deref(),
+                &out,
+                &table,
+                &personal.entries,
+            )?;
+            let ssv = ssv.unwrap_or_else(|| out.with_extension("ssv"));
+            let name = fit
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "subject".into());
+            std::fs::write(&ssv, write_ssv(&name, &personal.generic))
+                .map_err(|e| Error::io(&ssv, e))?;
             println!(
-                "wrote {} ({} bytes): {}",
+                "wrote {} ({} bytes, GUID {}, {} parameters from {}): {}",
                 p.path.display(),
                 p.bytes,
+                table.guid(),
+                personal.personalisation.starts.len(),
+                fit.display(),
                 p.entries.join(", ")
+            );
+            println!(
+                "wrote {} (the same parameters for the generic FMU)",
+                ssv.display()
             );
             Ok(())
         }

@@ -90,8 +90,34 @@ pub fn allow_negative_values(cmd: clap::Command) -> clap::Command {
 /// Parses the command line (see [`allow_negative_values`]); exits with clap's message on
 /// a usage error.
 pub fn parse() -> Cli {
-    let matches = allow_negative_values(Cli::command()).get_matches();
+    let args = help_request(&Cli::command(), std::env::args_os().collect());
+    let matches = allow_negative_values(Cli::command()).get_matches_from(args);
     Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
+/// The command line to parse: `args` itself, or, when it asks for help (`--help` or `-h`
+/// anywhere after the subcommands), the subcommands followed by `--help` alone. A
+/// real-valued option takes a value starting with `-` ([`allow_negative_values`]), so
+/// `torso simulate --rtol --help` would otherwise read `--help` as the tolerance and report
+/// it as not a number; a request for help is answered with help wherever it stands.
+pub fn help_request(cmd: &clap::Command, args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let asks_help = args.iter().skip(1).any(|a| a == "--help" || a == "-h");
+    if !asks_help {
+        return args;
+    }
+    let mut kept: Vec<std::ffi::OsString> = args.iter().take(1).cloned().collect();
+    let mut current = cmd;
+    for a in args.iter().skip(1) {
+        match a.to_str().and_then(|s| current.find_subcommand(s)) {
+            Some(sub) => {
+                kept.push(a.clone());
+                current = sub;
+            }
+            None => break,
+        }
+    }
+    kept.push("--help".into());
+    kept
 }
 
 /// Entry point: parses arguments, runs the subcommand, returns the process exit code.

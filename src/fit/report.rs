@@ -45,6 +45,27 @@ pub fn subject_fmi(subject: &Subject) -> Value {
     })
 }
 
+/// The model a fit ran, other than its subject and drive, under the FMI parameter names: the
+/// level of detail, the marker grid, the lung ratio, the skin reference (`slp.reference`: the
+/// rest-pose grid of a `--skin-fit`, empty otherwise) and the subject mesh folder
+/// (`subject.mesh_dir`, empty for the generated geometry). With `subject` and the drive this
+/// is what `torso fmu build --subject` bakes into a personalised FMU.
+pub fn model_fmi(config: &crate::Config) -> Value {
+    let path = |p: &Option<PathBuf>| {
+        p.as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default()
+    };
+    json!({
+        "scene.level_of_detail": config.scene.level_of_detail,
+        "grid.rows": config.scene.grid_rows,
+        "grid.cols": config.scene.grid_cols,
+        "lung.ratio": config.lung_ratio,
+        "slp.reference": path(&config.scene.slp_reference),
+        "subject.mesh_dir": path(&config.subject_mesh_dir),
+    })
+}
+
 /// The provenance key of the level of detail a recording was made at.
 pub const LOD_KEY: &str = "scene.level_of_detail";
 
@@ -97,13 +118,14 @@ pub struct FitOutputs {
     pub png: PathBuf,
 }
 
-/// The result JSON of a fit. `breaths` (the per-breath report of the fitted model) fills
-/// the `breaths` array and `breaths_summary`; without it the array is empty and the
-/// summary null. The recording's own breath timing is `recording_breaths`.
+/// The result JSON of a fit of the model configured by `model` (its drive aside).
+/// `breaths` (the per-breath report of the fitted model) fills the `breaths` array and
+/// `breaths_summary`; without it the array is empty and the summary null. The recording's
+/// own breath timing is `recording_breaths`.
 pub fn fit_json(
     fit: &Fit,
     recording: &Path,
-    subject: &Subject,
+    model: &crate::Config,
     volume_csv: &Path,
     breath: Option<&BreathSummary>,
     breaths: Option<&BreathReport>,
@@ -164,7 +186,8 @@ pub fn fit_json(
             "rotation_deg": rot,
             "translation_m": [fit.to_model.translation.x, fit.to_model.translation.y, fit.to_model.translation.z],
         },
-        "subject": subject_fmi(subject),
+        "subject": subject_fmi(&model.subject),
+        "model": model_fmi(model),
     });
     if let Value::Object(e) = extra {
         m.extend(e);
@@ -179,16 +202,17 @@ fn create_parent(path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes result JSON at `json_path`, the lung volume CSV and the figure beside it
-/// (`<stem>_lung_volume.csv`, `<stem>_report.png` / `.svg`).
+/// Writes result JSON at `json_path` of a fit of the model configured by `model`, the lung
+/// volume CSV and the figure beside it (`<stem>_lung_volume.csv`, `<stem>_report.png` /
+/// `.svg`).
 pub fn write_fit(
     fit: &Fit,
     json_path: &Path,
     recording: &Path,
-    subject: &Subject,
+    model: &crate::Config,
     breath: Option<&BreathSummary>,
 ) -> Result<FitOutputs> {
-    write_fit_report(fit, json_path, recording, subject, breath, None)
+    write_fit_report(fit, json_path, recording, model, breath, None)
 }
 
 /// [`write_fit`] with the per-breath report of the fitted model: its breaths in the JSON,
@@ -198,7 +222,7 @@ pub fn write_fit_report(
     fit: &Fit,
     json_path: &Path,
     recording: &Path,
-    subject: &Subject,
+    model: &crate::Config,
     breath: Option<&BreathSummary>,
     breaths: Option<&BreathReport>,
 ) -> Result<FitOutputs> {
@@ -244,7 +268,7 @@ pub fn write_fit_report(
     }
     w.flush().map_err(io(&volume_csv))?;
 
-    let value = fit_json(fit, recording, subject, &volume_csv, breath, breaths);
+    let value = fit_json(fit, recording, model, &volume_csv, breath, breaths);
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Error::State(format!("result JSON: {e}")))?;
     std::fs::write(json_path, text + "\n").map_err(io(json_path))?;

@@ -283,14 +283,6 @@ pub unsafe extern "C" fn fmi2Instantiate(
             ));
         }
         let guid = string(fmuGUID);
-        if guid.as_deref() != Some(table().guid()) {
-            return fail(format!(
-                "GUID {} does not match this FMU's {}: the model description and the binary differ",
-                guid.as_deref().unwrap_or("(null)"),
-                table().guid()
-            ));
-        }
-        let sink = make_sink(&*functions, &name);
         let mut notes = Vec::new();
         let resources = match string(fmuResourceLocation) {
             None => None,
@@ -302,7 +294,29 @@ pub unsafe extern "C" fn fmi2Instantiate(
                 }
             },
         };
-        let mut inst = Instance::new(&name, resources, sink, loggingOn != fmi2False);
+        // A personalised FMU carries its parameter set in its resources; its variables, and
+        // so its GUID, follow from it.
+        let fmu_table = match super::personal::table_in(resources.as_deref()) {
+            Ok(t) => t,
+            Err(e) => return fail(e.to_string()),
+        };
+        if guid.as_deref() != Some(fmu_table.guid()) {
+            return fail(format!(
+                "GUID {} does not match this FMU's {}: the model description and the binary differ",
+                guid.as_deref().unwrap_or("(null)"),
+                fmu_table.guid()
+            ));
+        }
+        let sink = make_sink(&*functions, &name);
+        let logging = loggingOn != fmi2False;
+        let mut inst = if std::ptr::eq(fmu_table, table()) {
+            Instance::new(&name, resources, sink, logging)
+        } else {
+            match Instance::with_table(&name, resources, sink, logging, fmu_table) {
+                Ok(inst) => inst,
+                Err(e) => return fail(e.to_string()),
+            }
+        };
         inst.trace(|| {
             format!(
                 "fmi2Instantiate(instanceName={name:?}, fmuType={fmuType}, fmuGUID={:?}, fmuResourceLocation={:?}, visible={visible}, loggingOn={loggingOn})",
@@ -851,7 +865,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
                 let Some(bytes) = slice(serializedState as *const u8, size) else {
                     return null_argument(inst, "fmi2DeSerializeFMUstate", "serializedState");
                 };
-                match FmuState::from_bytes(bytes) {
+                match FmuState::from_bytes_for(bytes, inst.table()) {
                     Ok(state) => store_state(inst, "fmi2DeSerializeFMUstate", FMUstate, state),
                     Err(e) => inst.error(&format!("fmi2DeSerializeFMUstate: {e}")),
                 }

@@ -18,8 +18,8 @@ use super::types::{
     fmi2DoStepStatus, fmi2LastSuccessfulTime, fmi2PendingStatus, fmi2Status, fmi2Terminated,
 };
 use super::variables::{
-    Causality, Input, LOG_CATEGORIES, Parameter, Role, ScalarType, Value, Variable, read_output,
-    table,
+    Causality, Input, LOG_CATEGORIES, Parameter, Role, ScalarType, Table, Value, Variable,
+    read_output, start_config, table,
 };
 use crate::model::{Checkpoint, Config, Snapshot, Torso};
 use crate::{Error, Result};
@@ -169,6 +169,12 @@ use crate::model::bounds::{CHECKED_VOLUMES, physiology_violation};
 /// An FMU instance.
 pub struct Instance {
     name: String,
+    /// The variables of the FMU this instance belongs to: the generic table or a personalised
+    /// one ([`Table::personalised`]).
+    table: &'static Table,
+    /// The configuration the start values describe (string parameters resolved), which the
+    /// instance starts from and `fmi2Reset` returns to.
+    start: Config,
     resources: Option<PathBuf>,
     sink: Option<LogSink>,
     categories: u32,
@@ -245,8 +251,15 @@ impl FmuState {
         out
     }
 
-    /// Parses bytes written by [`FmuState::to_bytes`]; anything else is an error, never a panic.
+    /// Parses bytes written by [`FmuState::to_bytes`] by the generic FMU; anything else is an
+    /// error, never a panic.
     pub fn from_bytes(bytes: &[u8]) -> Result<FmuState> {
+        FmuState::from_bytes_for(bytes, table())
+    }
+
+    /// Parses bytes written by [`FmuState::to_bytes`] by an FMU whose variables are `table`
+    /// (the GUID must be that table's).
+    pub fn from_bytes_for(bytes: &[u8], table: &Table) -> Result<FmuState> {
         let bad =
             |m: String| Error::State(format!("not a serialized BreathingTorso FMU state: {m}"));
         if bytes.len() < 20 || &bytes[..8] != STATE_MAGIC {
@@ -267,11 +280,11 @@ impl FmuState {
             return Err(bad(format!("truncated: {} of {len} bytes", body.len())));
         }
         let saved: Saved = serde_json::from_slice(&body[..len]).map_err(|e| bad(e.to_string()))?;
-        if saved.guid != table().guid() {
+        if saved.guid != table.guid() {
             return Err(bad(format!(
                 "saved by an FMU with GUID {}, this one is {}",
                 saved.guid,
-                table().guid()
+                table.guid()
             )));
         }
         saved.config.validate()?;
@@ -280,7 +293,7 @@ impl FmuState {
                 Input::Activation(g) => super::variables::VR_ACTIVATION + g.index() as u32,
                 Input::AirwayOpening => super::variables::VR_AIRWAY_OPENING,
             };
-            if let Some(var) = table().by_vr(vr) {
+            if let Some(var) = table.by_vr(vr) {
                 var.check(v)?;
             }
         }
@@ -304,14 +317,14 @@ fn same_fixed_config(a: &Config, b: &Config) -> bool {
 
 /// The fixed parameters in which `ours` and `theirs` differ, as `name: ours here, theirs in
 /// the state`; settings without an FMI variable (constants of the dynamics) are named as such.
-fn fixed_differences(ours: &Config, theirs: &Config) -> String {
+fn fixed_differences(table: &Table, ours: &Config, theirs: &Config) -> String {
     let show = |v: Value| match v {
         Value::Real(x) => format!("{x}"),
         Value::Integer(i) => format!("{i}"),
         Value::Boolean(b) => format!("{b}"),
         Value::String(s) => format!("{s:?}"),
     };
-    let mut out: Vec<String> = table()
+    let mut out: Vec<String> = table
         .variables()
         .iter()
         .filter_map(|var| match var.role {
@@ -355,8 +368,43 @@ impl Instance {
         sink: Option<LogSink>,
         logging_on: bool,
     ) -> Instance {
+        Instance::fresh(name, resources, sink, logging_on, table(), start_config())
+    }
+
+    /// A fresh instance of the FMU whose variables are `table` (a personalised FMU's): its
+    /// configuration starts from the table's start values, a relative `slp.reference` or
+    /// `subject.mesh_dir` being looked up in `resources` first. An error names the parameter
+    /// whose start value cannot be used (e.g. a file missing from the FMU's resources/).
+    pub fn with_table(
+        name: &str,
+        resources: Option<PathBuf>,
+        sink: Option<LogSink>,
+        logging_on: bool,
+        table: &'static Table,
+    ) -> Result<Instance> {
+        let mut inst = Instance::fresh(name, resources, sink, logging_on, table, start_config());
+        let start = table.start_config_with(&mut |p, value| inst.resolve_path(p, value))?;
+        inst.config = start.clone();
+        inst.start = start;
+        Ok(inst)
+    }
+
+    /// The variables of the FMU this instance belongs to.
+    pub fn table(&self) -> &'static Table {
+        self.table
+    }
+
+    fn fresh(
+        name: &str,
+        resources: Option<PathBuf>,
+        sink: Option<LogSink>,
+        logging_on: bool,
+        table: &'static Table,
+        start: Config,
+    ) -> Instance {
         Instance {
             name: name.to_string(),
+            table,
             resources,
             sink,
             categories: if logging_on {
@@ -365,7 +413,8 @@ impl Instance {
                 STATUS_ONLY
             },
             phase: Phase::Instantiated,
-            config: super::variables::start_config(),
+            config: start.clone(),
+            start,
             rtol_explicit: false,
             stiffness_logged: false,
             step_start: Checkpoint::default(),
@@ -496,7 +545,7 @@ impl Instance {
         }
         let mut status = fmi2OK;
         if let Some(tol) = tolerance {
-            let rtol = table().by_name("solver.rtol").map(|v| v.check(tol));
+            let rtol = self.table.by_name("solver.rtol").map(|v| v.check(tol));
             match rtol {
                 Some(Ok(())) if !self.rtol_explicit => {
                     self.config.solver.rtol = tol;
@@ -558,7 +607,14 @@ impl Instance {
             (Some(torso), Some(fresh)) => Some((torso, fresh)),
             _ => self.spare.take(),
         };
-        let instance = Instance::new(&self.name, self.resources.take(), self.sink.take(), false);
+        let instance = Instance::fresh(
+            &self.name,
+            self.resources.take(),
+            self.sink.take(),
+            false,
+            self.table,
+            self.start.clone(),
+        );
         let categories = self.categories;
         *self = Instance {
             categories,
@@ -570,16 +626,26 @@ impl Instance {
         fmi2OK
     }
 
-    fn resolve_slp(&self, value: &str) -> Result<String> {
+    /// The path a String parameter's value stands for: a relative `slp.reference` (a file) or
+    /// `subject.mesh_dir` (a folder) is looked up in the FMU's resources/ first, then as
+    /// given. Other parameters and the empty string are returned unchanged. An error names
+    /// the parameter and where it was looked for.
+    fn resolve_path(&self, p: Parameter, value: &str) -> Result<String> {
+        let (name, wants_dir, what) = match p {
+            Parameter::SlpReference => ("slp.reference", false, "an existing SLP recording file"),
+            Parameter::MeshDir => ("subject.mesh_dir", true, "an existing subject mesh folder"),
+            _ => return Ok(value.to_string()),
+        };
         if value.is_empty() {
             return Ok(String::new());
         }
+        let exists = |p: &Path| if wants_dir { p.is_dir() } else { p.is_file() };
         let path = Path::new(value);
         let candidate = match (&self.resources, path.is_relative()) {
-            (Some(r), true) if r.join(path).is_file() => r.join(path),
+            (Some(r), true) if exists(&r.join(path)) => r.join(path),
             _ => path.to_path_buf(),
         };
-        if !candidate.is_file() {
+        if !exists(&candidate) {
             let where_ = match (&self.resources, path.is_relative()) {
                 (Some(r), _) => format!(" (also looked in {})", r.display()),
                 (None, true) => {
@@ -587,11 +653,7 @@ impl Instance {
                 }
                 (None, false) => String::new(),
             };
-            return Err(Error::invalid(
-                "slp.reference",
-                value,
-                format!("an existing SLP recording file{where_}"),
-            ));
+            return Err(Error::invalid(name, value, format!("{what}{where_}")));
         }
         Ok(candidate.display().to_string())
     }
@@ -633,7 +695,7 @@ impl Instance {
         vr: u32,
         ty: ScalarType,
     ) -> std::result::Result<&'static Variable, fmi2Status> {
-        match table().by_vr(vr) {
+        match self.table.by_vr(vr) {
             Some(v) if v.ty == ty => Ok(v),
             Some(v) => Err(self.error(&format!(
                 "{function}: value reference {vr} is `{}`, a {}, not a {}",
@@ -758,10 +820,12 @@ impl Instance {
                     )));
                 }
                 let value = match (p, value) {
-                    (Parameter::SlpReference, Value::String(s)) => match self.resolve_slp(&s) {
-                        Ok(path) => Value::String(path),
-                        Err(e) => return Err(self.error(&format!("{function}: {e}"))),
-                    },
+                    (Parameter::SlpReference | Parameter::MeshDir, Value::String(s)) => {
+                        match self.resolve_path(p, &s) {
+                            Ok(path) => Value::String(path),
+                            Err(e) => return Err(self.error(&format!("{function}: {e}"))),
+                        }
+                    }
                     (_, v) => v,
                 };
                 Ok(Change::Parameter(p, value))
@@ -1050,7 +1114,7 @@ impl Instance {
     pub fn get_fmu_state(&mut self) -> FmuState {
         FmuState {
             saved: Saved {
-                guid: table().guid().to_string(),
+                guid: self.table.guid().to_string(),
                 phase: self.phase,
                 config: self.config.clone(),
                 rtol_explicit: self.rtol_explicit,
@@ -1076,7 +1140,7 @@ impl Instance {
         let s = &state.saved;
         let initialised = !matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
         if initialised && !same_fixed_config(&self.config, &s.config) {
-            let differences = fixed_differences(&self.config, &s.config);
+            let differences = fixed_differences(self.table, &self.config, &s.config);
             return self.error(&format!(
                 "fmi2SetFMUstate: the state was saved by an instance with other fixed parameters \
                  ({differences}); fixed parameters cannot change after \

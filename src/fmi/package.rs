@@ -5,8 +5,8 @@
 //! the same inputs give the same archive. Each library is checked to be a binary of its
 //! platform's format (ELF, PE or Mach-O) before it is packaged.
 
-use super::variables::MODEL_IDENTIFIER;
-use super::xml::{documentation_html, model_description};
+use super::variables::{MODEL_IDENTIFIER, Table, table};
+use super::xml::{documentation_html_for, model_description_for};
 use crate::{Error, Result};
 use std::fs;
 use std::io::Write;
@@ -249,6 +249,30 @@ pub fn build_fmu_for(
     resources: Option<&Path>,
     out: &Path,
 ) -> Result<Packaged> {
+    build_fmu_with(binaries, resources, out, table(), &[])
+}
+
+/// Writes the FMU whose variables are `table` (the generic one or a personalised one) to
+/// `out`, as [`build_fmu_for`] does, with the `extra` entries (full entry name, content):
+/// those under `documentation/` follow `documentation/index.html`, those under
+/// `resources/` follow the folder `resources`' files. Any other name is refused.
+pub fn build_fmu_with(
+    binaries: &[Binary],
+    resources: Option<&Path>,
+    out: &Path,
+    table: &Table,
+    extra: &[(String, Vec<u8>)],
+) -> Result<Packaged> {
+    if let Some((name, _)) = extra
+        .iter()
+        .find(|(n, _)| !(n.starts_with("documentation/") || n.starts_with("resources/")))
+    {
+        return Err(Error::invalid(
+            "FMU entry",
+            name,
+            "a file under documentation/ or resources/",
+        ));
+    }
     if binaries.is_empty() {
         return Err(Error::State("an FMU needs at least one binary".into()));
     }
@@ -314,7 +338,7 @@ pub fn build_fmu_for(
         &mut zip,
         &mut entries,
         "modelDescription.xml".into(),
-        model_description().as_bytes(),
+        model_description_for(table).as_bytes(),
         0o644,
     )?;
     for (name, lib) in &libraries {
@@ -324,9 +348,15 @@ pub fn build_fmu_for(
         &mut zip,
         &mut entries,
         "documentation/index.html".into(),
-        documentation_html().as_bytes(),
+        documentation_html_for(table).as_bytes(),
         0o644,
     )?;
+    for (name, data) in extra
+        .iter()
+        .filter(|(n, _)| n.starts_with("documentation/"))
+    {
+        add(&mut zip, &mut entries, name.clone(), data, 0o644)?;
+    }
     zip.add_directory("resources/", options).map_err(zip_err)?;
     entries.push("resources/".into());
     if let Some(dir) = resources {
@@ -343,6 +373,14 @@ pub fn build_fmu_for(
                 0o644,
             )?;
         }
+    }
+    for (name, data) in extra.iter().filter(|(n, _)| n.starts_with("resources/")) {
+        if entries.contains(name) {
+            return Err(Error::State(format!(
+                "{name} is given twice (the --resources folder has a file of that name)"
+            )));
+        }
+        add(&mut zip, &mut entries, name.clone(), data, 0o644)?;
     }
     zip.finish().map_err(zip_err)?;
     let bytes = fs::metadata(out).map_err(|e| Error::io(out, e))?.len();

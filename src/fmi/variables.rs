@@ -22,7 +22,7 @@ use crate::{Error, Result};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::PathBuf;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 /// The FMU's model identifier (name of the shared library and of the `.fmu`).
 pub const MODEL_IDENTIFIER: &str = "BreathingTorso";
@@ -559,6 +559,7 @@ pub struct Table {
     by_vr: HashMap<u32, usize>,
     by_name: HashMap<String, usize>,
     guid: String,
+    personalisation: Option<Personalisation>,
 }
 
 impl Table {
@@ -588,11 +589,14 @@ impl Table {
     }
 }
 
-/// The table (built once; immutable and shared by every instance and thread).
-pub fn table() -> &'static Table {
-    static TABLE: OnceLock<Table> = OnceLock::new();
-    TABLE.get_or_init(|| {
-        let variables = build();
+impl Table {
+    /// Indexes `variables`; the GUID hashes their interface and `extra` (empty for the
+    /// generic table).
+    fn indexed(
+        variables: Vec<Variable>,
+        extra: &str,
+        personalisation: Option<Personalisation>,
+    ) -> Table {
         let by_vr = variables
             .iter()
             .enumerate()
@@ -603,14 +607,153 @@ pub fn table() -> &'static Table {
             .enumerate()
             .map(|(i, v)| (v.name.clone(), i))
             .collect();
-        let guid = format_guid(fnv1a_128(interface_text(&variables).as_bytes()));
+        let text = interface_text(&variables) + extra;
+        let guid = format_guid(fnv1a_128(text.as_bytes()));
         Table {
             variables,
             by_vr,
             by_name,
             guid,
+            personalisation,
         }
-    })
+    }
+
+    /// The table of a personalised FMU: the generic table with `p`'s start values (each
+    /// checked against its variable's type and range), `grid.rows` and `grid.cols` fixed at
+    /// their start values (min = max), and only the markers of that grid as outputs. Its GUID
+    /// differs from the generic one. An error names the variable that cannot take its value.
+    ///
+    /// The marker outputs follow the subject's marker set, which is today always a grid: its
+    /// `rows x cols` markers, numbered as in the generic FMU. A named marker set (labels
+    /// instead of grid positions) would be a second kind of set here, giving the outputs
+    /// `marker[<label>].x|y|z` in the set's order; the model has no such set yet, so a
+    /// personalisation names only the grid.
+    pub fn personalised(p: &Personalisation) -> Result<Table> {
+        let mut variables = build();
+        for (name, value) in &p.starts {
+            let var = variables
+                .iter_mut()
+                .find(|v| &v.name == name)
+                .ok_or_else(|| Error::invalid("parameter name", name, "a parameter of the FMU"))?;
+            if !matches!(var.role, Role::Parameter(_)) {
+                return Err(Error::invalid(
+                    name,
+                    format!("{value:?}"),
+                    "a value for a parameter only (this variable is not one)",
+                ));
+            }
+            let numeric = match value {
+                Value::Real(x) => Some(*x),
+                Value::Integer(i) => Some(f64::from(*i)),
+                _ => None,
+            };
+            if let Some(x) = numeric {
+                var.check(x)?;
+            }
+            var.start = match (var.ty, value) {
+                (ScalarType::Real, Value::Real(x)) => Start::Real(*x),
+                (ScalarType::Integer, Value::Integer(i)) => Start::Integer(*i),
+                (ScalarType::Boolean, Value::Boolean(b)) => Start::Boolean(*b),
+                (ScalarType::String, Value::String(s)) => Start::String(s.clone()),
+                (ty, v) => {
+                    return Err(Error::invalid(
+                        name,
+                        format!("{v:?}"),
+                        format!("a {ty:?} value"),
+                    ));
+                }
+            };
+        }
+        let grid = |name: &str, variables: &mut [Variable]| -> usize {
+            let v = variables.iter_mut().find(|v| v.name == name);
+            match v {
+                Some(v) => {
+                    let n = match v.start {
+                        Start::Integer(n) => n.max(0),
+                        _ => 0,
+                    };
+                    v.min = Some(f64::from(n));
+                    v.max = Some(f64::from(n));
+                    n as usize
+                }
+                None => 0,
+            }
+        };
+        let rows = grid("grid.rows", &mut variables);
+        let cols = grid("grid.cols", &mut variables);
+        let markers = rows * cols;
+        variables.retain(|v| match v.role {
+            Role::Output(Quantity::Marker { index, .. }) => usize::from(index) < markers,
+            _ => true,
+        });
+        let extra = format!("personalised|{rows}x{cols}\n");
+        Ok(Table::indexed(variables, &extra, Some(p.clone())))
+    }
+
+    /// The personalisation this table was made with (`None`: the generic table).
+    pub fn personalisation(&self) -> Option<&Personalisation> {
+        self.personalisation.as_ref()
+    }
+
+    /// The configuration the table's start values describe: [`start_config`] with the
+    /// personalisation's values set (`resolve` turns a String parameter's value into the
+    /// path the instance uses, e.g. a path relative to the FMU's `resources/`). An error
+    /// names the parameter.
+    pub fn start_config_with(
+        &self,
+        resolve: &mut dyn FnMut(Parameter, &str) -> Result<String>,
+    ) -> Result<Config> {
+        let mut config = start_config();
+        if let Some(p) = &self.personalisation {
+            for (name, value) in &p.starts {
+                let Some(Variable {
+                    role: Role::Parameter(par),
+                    ..
+                }) = self.by_name(name)
+                else {
+                    continue;
+                };
+                let value = match value {
+                    Value::String(s) if !s.is_empty() => Value::String(resolve(*par, s)?),
+                    v => v.clone(),
+                };
+                par.set(&mut config, value)
+                    .map_err(|e| Error::State(format!("`{name}`: {e}")))?;
+            }
+        }
+        Ok(config)
+    }
+}
+
+/// A subject baked into an FMU ([`Table::personalised`]): parameters with the start values
+/// that replace the generic ones, in the order given.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Personalisation {
+    /// (FMI parameter name, start value).
+    pub starts: Vec<(String, Value)>,
+}
+
+/// The table (built once; immutable and shared by every instance and thread).
+pub fn table() -> &'static Table {
+    static TABLE: OnceLock<Table> = OnceLock::new();
+    TABLE.get_or_init(|| Table::indexed(build(), "", None))
+}
+
+/// The table of a personalisation, built once per distinct personalisation and kept for
+/// the life of the process (an FMU's instances share it, as they share [`table`]).
+pub fn personalised_table(p: &Personalisation) -> Result<&'static Table> {
+    static TABLES: OnceLock<Mutex<Vec<&'static Table>>> = OnceLock::new();
+    let tables = TABLES.get_or_init(|| Mutex::new(Vec::new()));
+    let mut tables = tables.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(t) = tables
+        .iter()
+        .find(|t| t.personalisation.as_ref() == Some(p))
+    {
+        return Ok(t);
+    }
+    let t: &'static Table = Box::leak(Box::new(Table::personalised(p)?));
+    tables.push(t);
+    Ok(t)
 }
 
 /// Value reference of `marker[index + 1].<axis>` (index 0-based, axis 0 = x, 1 = y, 2 = z).

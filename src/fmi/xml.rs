@@ -227,9 +227,14 @@ fn write_structure(w: &mut Writer<Vec<u8>>, t: &Table) -> io::Result<()> {
     Ok(())
 }
 
-/// The complete `modelDescription.xml` text.
+/// The complete `modelDescription.xml` text of the generic FMU.
 pub fn model_description() -> String {
-    let t = table();
+    model_description_for(table())
+}
+
+/// The complete `modelDescription.xml` text of the FMU whose variables are `t` (the generic
+/// table or a personalised one, [`super::variables::Table::personalised`]).
+pub fn model_description_for(t: &Table) -> String {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     let version = env!("CARGO_PKG_VERSION");
     let tool = format!("breathing-torso {version}");
@@ -297,10 +302,15 @@ fn escape_html(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// `documentation/index.html`: the variable table, for people.
+/// `documentation/index.html` of the generic FMU: the variable table, for people.
 pub fn documentation_html() -> String {
+    documentation_html_for(table())
+}
+
+/// `documentation/index.html` of the FMU whose variables are `t`; a personalised FMU's page
+/// says so and points at the fit result beside it.
+pub fn documentation_html_for(t: &Table) -> String {
     use std::fmt::Write;
-    let t = table();
     let mut s = String::new();
     let _ = write!(
         s,
@@ -319,6 +329,14 @@ pub fn documentation_html() -> String {
         env!("CARGO_PKG_VERSION"),
         t.guid()
     );
+    if t.personalisation().is_some() {
+        s.push_str(
+            "<p>This FMU is personalised: the start values of the subject's and the fitted drive's \
+             parameters are those of the fit in <a href=\"fit.json\">fit.json</a>, and the files the \
+             subject needs are in <code>resources/subject/</code>. Only the markers of the subject's \
+             grid are outputs.</p>\n",
+        );
+    }
     for v in t.variables() {
         let start = match &v.start {
             Start::None => String::new(),

@@ -1,0 +1,134 @@
+"""Personalised FMUs through fmpy: a short skin fit of the bundled recording baked into an FMU
+with `torso fmu build --subject`. fmpy validates it; its start values are the fit's; it
+simulated with no parameter set gives the same lung volume and markers as the generic FMU
+(built from the same library) with the `.ssv` written beside it applied as start values
+(within 1e-12 relative); every `.ssv` parameter is a parameter of both FMUs with the same
+type; packaged with the distributable binaries it stays at most 4 MB.
+"""
+
+import json
+import subprocess
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+ROOT = Path(__file__).resolve().parents[2]
+TORSO = ROOT / "target" / "release" / "torso"
+SHIPPED = ROOT / "fmu" / "BreathingTorso.fmu"
+RECORDING = ROOT / "data" / "recordings" / "demo_quiet.csv"
+SSV = "{http://ssp-standard.org/SSP1/SystemStructureParameterValues}"
+MAX_BYTES = 4_000_000
+
+
+def torso(*args):
+    assert TORSO.is_file(), f"{TORSO} missing: cargo build --release"
+    out = subprocess.run([str(TORSO), *map(str, args)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr + out.stdout
+    return out.stdout
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    d = tmp_path_factory.mktemp("personal")
+    fit = d / "fit" / "result.json"
+    fit.parent.mkdir()
+    torso("fit", "--slp", RECORDING, "--lod", "0", "--max-evals", "50", "--skin-fit",
+          "--threads", "1", "--out", fit)
+    personal = d / "subject.fmu"
+    torso("fmu", "build", "--subject", fit, "--out", personal)
+    generic = d / "generic.fmu"
+    torso("fmu", "build", "--out", generic)
+    return {"dir": d, "fit": fit, "personal": personal, "generic": generic,
+            "ssv": personal.with_suffix(".ssv")}
+
+
+def ssv_values(path):
+    """name -> (type, Python value) of an SSP 1.0 parameter set."""
+    root = ET.parse(path).getroot()
+    assert root.tag == SSV + "ParameterSet" and root.get("version") == "1.0"
+    out = {}
+    for p in root.iter(SSV + "Parameter"):
+        (v,) = list(p)
+        ty = v.tag.removeprefix(SSV)
+        text = v.get("value")
+        out[p.get("name")] = (ty, {"Real": float, "Integer": int, "String": str,
+                                   "Boolean": lambda s: s in ("true", "1")}[ty](text))
+    return out
+
+
+def test_both_fmus_validate(built):
+    assert validate_fmu(str(built["personal"])) == []
+    assert validate_fmu(str(built["generic"])) == []
+
+
+def test_start_values_are_the_fits(built):
+    fit = json.loads(built["fit"].read_text())
+    md = read_model_description(str(built["personal"]))
+    generic = read_model_description(str(built["generic"]))
+    assert md.guid != generic.guid
+    var = {v.name: v for v in md.modelVariables}
+    drive = [k for k in fit if k.startswith("drive.")]
+    assert len(drive) == 8
+    for k in drive:
+        assert float(var[k].start) == fit[k], k
+    for k, v in fit["subject"].items():
+        if isinstance(v, str):
+            v = {"Male": 0, "Female": 1, "Standing": 0, "Sitting": 1, "Supine": 2}[v]
+        assert float(var[k].start) == v, k
+    rows, cols = fit["model"]["grid.rows"], fit["model"]["grid.cols"]
+    markers = [n for n in var if n.startswith("marker[")]
+    assert len(markers) == 3 * rows * cols
+    assert var["slp.reference"].start == "subject/result_reference.csv"
+    with zipfile.ZipFile(built["personal"]) as z:
+        names = z.namelist()
+    assert "resources/subject/result_reference.csv" in names
+    assert "documentation/fit.json" in names
+
+
+def test_ssv_parameters_exist_in_both_fmus_with_their_types(built):
+    values = ssv_values(built["ssv"])
+    assert len(values) >= 17
+    for path in (built["personal"], built["generic"]):
+        var = {v.name: v for v in read_model_description(str(path)).modelVariables}
+        for name, (ty, _) in values.items():
+            assert name in var, f"{name} not in {path.name}"
+            assert var[name].type == ty, name
+            assert var[name].causality == "parameter", name
+
+
+def test_personalised_fmu_equals_generic_with_the_ssv(built):
+    outputs = ["volume.lung", "marker[1].x", "marker[60].y"]
+    kw = dict(stop_time=2.0, output_interval=0.05, output=outputs)
+    personal = simulate_fmu(str(built["personal"]), **kw)
+    start = {name: v for name, (_, v) in ssv_values(built["ssv"]).items()}
+    generic = simulate_fmu(str(built["generic"]), start_values=start, **kw)
+    plain = simulate_fmu(str(built["generic"]), **kw)
+    for name in outputs:
+        a, g = personal[name], generic[name]
+        assert np.all(np.abs(a - g) <= 1e-12 * np.abs(g)), (name, np.max(np.abs(a - g)))
+    assert np.ptp(generic["volume.lung"]) > 0.05
+    # Without the parameter set the generic FMU is another subject.
+    assert np.max(np.abs(plain["marker[1].x"] - generic["marker[1].x"])) > 1e-6
+
+
+def test_packaged_with_the_distributable_binaries_it_is_at_most_4_mb(built, tmp_path):
+    assert SHIPPED.is_file(), f"{SHIPPED} missing: build it with `bash scripts/deploy.sh` (scripts/test.sh does)"
+    args = []
+    with zipfile.ZipFile(SHIPPED) as z:
+        for n in z.namelist():
+            if n.startswith("binaries/") and not n.endswith("/"):
+                platform = n.split("/")[1]
+                path = tmp_path / platform / Path(n).name
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_bytes(z.read(n))
+                args += ["--binary", f"{platform}={path}"]
+    assert args
+    out = tmp_path / "subject.fmu"
+    torso("fmu", "build", "--subject", built["fit"], "--out", out, *args)
+    assert out.stat().st_size <= MAX_BYTES, f"{out.stat().st_size} bytes"
+    assert validate_fmu(str(out)) == []

@@ -1,0 +1,281 @@
+//! SSP parameter sets (`.ssv`, SystemStructureParameterValues of SSP 1.0, Modelica
+//! Association 2019, section 7): writing the parameters of a personalised FMU so that an SSP
+//! tool can apply them to the generic FMU, and reading them back (a personalised FMU reads its
+//! own set from `resources/subject/parameters.ssv` when it is instantiated).
+//!
+//! The file is an `ssv:ParameterSet` (attributes `version="1.0"` and `name`) holding
+//! `ssv:Parameters`, whose every `ssv:Parameter name=".."` holds one typed value:
+//! `ssv:Real`, `ssv:Integer`, `ssv:Boolean` or `ssv:String`, each with a `value` attribute.
+//! Names are the FMU's variable names.
+
+use super::variables::{Table, Value};
+use crate::{Error, Result};
+use quick_xml::Reader;
+use quick_xml::Writer;
+use quick_xml::events::{BytesDecl, BytesStart, Event};
+
+/// XML namespace of SSP 1.0 parameter values.
+pub const SSV_NAMESPACE: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
+
+/// The text of a `.ssv` parameter set called `name` holding `parameters` in the order given.
+/// Reals are written in their shortest round-trip form, so reading the file gives the same
+/// `f64`s.
+pub fn write(name: &str, parameters: &[(String, Value)]) -> String {
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    let result: std::io::Result<()> = (|| {
+        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+        w.create_element("ssv:ParameterSet")
+            .with_attribute(("xmlns:ssv", SSV_NAMESPACE))
+            .with_attribute(("version", "1.0"))
+            .with_attribute(("name", name))
+            .write_inner_content(|w| {
+                w.create_element("ssv:Parameters")
+                    .write_inner_content(|w| {
+                        for (pname, value) in parameters {
+                            let (tag, text) = match value {
+                                Value::Real(x) => ("ssv:Real", super::xml::num(*x)),
+                                Value::Integer(i) => ("ssv:Integer", i.to_string()),
+                                Value::Boolean(b) => ("ssv:Boolean", b.to_string()),
+                                Value::String(s) => ("ssv:String", s.clone()),
+                            };
+                            w.create_element("ssv:Parameter")
+                                .with_attribute(("name", pname.as_str()))
+                                .write_inner_content(|w| {
+                                    w.create_element(tag)
+                                        .with_attribute(("value", text.as_str()))
+                                        .write_empty()?;
+                                    Ok(())
+                                })?;
+                        }
+                        Ok(())
+                    })?;
+                Ok(())
+            })?;
+        Ok(())
+    })();
+    // Writing into a Vec cannot fail.
+    debug_assert!(result.is_ok());
+    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
+/// Reads the parameters of a `.ssv` text (`path` names it in errors, with the line). Every
+/// parameter must hold exactly one of `ssv:Real`, `ssv:Integer`, `ssv:Boolean`, `ssv:String`.
+pub fn parse(text: &str, path: &str) -> Result<Vec<(String, Value)>> {
+    let mut reader = Reader::from_str(text);
+    reader.config_mut().trim_text(true);
+    let err = |at: u64, message: String| {
+        let at = usize::try_from(at).unwrap_or(usize::MAX).min(text.len());
+        let line = text.as_bytes()[..at]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        Error::Parse {
+            path: path.to_string(),
+            line,
+            column: 0,
+            message,
+        }
+    };
+    let mut out = Vec::new();
+    let mut root_seen = false;
+    let mut current: Option<(String, Option<Value>)> = None;
+    loop {
+        let at = reader.buffer_position();
+        let event = reader
+            .read_event()
+            .map_err(|e| err(at, format!("not well-formed XML: {e}")))?;
+        let empty = matches!(event, Event::Empty(_));
+        match event {
+            Event::Start(e) | Event::Empty(e) => {
+                let attr = |e: &BytesStart, key: &str| -> Result<Option<String>> {
+                    match e.try_get_attribute(key) {
+                        Ok(Some(a)) => a
+                            .unescape_value()
+                            .map(|v| Some(v.into_owned()))
+                            .map_err(|x| err(at, format!("attribute `{key}`: {x}"))),
+                        Ok(None) => Ok(None),
+                        Err(x) => Err(err(at, format!("attribute `{key}`: {x}"))),
+                    }
+                };
+                let local = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                if !root_seen {
+                    if local != "ParameterSet" {
+                        return Err(err(
+                            at,
+                            format!("the root element is `{local}`, not ssv:ParameterSet"),
+                        ));
+                    }
+                    let namespaced = e.attributes().flatten().any(|a| {
+                        a.key.as_ref().starts_with(b"xmlns")
+                            && a.value.as_ref() == SSV_NAMESPACE.as_bytes()
+                    });
+                    if !namespaced {
+                        return Err(err(
+                            at,
+                            format!(
+                                "ssv:ParameterSet does not declare the namespace {SSV_NAMESPACE}"
+                            ),
+                        ));
+                    }
+                    root_seen = true;
+                    continue;
+                }
+                match local.as_str() {
+                    "Parameter" => {
+                        if let Some((name, _)) = &current {
+                            return Err(err(at, format!("parameter `{name}` is not closed")));
+                        }
+                        let name = attr(&e, "name")?
+                            .ok_or_else(|| err(at, "ssv:Parameter without a `name`".into()))?;
+                        if empty {
+                            return Err(err(
+                                at,
+                                format!(
+                                    "parameter `{name}` holds no value (ssv:Real, ssv:Integer, ssv:Boolean or ssv:String)"
+                                ),
+                            ));
+                        }
+                        current = Some((name, None));
+                    }
+                    "Real" | "Integer" | "Boolean" | "String" => {
+                        let Some((name, value)) = current.as_mut() else {
+                            return Err(err(at, format!("ssv:{local} outside an ssv:Parameter")));
+                        };
+                        if value.is_some() {
+                            return Err(err(
+                                at,
+                                format!("parameter `{name}` holds more than one value"),
+                            ));
+                        }
+                        let text = attr(&e, "value")?.ok_or_else(|| {
+                            err(at, format!("ssv:{local} of `{name}` without a `value`"))
+                        })?;
+                        let bad = |what: &str| err(at, format!("`{name}`: {text:?} is not {what}"));
+                        *value = Some(match local.as_str() {
+                            "Real" => {
+                                Value::Real(text.trim().parse().map_err(|_| bad("a real number"))?)
+                            }
+                            "Integer" => {
+                                Value::Integer(text.trim().parse().map_err(|_| bad("an integer"))?)
+                            }
+                            "Boolean" => Value::Boolean(match text.trim() {
+                                "true" | "1" => true,
+                                "false" | "0" => false,
+                                _ => return Err(bad("a boolean (true, false, 1, 0)")),
+                            }),
+                            _ => Value::String(text),
+                        });
+                    }
+                    _ => {}
+                }
+            }
+            Event::End(e) if e.local_name().as_ref() == b"Parameter" => match current.take() {
+                Some((name, Some(v))) => out.push((name, v)),
+                Some((name, None)) => {
+                    return Err(err(
+                        at,
+                        format!(
+                            "parameter `{name}` holds no value (ssv:Real, ssv:Integer, ssv:Boolean or ssv:String)"
+                        ),
+                    ));
+                }
+                None => {}
+            },
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    if !root_seen {
+        return Err(err(0, "no ssv:ParameterSet element".into()));
+    }
+    Ok(out)
+}
+
+/// Checks that every parameter of a set is a parameter of the FMU described by `table`, with
+/// the set's type, and within the variable's range; the error names the set (`path`), the
+/// parameter and what it should be.
+pub fn check(table: &Table, parameters: &[(String, Value)], path: &str) -> Result<()> {
+    use super::variables::{Causality, ScalarType};
+    for (name, value) in parameters {
+        let var = table
+            .by_name(name)
+            .filter(|v| v.causality == Causality::Parameter)
+            .ok_or_else(|| {
+                Error::State(format!("{path}: `{name}` is not a parameter of the FMU"))
+            })?;
+        let (ty, x) = match value {
+            Value::Real(x) => (ScalarType::Real, Some(*x)),
+            Value::Integer(i) => (ScalarType::Integer, Some(f64::from(*i))),
+            Value::Boolean(_) => (ScalarType::Boolean, None),
+            Value::String(_) => (ScalarType::String, None),
+        };
+        if ty != var.ty {
+            return Err(Error::State(format!(
+                "{path}: `{name}` is given as {ty:?}, the FMU's variable is {:?}",
+                var.ty
+            )));
+        }
+        if let Some(x) = x {
+            var.check(x)
+                .map_err(|e| Error::State(format!("{path}: {e}")))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set() -> Vec<(String, Value)> {
+        vec![
+            ("subject.age".into(), Value::Real(41.25)),
+            ("drive.ribs.phase".into(), Value::Real(-0.1 - 1e-17 * 3.0)),
+            ("drive.frequency".into(), Value::Real(0.2345678901234567)),
+            ("subject.sex".into(), Value::Integer(1)),
+            ("drive.enabled".into(), Value::Boolean(true)),
+            (
+                "slp.reference".into(),
+                Value::String("a <&> \"b\".csv".into()),
+            ),
+        ]
+    }
+
+    #[test]
+    fn a_written_set_reads_back_exactly_and_matches_the_table() {
+        let text = write("subject", &set());
+        assert!(text.contains(SSV_NAMESPACE), "{text}");
+        assert!(text.contains("<ssv:Real value=\"41.25\"/>"), "{text}");
+        let back = parse(&text, "t.ssv").unwrap();
+        assert_eq!(back, set());
+        check(super::super::variables::table(), &back, "t.ssv").unwrap();
+    }
+
+    #[test]
+    fn bad_sets_are_refused_with_the_file_line_and_name() {
+        let text = write("subject", &set());
+        let e = parse(&text.replace("41.25", "forty"), "t.ssv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.ssv:") && e.contains("subject.age") && e.contains("forty"),
+            "{e}"
+        );
+        let e = parse(&text.replace(SSV_NAMESPACE, "urn:x"), "t.ssv")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("namespace"), "{e}");
+        let e = parse("<a/>", "t.ssv").unwrap_err().to_string();
+        assert!(e.contains("root element"), "{e}");
+        let t = super::super::variables::table();
+        let e = check(t, &[("volume.lung".into(), Value::Real(1.0))], "t.ssv").unwrap_err();
+        assert!(e.to_string().contains("volume.lung"), "{e}");
+        let e = check(t, &[("subject.sex".into(), Value::Real(1.0))], "t.ssv").unwrap_err();
+        assert!(e.to_string().contains("Integer"), "{e}");
+        let e = check(t, &[("subject.age".into(), Value::Real(500.0))], "t.ssv").unwrap_err();
+        assert!(e.to_string().contains("subject.age"), "{e}");
+    }
+}

@@ -1,0 +1,483 @@
+//! Personalised FMUs (`torso fmu build --subject`) built from a real short fit of the bundled
+//! recording with the skin fitted (so the subject carries a skin reference): the model
+//! description's start values are the fit's, the GUID is not the generic FMU's, only the
+//! fit's grid markers are outputs, the `.ssv` beside it names the FMU's parameters with their
+//! types, the relative `slp.reference` is found in the FMU's resources/, and the personalised
+//! FMU without any parameter set runs exactly as the generic FMU with the `.ssv` applied.
+//! Files that are not fit results are refused naming the file and the missing key.
+
+use breathing_torso::fmi::instance::Instance;
+use breathing_torso::fmi::personal::{PARAMETERS, table_in};
+use breathing_torso::fmi::ssv;
+use breathing_torso::fmi::types::fmi2Status::fmi2OK;
+use breathing_torso::fmi::variables::{Value, table};
+use quick_xml::Reader;
+use quick_xml::events::Event;
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn torso(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(args)
+        .output()
+        .expect("run torso");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout),
+    )
+}
+
+fn dir() -> PathBuf {
+    std::env::temp_dir().join(format!("fmi_personal_{}", std::process::id()))
+}
+
+struct Built {
+    fit: PathBuf,
+    ssv: PathBuf,
+    unpacked: PathBuf,
+}
+
+/// One short skin fit of the bundled recording at level of detail 0, made into a
+/// personalised FMU (once for the whole file).
+fn built() -> &'static Built {
+    static BUILT: OnceLock<Built> = OnceLock::new();
+    BUILT.get_or_init(|| {
+        let dir = dir();
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::create_dir_all(dir.join("fit")).unwrap();
+        let fit = dir.join("fit").join("result.json");
+        let recording = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/recordings/demo_quiet.csv"
+        );
+        let (ok, msg) = torso(&[
+            "fit",
+            "--slp",
+            recording,
+            "--lod",
+            "0",
+            "--max-evals",
+            "50",
+            "--skin-fit",
+            "--threads",
+            "1",
+            "--out",
+            fit.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        let fmu = dir.join("subject.fmu");
+        let (ok, msg) = torso(&[
+            "fmu",
+            "build",
+            "--subject",
+            fit.to_str().unwrap(),
+            "--out",
+            fmu.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        let unpacked = dir.join("unpacked");
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+        zip.extract(&unpacked).unwrap();
+        Built {
+            fit,
+            ssv: fmu.with_extension("ssv"),
+            unpacked,
+        }
+    })
+}
+
+fn fit_json() -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(&built().fit).unwrap()).unwrap()
+}
+
+/// Every `<ScalarVariable>` of a model description: name -> (type element, its attributes
+/// and the variable's).
+type Vars = HashMap<String, (String, HashMap<String, String>)>;
+
+fn variables(xml: &str) -> (String, Vars) {
+    let mut reader = Reader::from_str(xml);
+    let mut out = HashMap::new();
+    let mut guid = String::new();
+    let mut current: Option<HashMap<String, String>> = None;
+    let attrs = |e: &quick_xml::events::BytesStart| -> HashMap<String, String> {
+        e.attributes()
+            .map(|a| {
+                let a = a.unwrap();
+                (
+                    String::from_utf8_lossy(a.key.as_ref()).into_owned(),
+                    a.unescape_value().unwrap().into_owned(),
+                )
+            })
+            .collect()
+    };
+    loop {
+        match reader.read_event().unwrap() {
+            Event::Start(e) | Event::Empty(e) => {
+                let tag = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+                match tag.as_str() {
+                    "fmiModelDescription" => guid = attrs(&e)["guid"].clone(),
+                    "ScalarVariable" => current = Some(attrs(&e)),
+                    "Real" | "Integer" | "Boolean" | "String" => {
+                        if let Some(mut v) = current.take() {
+                            let name = v.remove("name").unwrap();
+                            v.extend(attrs(&e));
+                            out.insert(name, (tag, v));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    (guid, out)
+}
+
+fn model_description() -> String {
+    std::fs::read_to_string(built().unpacked.join("modelDescription.xml")).unwrap()
+}
+
+#[test]
+fn start_values_are_the_fits_and_the_guid_is_its_own() {
+    let fit = fit_json();
+    let (guid, vars) = variables(&model_description());
+    assert_ne!(guid, table().guid());
+    let (generic_guid, generic) = variables(&breathing_torso::fmi::xml::model_description());
+    assert_eq!(generic_guid, table().guid());
+    let start = |name: &str| vars[name].1["start"].clone();
+    let mut compared = 0;
+    for (key, v) in fit.as_object().unwrap() {
+        if key.starts_with("drive.") {
+            assert_eq!(
+                start(key).parse::<f64>().unwrap(),
+                v.as_f64().unwrap(),
+                "{key}"
+            );
+            compared += 1;
+        }
+    }
+    for (key, v) in fit["subject"].as_object().unwrap() {
+        let s = start(key);
+        match v {
+            serde_json::Value::String(name) => {
+                let code = match name.as_str() {
+                    "Male" | "Standing" => "0",
+                    "Female" | "Sitting" => "1",
+                    "Supine" => "2",
+                    other => panic!("{key} = {other}"),
+                };
+                assert_eq!(s, code, "{key}");
+            }
+            _ => assert_eq!(s.parse::<f64>().unwrap(), v.as_f64().unwrap(), "{key}"),
+        }
+        compared += 1;
+    }
+    let model = &fit["model"];
+    assert_eq!(start("scene.level_of_detail"), "0");
+    assert_eq!(start("grid.rows"), model["grid.rows"].to_string());
+    assert_eq!(start("grid.cols"), model["grid.cols"].to_string());
+    // The fit's skin reference is in resources/subject/, named relative to resources/.
+    let reference = start("slp.reference");
+    assert_eq!(reference, "subject/result_reference.csv");
+    assert!(
+        built()
+            .unpacked
+            .join("resources")
+            .join(&reference)
+            .is_file()
+    );
+    assert!(compared >= 14, "{compared}");
+    // The fitted drive is not the generic start (the fit moved it).
+    assert_ne!(
+        start("drive.ribs.amplitude"),
+        generic["drive.ribs.amplitude"].1["start"]
+    );
+    // The fit's report is in documentation/.
+    for f in [
+        "documentation/fit.json",
+        "documentation/fit_report.png",
+        "documentation/index.html",
+    ] {
+        assert!(built().unpacked.join(f).is_file(), "{f}");
+    }
+}
+
+#[test]
+fn only_the_fits_grid_markers_are_outputs() {
+    let (_, vars) = variables(&model_description());
+    let fit = fit_json();
+    let n =
+        fit["model"]["grid.rows"].as_u64().unwrap() * fit["model"]["grid.cols"].as_u64().unwrap();
+    let markers = vars.keys().filter(|k| k.starts_with("marker[")).count() as u64;
+    assert_eq!(markers, 3 * n);
+    assert!(vars.contains_key(&format!("marker[{n}].z")));
+    assert!(!vars.contains_key(&format!("marker[{}].x", n + 1)));
+    // The grid is fixed at the fit's: min = max = start.
+    let rows = &vars["grid.rows"].1;
+    assert_eq!(rows["min"], rows["start"]);
+    assert_eq!(rows["max"], rows["start"]);
+    // The ModelStructure indices point at outputs of this description (1-based).
+    let (generic_guid, generic) = variables(&breathing_torso::fmi::xml::model_description());
+    assert_eq!(generic_guid, table().guid());
+    assert_eq!(
+        generic.keys().filter(|k| k.starts_with("marker[")).count(),
+        3 * 256
+    );
+}
+
+#[test]
+fn the_ssv_names_the_fmus_parameters_with_their_types() {
+    let b = built();
+    let text = std::fs::read_to_string(&b.ssv).unwrap();
+    assert!(text.contains(ssv::SSV_NAMESPACE));
+    let set = ssv::parse(&text, &b.ssv.display().to_string()).unwrap();
+    let (_, vars) = variables(&model_description());
+    let (_, generic) = variables(&breathing_torso::fmi::xml::model_description());
+    assert!(set.len() >= 17, "{}", set.len());
+    for (name, value) in &set {
+        let ty = match value {
+            Value::Real(_) => "Real",
+            Value::Integer(_) => "Integer",
+            Value::Boolean(_) => "Boolean",
+            Value::String(_) => "String",
+        };
+        for (which, v) in [("personalised", &vars), ("generic", &generic)] {
+            let (tag, attrs) = v
+                .get(name)
+                .unwrap_or_else(|| panic!("{name} not in the {which} FMU"));
+            assert_eq!(tag, ty, "{name} in the {which} FMU");
+            assert_eq!(attrs["causality"], "parameter", "{name}");
+        }
+        // Same value as the personalised FMU's start (paths aside: absolute in the .ssv).
+        let start = &vars[name].1["start"];
+        match value {
+            Value::Real(x) => assert_eq!(start.parse::<f64>().unwrap(), *x, "{name}"),
+            Value::Integer(i) => assert_eq!(start, &i.to_string(), "{name}"),
+            Value::Boolean(x) => assert_eq!(start, &x.to_string(), "{name}"),
+            Value::String(s) if s.is_empty() => assert_eq!(start, s),
+            Value::String(s) => {
+                assert!(
+                    Path::new(s).is_absolute() && Path::new(s).is_file(),
+                    "{name} = {s}"
+                );
+                assert!(
+                    s.ends_with(start.trim_start_matches("subject/")),
+                    "{s} vs {start}"
+                );
+            }
+        }
+    }
+    // The FMU's own copy of the set, which the library reads at instantiation.
+    let inner = b.unpacked.join("resources").join(PARAMETERS);
+    let inner = ssv::parse(&std::fs::read_to_string(&inner).unwrap(), "inner").unwrap();
+    assert_eq!(inner.len(), set.len());
+}
+
+fn lung_and_marker(inst: &mut Instance, steps: usize) -> Vec<[f64; 2]> {
+    let t = inst.table();
+    let vrs = [
+        t.by_name("volume.lung").unwrap().vr,
+        t.by_name("marker[1].x").unwrap().vr,
+    ];
+    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+    let h = 0.05;
+    let mut out = Vec::new();
+    for k in 0..steps {
+        assert_eq!(inst.do_step(k as f64 * h, h), fmi2OK);
+        let mut v = [0.0; 2];
+        assert_eq!(inst.get_real(&vrs, &mut v), fmi2OK);
+        out.push(v);
+    }
+    out
+}
+
+fn generic_with(set: &[(String, Value)]) -> Instance {
+    let mut inst = Instance::new("generic", None, None, false);
+    let t = table();
+    for (name, value) in set {
+        let vr = [t.by_name(name).unwrap().vr];
+        let status = match value {
+            Value::Real(x) => inst.set_real(&vr, &[*x]),
+            Value::Integer(i) => inst.set_integer(&vr, &[*i]),
+            Value::Boolean(b) => inst.set_boolean(&vr, &[i32::from(*b)]),
+            Value::String(s) => inst.set_string(&vr, std::slice::from_ref(s)),
+        };
+        assert_eq!(status, fmi2OK, "{name}");
+    }
+    inst
+}
+
+#[test]
+fn the_personalised_fmu_runs_as_the_generic_one_with_the_ssv_applied() {
+    let b = built();
+    let resources = b.unpacked.join("resources");
+    let personal_table = table_in(Some(&resources)).unwrap();
+    let (guid, _) = variables(&model_description());
+    assert_eq!(
+        personal_table.guid(),
+        guid,
+        "the library computes the description's GUID"
+    );
+    let mut personal = Instance::with_table(
+        "personal",
+        Some(resources.clone()),
+        None,
+        false,
+        personal_table,
+    )
+    .unwrap();
+    let set = ssv::parse(&std::fs::read_to_string(&b.ssv).unwrap(), "set").unwrap();
+    let mut generic = generic_with(&set);
+    let steps = 40; // 2 s, about half a breath of the fitted drive
+    let a = lung_and_marker(&mut personal, steps);
+    let g = lung_and_marker(&mut generic, steps);
+    for (k, (a, g)) in a.iter().zip(&g).enumerate() {
+        for i in 0..2 {
+            assert!(
+                (a[i] - g[i]).abs() <= 1e-12 * g[i].abs(),
+                "step {k}, output {i}: {} vs {}",
+                a[i],
+                g[i]
+            );
+        }
+    }
+    // The lung breathes and the skin reference matters: without it the marker differs.
+    let swing = g.iter().map(|v| v[0]).fold(f64::NEG_INFINITY, f64::max)
+        - g.iter().map(|v| v[0]).fold(f64::INFINITY, f64::min);
+    assert!(swing > 0.05, "tidal swing {swing} L");
+    let without: Vec<(String, Value)> = set
+        .iter()
+        .map(|(n, v)| match n.as_str() {
+            "slp.reference" => (n.clone(), Value::String(String::new())),
+            _ => (n.clone(), v.clone()),
+        })
+        .collect();
+    let plain = lung_and_marker(&mut generic_with(&without), 1);
+    assert!(
+        (plain[0][1] - g[0][1]).abs() > 1e-6,
+        "{} vs {}",
+        plain[0][1],
+        g[0][1]
+    );
+    // A missing skin reference in resources/ is an error naming the parameter.
+    let broken = b.unpacked.parent().unwrap().join("broken");
+    let _ = std::fs::remove_dir_all(&broken);
+    std::fs::create_dir_all(broken.join("subject")).unwrap();
+    std::fs::copy(resources.join(PARAMETERS), broken.join(PARAMETERS)).unwrap();
+    let e = Instance::with_table("broken", Some(broken.clone()), None, false, personal_table)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("slp.reference") && e.contains("subject/result_reference.csv"),
+        "{e}"
+    );
+}
+
+#[test]
+fn files_that_are_not_fit_results_are_refused_naming_the_key() {
+    let built = built();
+    let dir = dir().join("bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut fit = String::new();
+    std::fs::File::open(&built.fit)
+        .unwrap()
+        .read_to_string(&mut fit)
+        .unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&fit).unwrap();
+    v.as_object_mut().unwrap().remove("model");
+    let no_model = dir.join("no_model.json");
+    std::fs::write(&no_model, v.to_string()).unwrap();
+    let mut w: serde_json::Value = serde_json::from_str(&fit).unwrap();
+    w["subject"].as_object_mut().unwrap().remove("subject.mass");
+    let no_mass = dir.join("no_mass.json");
+    std::fs::write(&no_mass, w.to_string()).unwrap();
+    let mut x: serde_json::Value = serde_json::from_str(&fit).unwrap();
+    x["drive.frequency"] = serde_json::json!(9.0);
+    let fast = dir.join("fast.json");
+    std::fs::write(&fast, x.to_string()).unwrap();
+    let not_json = dir.join("not.json");
+    std::fs::write(&not_json, "{\"drive.frequency\": ").unwrap();
+    for (file, expect) in [
+        (&no_model, "missing key `model`"),
+        (&no_mass, "missing key `subject.mass` in `subject`"),
+        (&fast, "drive.frequency"),
+        (&not_json, "not.json:1:"),
+    ] {
+        let out = dir.join("x.fmu");
+        let (ok, msg) = torso(&[
+            "fmu",
+            "build",
+            "--subject",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!ok, "{msg}");
+        assert!(msg.contains(expect), "{msg}");
+        if file != &not_json {
+            assert!(msg.contains(&file.display().to_string()), "{msg}");
+        }
+    }
+}
+
+#[test]
+fn a_subject_on_another_grid_has_that_grids_markers() {
+    use breathing_torso::fmi::variables::{Personalisation, Table};
+    let p = |rows: i32, cols: i32| Personalisation {
+        starts: vec![
+            ("grid.rows".into(), Value::Integer(rows)),
+            ("grid.cols".into(), Value::Integer(cols)),
+            ("subject.age".into(), Value::Real(52.5)),
+        ],
+    };
+    let t = Table::personalised(&p(4, 3)).unwrap();
+    let markers: Vec<&str> = t
+        .variables()
+        .iter()
+        .map(|v| v.name.as_str())
+        .filter(|n| n.starts_with("marker["))
+        .collect();
+    assert_eq!(markers.len(), 36);
+    assert_eq!(markers.last(), Some(&"marker[12].z"));
+    assert_ne!(t.guid(), table().guid());
+    assert_ne!(t.guid(), Table::personalised(&p(3, 4)).unwrap().guid());
+    let (guid, vars) = variables(&breathing_torso::fmi::xml::model_description_for(&t));
+    assert_eq!(guid, t.guid());
+    assert_eq!(vars["subject.age"].1["start"], "52.5");
+    assert_eq!(vars["grid.cols"].1["max"], "3");
+    // The grid cannot be set to another size in that FMU.
+    let mut inst = Instance::with_table(
+        "grid",
+        None,
+        None,
+        false,
+        breathing_torso::fmi::variables::personalised_table(&p(4, 3)).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(inst.config().scene.grid_rows, 4);
+    let vr = [t.by_name("grid.rows").unwrap().vr];
+    assert_ne!(inst.set_integer(&vr, &[10]), fmi2OK);
+    // Values outside a parameter's range, of the wrong type or for a non-parameter are refused.
+    for (name, v) in [
+        ("subject.age", Value::Real(500.0)),
+        ("subject.age", Value::Integer(50)),
+        ("volume.lung", Value::Real(3.0)),
+        ("no.such", Value::Real(3.0)),
+    ] {
+        let e = Table::personalised(&Personalisation {
+            starts: vec![(name.into(), v)],
+        })
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.contains(name), "{e}");
+    }
+}
