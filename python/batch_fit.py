@@ -143,7 +143,8 @@ def tidal_from_csv(path: Path) -> float:
 
 def figures(fit: dict, recording: Path, fit_json: Path) -> dict:
     """The key figures of one fit's JSON (NaN for what it does not hold)."""
-    tidal = pick(fit, "tidal_volume_l", "volume.tidal", "tidal_volume", "breath/tidal_volume_l")
+    tidal = pick(fit, "breaths_summary/mean/tidal_volume_l", "fitted_breath/tidal_volume_l",
+                 "tidal_volume_l", "volume.tidal", "tidal_volume", "breath/tidal_volume_l")
     if math.isnan(tidal):
         csv = fit.get("lung_volume_csv")
         candidates = [fit_json.with_name(fit_json.stem + "_lung_volume.csv")]
@@ -157,9 +158,16 @@ def figures(fit: dict, recording: Path, fit_json: Path) -> dict:
     rate = pick(fit, "rate_bpm", "breathing_rate_bpm")
     if math.isnan(rate) and not math.isnan(freq):
         rate = 60.0 * freq
-    ribs = pick(fit, "drive.ribs.phase")
-    dia = pick(fit, "drive.diaphragm.phase")
-    phase = wrap_deg(math.degrees(dia - ribs)) if not (math.isnan(ribs) or math.isnan(dia)) else math.nan
+    # Thoraco-abdominal phase: the Lissajous angle of the fitted model's compartments, mean over
+    # its breaths (torso fit's breaths_summary; positive when the abdomen leads); for a fit
+    # result without it, the fitted drive's phase lead of the diaphragm over the ribs, the same
+    # sign convention.
+    phase = pick(fit, "breaths_summary/mean/phase_angle_deg")
+    if math.isnan(phase):
+        ribs = pick(fit, "drive.ribs.phase")
+        dia = pick(fit, "drive.diaphragm.phase")
+        if not (math.isnan(ribs) or math.isnan(dia)):
+            phase = wrap_deg(math.degrees(dia - ribs))
     noise = pick(fit, "noise_floor_m", "cost/noise_floor_m")
     if math.isnan(noise):
         truth = recording.with_suffix(".truth.json")
@@ -425,7 +433,7 @@ METRICS = [
     ("rate_bpm", "breathing rate [1/min]"),
     ("ti_ttot", "Ti/Ttot"),
     ("ribcage_share", "rib-cage share"),
-    ("ta_phase_deg", "thoraco-abdominal phase [deg]\n(diaphragm - ribs)"),
+    ("ta_phase_deg", "thoraco-abdominal phase [deg]\n(Lissajous, + abdomen leads)"),
 ]
 
 
