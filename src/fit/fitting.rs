@@ -513,9 +513,31 @@ pub fn fit_recording(
     options: &FitOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Fit> {
-    let start = Instant::now();
     recording.validate()?;
     check_grid(recording.grid, model.grid())?;
+    fit_marker_frames(model, recording, options, progress)
+}
+
+/// The fit of [`fit_recording`] for a recording of any marker set: its points are the
+/// model's markers in the same order (`recording.grid` = `model.grid()`, (markers, 1) for a
+/// set other than the grid, e.g. bound by [`crate::anatomy::skin::register_to_surface`]);
+/// the grid's side limit does not apply. The first frame is registered to the rest markers
+/// by correspondence (rigid), as for the grid.
+pub fn fit_marker_frames(
+    model: &mut dyn MarkerSource,
+    recording: &Recording,
+    options: &FitOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Fit> {
+    let start = Instant::now();
+    recording.validate_frames()?;
+    if recording.grid != model.grid() {
+        return Err(Error::invalid(
+            "recording markers",
+            recording.points(),
+            format!("the model's {} markers", model.grid().0 * model.grid().1),
+        ));
+    }
     if options.max_evals < 10 {
         return Err(Error::invalid(
             "--max-evals",

@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
 //! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
+//! | [`named`] | recordings of any marker set: registration to the skin without correspondences, binding, fit |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
@@ -18,6 +19,7 @@
 pub mod breathing;
 pub mod fitting;
 pub mod markers;
+pub mod named;
 pub mod optimize;
 pub mod principal;
 pub mod recording;
@@ -26,8 +28,9 @@ pub mod source;
 pub mod sweep;
 pub mod synth;
 
-pub use fitting::{Fit, FitOptions, Method, fit_recording};
+pub use fitting::{Fit, FitOptions, Method, fit_marker_frames, fit_recording};
 pub use markers::{Format, Markers, ReadOptions};
+pub use named::{BoundRecording, MarkerSetFit, bind_recording, fit_any_markers};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

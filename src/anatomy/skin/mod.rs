@@ -14,7 +14,9 @@ mod profile;
 mod reference;
 mod register;
 pub mod render;
+mod sets;
 mod smooth;
+mod surface;
 
 pub use anthropometry::TorsoDimensions;
 pub use markers::{MAX_GRID_SIZE, Marker, MarkerGrid, SurfaceBinding};
@@ -25,7 +27,11 @@ pub use reference::{
     trunk_spine, wall_points,
 };
 pub use register::{FitOptions, Registration, RigidTransform, SkinFitReport, register_rigid};
+pub use sets::{BUILTIN_SETS, MarkerSet};
 pub use smooth::{taubin_smooth, vertex_neighbours};
+pub use surface::{
+    AttachedMarker, MIN_SURFACE_MARKERS, SurfaceOptions, SurfaceRegistration, register_to_surface,
+};
 
 use crate::anatomy::{Anatomy, Sex, Subject};
 use crate::{Error, Result};
