@@ -300,7 +300,8 @@ pub fn fit_file(
                 &SurfaceOptions::default(),
                 options,
                 &mut |n, b| bar.update(n, b),
-            )?;
+            )
+            .map_err(|e| Error::State(format!("{}: {e}", recording_path.display())))?;
             bar.finish();
             let fit = set_fit.fit;
             let breath = fitted_breath(&config, &fit)?;

@@ -97,7 +97,11 @@ pub struct MarkerSetFit {
 }
 
 /// Fits a recording of any marker set on a fresh torso built from `config`: registration
-/// and binding ([`bind_recording`]), then the grid's fit over the bound markers.
+/// and binding ([`bind_recording`]), then the grid's fit over the bound markers with each
+/// marker's constant offset left out of the cost ([`FitOptions::marker_offsets`]): a
+/// marker bound to its nearest skin point stands off it by its height above the skin and
+/// the registration's residual (the first frame is not the rest pose the skin is in), which
+/// the model's motion must not try to explain.
 pub fn fit_any_markers(
     config: crate::Config,
     markers: &Markers,
@@ -109,6 +113,10 @@ pub fn fit_any_markers(
     let bound = bind_recording(&torso, markers, surface)?;
     torso.set_marker_set(Some(Arc::new(bound.set.clone())));
     let mut source = TorsoMarkers::from_torso(torso)?;
-    let fit = fit_marker_frames(&mut source, &bound.recording, options, progress)?;
+    let options = FitOptions {
+        marker_offsets: true,
+        ..options.clone()
+    };
+    let fit = fit_marker_frames(&mut source, &bound.recording, &options, progress)?;
     Ok(MarkerSetFit { fit, bound })
 }

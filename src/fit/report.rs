@@ -437,6 +437,7 @@ pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value 
             "translation_m": [t.translation.x, t.translation.y, t.translation.z],
             "scale": t.scale,
         },
+        "cost": "each marker's trajectory about its own mean over the recording (its constant offset from the skin point it is bound to left out)",
         "rms_m": r.rms,
         "trimmed_rms_m": r.trimmed_rms,
         "iterations": r.iterations,
