@@ -541,25 +541,29 @@ fn the_recordings_doc_example_runs_as_written() {
             _ => {}
         }
     }
-    assert_eq!(blocks.len(), 1, "docs/recordings.md holds one ```sh block");
+    assert_eq!(blocks.len(), 2, "docs/recordings.md holds two ```sh blocks");
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_torso"));
     let path = format!(
         "{}:{}",
         bin.parent().unwrap().display(),
         std::env::var("PATH").unwrap_or_default()
     );
-    let out = std::process::Command::new("bash")
-        .arg("-c")
-        .arg(&blocks[0])
-        .current_dir(&root)
-        .env("PATH", path)
-        .output()
-        .expect("bash runs");
-    let (stdout, stderr) = (
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr),
-    );
-    assert!(out.status.success(), "{}\n{stdout}\n{stderr}", blocks[0]);
+    let run = |block: &str| {
+        let out = std::process::Command::new("bash")
+            .arg("-c")
+            .arg(block)
+            .current_dir(&root)
+            .env("PATH", &path)
+            .output()
+            .expect("bash runs");
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        );
+        assert!(out.status.success(), "{block}\n{stdout}\n{stderr}");
+        (stdout, stderr)
+    };
+    let (stdout, stderr) = run(&blocks[0]);
     for want in [
         "format: C3D",
         "markers: 60",
@@ -569,6 +573,22 @@ fn the_recordings_doc_example_runs_as_written() {
         assert!(stdout.contains(want), "no `{want}` in:\n{stdout}");
     }
     assert!(stderr.contains("fitting at level of detail 0"), "{stderr}");
+    // The named marker set in a laboratory frame.
+    let (stdout, stderr) = run(&blocks[1]);
+    for want in [
+        "format: C3D",
+        "markers: 30",
+        "30 of 30 markers bound to the skin",
+        "\"scale\"",
+        "lung_tidal_volume_l",
+        "\"tidal_volume_l\"",
+    ] {
+        assert!(stdout.contains(want), "no `{want}` in:\n{stdout}");
+    }
+    assert!(
+        stderr.contains("made with another model") && stderr.contains("subject.stature 1.89"),
+        "{stderr}"
+    );
 }
 
 /// A valid point whose residual byte is 128 or more (word 0x01C8: camera 1, residual 200)

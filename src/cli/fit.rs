@@ -363,8 +363,13 @@ fn fitted_breath(
     config: &crate::Config,
     fit: &crate::fit::Fit,
 ) -> Result<crate::model::run::BreathSummary> {
+    breath_of(config, fit.drive)
+}
+
+/// `config`'s torso breathing `drive`: three breaths from rest, the last two summarised.
+pub fn breath_of(config: &crate::Config, drive: Drive) -> Result<crate::model::run::BreathSummary> {
     let mut c = config.clone();
-    c.drive = fit.drive;
+    c.drive = drive;
     c.drive.enabled = true;
     let period = 1.0 / c.drive.frequency;
     let mut torso = crate::Torso::new(c)?;

@@ -101,6 +101,7 @@ pub fn main(args: &SynthArgs) -> Result<()> {
     let format = Format::from_path(&args.out)?;
     prepare_output_file(&args.out)?;
     prepare_output_file(&args.truth)?;
+    let truth_config = config.clone();
     let mut torso = Torso::new(config)?;
     let set = if args.marker_set == "grid" {
         None
@@ -171,6 +172,10 @@ pub fn main(args: &SynthArgs) -> Result<()> {
     if let Some(set) = &set {
         truth["marker_set"] = serde_json::json!(set.name);
         truth["marker_labels"] = serde_json::json!(set.labels);
+        // What a fit of a named set is judged by: the lung's tidal volume under the true
+        // drive (three breaths from rest, the last two, as `torso fit`'s fitted breath).
+        let breath = super::fit::breath_of(&truth_config, synthetic.truth)?;
+        truth["lung_tidal_volume_l"] = serde_json::json!(breath.tidal_volume);
     }
     let text = serde_json::to_string_pretty(&truth)
         .map_err(|e| Error::State(format!("truth JSON: {e}")))?;

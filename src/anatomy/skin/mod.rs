@@ -1,7 +1,9 @@
 //! The skin: a closed trunk surface from the neck to the hips generated from the subject's
 //! anthropometry (thesis 3.2 used MakeHuman; we build it from ANSUR II regressions), the
 //! SLP-like marker grid bound to it, its registration to a recording's first frame with
-//! skin fitting (thesis 3.2, figure 3.4), and export of meshes, animations and pictures.
+//! skin fitting (thesis 3.2, figure 3.4), other marker sets (built-in named sets placed from
+//! the landmarks, and recorded sets registered to the surface without correspondences and
+//! bound to it), and export of meshes, animations and pictures.
 //!
 //! Frame: ISB, x anterior, y superior, z right, metres, origin on the floor below the sacrum,
 //! midsagittal plane z = 0.

@@ -4,18 +4,23 @@
 //!
 //! The method: a principal-axes start (the markers' principal axes put onto the skin's, in
 //! each of the 24 orderings and sign choices of the axes that make a proper rotation, each
-//! also turned by sixths of a turn about the skin's long axis), then
-//! trimmed iterative closest point against the skin surface (Besl & McKay 1992, "A method
-//! for registration of 3-D shapes", IEEE PAMI 14:239, with the trimming of Chetverikov et
-//! al. 2002, "The trimmed iterative closest point algorithm", ICPR: each iteration pairs
-//! every marker with its closest point on the skin's triangles, keeps the best-matched 80 %
-//! of the pairs and solves the least-squares similarity of those pairs, Umeyama 1991). The
-//! candidates are run briefly, the best few to convergence, and the one of smallest
-//! truncated-quadratic distance kept (the mean over all markers of the squared distance
-//! capped at [`SurfaceOptions::max_distance`]: a pose must bring many markers near the skin,
-//! not fit a trimmed few closely). Each marker is then attached to the closest point on the registered skin
-//! (triangle and barycentric coordinates); markers farther than
-//! [`SurfaceOptions::max_distance`] are reported and left out.
+//! also turned by sixths of a turn about the skin's long axis), then trimmed iterative
+//! closest point against the skin surface (Besl & McKay 1992, "A method for registration of
+//! 3-D shapes", IEEE PAMI 14:239, with the trimming of Chetverikov et al. 2002, "The trimmed
+//! iterative closest point algorithm", ICPR: each iteration pairs every marker with its
+//! closest point on the skin's triangles, keeps the best-matched 80 % of the pairs and
+//! solves the least-squares similarity of those pairs, Umeyama 1991), polished
+//! point-to-plane (Chen & Medioni 1992). Every start is run briefly, the best few to
+//! convergence, and the one of smallest truncated-quadratic distance kept (the mean over
+//! all markers of the squared distance capped at [`SurfaceOptions::max_distance`]: a pose
+//! must bring many markers near the skin, not fit a trimmed few closely). Each marker is
+//! then attached to the closest point on the registered skin (triangle and barycentric
+//! coordinates); markers farther than [`SurfaceOptions::max_distance`] are reported and
+//! left out.
+//!
+//! Limits (tests/marker_registration.rs): 300 markers spread over the trunk are registered
+//! within 0.1 deg and 0.05 % of scale; a dozen leave the smooth trunk surface ambiguous,
+//! the pose is right but the markers may slide several millimetres along the skin.
 
 use super::SurfaceBinding;
 use super::register::{RigidTransform, register_rigid};
