@@ -149,3 +149,72 @@ fn oep89_on_a_taller_subject_in_a_lab_frame_recovers_the_tidal_volume() {
         100.0 * error
     );
 }
+
+/// `torso fit` on a TRC of the bundled chest-and-back recording with one stray marker 6 cm
+/// outside the trunk: the stray is named, with its distance, on stdout and in the result
+/// JSON, and left out; the 30 others are bound and fitted.
+#[test]
+fn torso_fit_reports_and_leaves_out_a_stray_marker() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut m = Markers::read(
+        &root.join("data/recordings/chest30_lab.c3d"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    // Outward from the trunk's vertical axis (the lab's z is up) at marker C3FR1.
+    let k = m.labels.iter().position(|l| l == "C3FR1").unwrap();
+    let first: Vec<_> = m.frames[0].iter().map(|p| p.unwrap()).collect();
+    let centre = first
+        .iter()
+        .fold(nalgebra::Vector3::zeros(), |a, p| a + p.coords)
+        / 30.0;
+    let mut out = first[k].coords - centre;
+    out.z = 0.0;
+    let out = out.normalize() * 0.06;
+    m.labels.push("STRAY".into());
+    for f in m.frames.iter_mut() {
+        let p = f[k].map(|p| p + out);
+        f.push(p);
+    }
+    let dir = std::env::temp_dir().join(format!("bt_stray_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    m.write(&dir.join("stray.trc")).unwrap();
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args([
+            "fit",
+            "--slp",
+            "stray.trc",
+            "--lod",
+            "0",
+            "--threads",
+            "1",
+            "--out",
+            "f/r.json",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("30 of 31 markers bound") && stdout.contains("left out              STRAY"),
+        "{stdout}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("f/r.json")).unwrap()).unwrap();
+    let set = &json["marker_set"];
+    assert_eq!(set["markers_bound"], 30);
+    assert_eq!(set["excluded"][0]["label"], "STRAY");
+    let d = set["excluded"][0]["distance_m"].as_f64().unwrap();
+    println!(
+        "{stdout}\nstray marker left out at {:.1} mm from the skin",
+        d * 1e3
+    );
+    assert!(d > 0.03, "{d}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
