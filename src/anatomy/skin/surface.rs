@@ -19,7 +19,7 @@
 //! left out.
 //!
 //! Limits (tests/marker_registration.rs): 300 markers spread over the trunk are registered
-//! within 0.1 deg and 0.05 % of scale; a dozen leave the smooth trunk surface ambiguous,
+//! within 0.06 deg and 0.04 % of scale; a dozen leave the smooth trunk surface ambiguous,
 //! the pose is right but the markers may slide several millimetres along the skin.
 
 use super::SurfaceBinding;
