@@ -5,13 +5,16 @@ use super::common::{
     SolverArgs, SubjectArgs, flag_error, parse_grid_flag, prepare_output_dir, prepare_output_file,
 };
 use super::progress::Progress;
+use crate::anatomy::skin::SurfaceOptions;
 use crate::fit::clinical::BreathReport;
 use crate::fit::fitting::fit_with_skin;
 use crate::fit::report::{
-    LOD_KEY, model_provenance, provenance_differences, summary, write_fit_report,
+    LOD_KEY, marker_set_json, marker_set_summary, model_provenance, provenance_differences,
+    summary, write_fit_report,
 };
 use crate::fit::{
-    FitOptions, Markers, Method, ReadOptions, Recording, TorsoMarkers, Units, fit_recording,
+    FitOptions, Markers, Method, ReadOptions, Recording, TorsoMarkers, Units, fit_any_markers,
+    fit_recording,
 };
 use crate::model::Drive;
 use crate::{Error, Result};
@@ -62,8 +65,10 @@ pub const FIT_ATOL_PER_RTOL: f64 = 1e-2;
 /// Options of `torso fit`.
 #[derive(Args, Debug)]
 pub struct FitArgs {
-    /// The recording: `.c3d`, `.trc` or `.csv` (the grid CSV or named markers) whose markers
-    /// are the model's grid, labelled `marker[1]`..`marker[R*C]` (docs/recordings.md).
+    /// The recording: `.c3d`, `.trc` or `.csv` (the grid CSV or named markers). Markers
+    /// labelled `marker[1]`..`marker[R*C]` are the model's grid; any other labels are a
+    /// marker set registered to the model's skin without correspondences, each marker bound
+    /// to its nearest skin point, those over 3 cm away left out (docs/recordings.md).
     #[arg(long)]
     pub slp: PathBuf,
     /// Units and frame rate of a recording that does not state them.
@@ -136,15 +141,35 @@ impl ReadArgs {
     }
 }
 
-/// Reads a recording of the model's grid and the configuration to fit it with. When the
-/// recording names the level of detail it was made at and `--lod` is not given, the fit runs
-/// at the recording's (a note on stderr says so); any other difference between the model
-/// that made the recording and the fitting model is one warning line on stderr.
+/// What `torso fit` fits: a recording of the model's grid, or of another marker set.
+pub enum ForFit {
+    /// Labelled `marker[1]`..`marker[R*C]`: the grid, registered by correspondence.
+    Grid(Recording),
+    /// Any other labels: registered to the skin without correspondences and bound.
+    Named(Markers),
+}
+
+/// Whether a recording's markers are meant as the model's grid: a `grid` provenance entry
+/// or any label of the form `marker[k]`.
+fn is_grid_recording(markers: &Markers) -> bool {
+    markers.provenance_value("grid").is_some()
+        || markers
+            .labels
+            .iter()
+            .any(|l| l.starts_with("marker[") && l.ends_with(']'))
+}
+
+/// Reads a recording and the configuration to fit it with. When the recording names the
+/// level of detail it was made at and `--lod` is not given, the fit runs at the recording's
+/// (a note on stderr says so); any other difference between the model that made the
+/// recording and the fitting model is one warning line on stderr. A recording whose labels
+/// are the grid's (any `marker[k]` label, or a `grid` entry) must be the model's grid;
+/// any other is returned as [`ForFit::Named`].
 pub fn read_for_fit(
     path: &Path,
     read: &ReadOptions,
     model: &ModelArgs,
-) -> Result<(Recording, crate::Config)> {
+) -> Result<(ForFit, crate::Config)> {
     // The flags are checked before the file is read, so that a bad flag is named first.
     model.config(Drive::default())?;
     let markers = Markers::read(path, read)?;
@@ -177,6 +202,9 @@ pub fn read_for_fit(
             differences.join(", ")
         );
     }
+    if !is_grid_recording(&markers) {
+        return Ok((ForFit::Named(markers), config));
+    }
     let grid = (config.scene.grid_rows, config.scene.grid_cols);
     if let Some((r, c)) = markers.grid_shape()
         && (r, c) != grid
@@ -195,7 +223,7 @@ pub fn read_for_fit(
     let recording = markers
         .to_recording(grid)
         .map_err(|e| Error::State(format!("{}: {e}", path.display())))?;
-    Ok((recording, config))
+    Ok((ForFit::Grid(recording), config))
 }
 
 /// Fits `recording_path` with a model from `model` and writes the outputs at `out`.
@@ -212,6 +240,36 @@ pub fn fit_file(
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
     let bar = Progress::new("fit", options.max_evals, "evaluations");
+    let recording = match recording {
+        ForFit::Grid(r) => r,
+        ForFit::Named(markers) => {
+            if skin_fit {
+                return Err(Error::invalid(
+                    "--skin-fit",
+                    "given for a recording of named markers",
+                    "a recording of the model's grid (marker[1]..): the skin is fitted to the grid",
+                ));
+            }
+            let set_fit = fit_any_markers(
+                config.clone(),
+                &markers,
+                &SurfaceOptions::default(),
+                options,
+                &mut |n, b| bar.update(n, format!("best cost {:.3} mm", b * 1e3)),
+            )
+            .map_err(|e| Error::State(format!("{}: {e}", recording_path.display())))?;
+            let named_set = (set_fit.bound, markers.markers());
+            return finish_fit(
+                set_fit.fit,
+                &config,
+                &model,
+                recording_path,
+                out,
+                &bar,
+                Some(&named_set),
+            );
+        }
+    };
     let fit = if skin_fit {
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
         let reference = out.with_file_name(format!("{stem}_reference.csv"));
@@ -227,20 +285,46 @@ pub fn fit_file(
             bar.update(n, format!("best cost {:.3} mm", b * 1e3))
         })?
     };
+    finish_fit(fit, &config, &model, recording_path, out, &bar, None)
+}
+
+/// Ends a fit of `recording_path`: closes the progress bar, runs the fitted model's breaths
+/// (`model`: the model as fitted, its skin fitted under --skin-fit), writes the result JSON
+/// with its CSV and figure at `out` (with the registration of a named marker set, when one
+/// was fitted) and prints the summary.
+fn finish_fit(
+    fit: crate::fit::Fit,
+    config: &crate::Config,
+    model: &crate::Config,
+    recording_path: &Path,
+    out: &Path,
+    bar: &Progress,
+    named_set: Option<&(crate::fit::BoundRecording, usize)>,
+) -> Result<crate::fit::Fit> {
     // The search's count leaves out the linearised start's runs; the fit's count is whole.
     bar.update(fit.evaluations, "");
     bar.finish(format!("best cost {:.3} mm", fit.cost_m * 1e3));
-    let breath = fitted_breath(&config, &fit)?;
-    // The fitted model as fitted (with its skin fitted to the recording under --skin-fit).
-    let breaths = BreathReport::of_fit(&model, &fit)?;
+    let breath = fitted_breath(config, &fit)?;
+    let breaths = BreathReport::of_fit(model, &fit)?;
     let outputs = write_fit_report(
         &fit,
         out,
         recording_path,
-        &model,
+        model,
         Some(&breath),
         Some(&breaths),
     )?;
+    if let Some((bound, recorded)) = named_set {
+        let text =
+            std::fs::read_to_string(&outputs.json).map_err(|e| Error::io(&outputs.json, e))?;
+        let mut json: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| Error::State(format!("{}: {e}", outputs.json.display())))?;
+        json["marker_set"] = marker_set_json(bound, *recorded);
+        let text = serde_json::to_string_pretty(&json)
+            .map_err(|e| Error::State(format!("result JSON: {e}")))?;
+        std::fs::write(&outputs.json, text + "\n").map_err(|e| Error::io(&outputs.json, e))?;
+        println!("{}", marker_set_summary(bound, *recorded));
+    }
     println!("{}", summary(&fit));
     println!(
         "breaths of the fitted model (phase: abdomen vs rib cage, + abdomen leads):\n{}",
@@ -266,8 +350,13 @@ fn fitted_breath(
     config: &crate::Config,
     fit: &crate::fit::Fit,
 ) -> Result<crate::model::run::BreathSummary> {
+    breath_of(config, fit.drive)
+}
+
+/// `config`'s torso breathing `drive`: three breaths from rest, the last two summarised.
+pub fn breath_of(config: &crate::Config, drive: Drive) -> Result<crate::model::run::BreathSummary> {
     let mut c = config.clone();
-    c.drive = fit.drive;
+    c.drive = drive;
     c.drive.enabled = true;
     let period = 1.0 / c.drive.frequency;
     let mut torso = crate::Torso::new(c)?;

@@ -100,6 +100,13 @@ pub struct FitOptions {
     /// ([`super::optimize::nelder_mead_parallel`]); the search and its result are those
     /// of one thread.
     pub threads: usize,
+    /// Leave each marker's constant offset out of the cost: the model's and the recording's
+    /// trajectories of each marker are compared about their own means over the recording
+    /// ([`centred_cost`]), with no pose refinement. For marker sets bound to the skin by
+    /// registration without correspondences, where each recorded marker stands off its
+    /// skin point by its unknown placement error and its height above the skin (half a
+    /// 10-14 mm motion-capture marker); off (the thesis's eq. 3.1) for the grid.
+    pub marker_offsets: bool,
 }
 
 impl Default for FitOptions {
@@ -115,6 +122,7 @@ impl Default for FitOptions {
             seed: 1,
             start: None,
             threads: 1,
+            marker_offsets: false,
         }
     }
 }
@@ -314,6 +322,46 @@ fn aligned_cost(
     ))
 }
 
+/// The cost with each marker's constant offset left out: the mean Euclidean distance
+/// between the model's and the recording's marker trajectories, each taken about its own
+/// mean over the frames where the marker is tracked, over all frames and tracked markers.
+/// A constant offset of a marker (where it was placed, its height above the skin) does not
+/// count; its motion does.
+pub fn centred_cost(model: &[Vec<Point3<f64>>], recorded: &[Vec<Option<Point3<f64>>>]) -> f64 {
+    let points = recorded.first().map_or(0, Vec::len);
+    let mut mean_m = vec![nalgebra::Vector3::zeros(); points];
+    let mut mean_q = vec![nalgebra::Vector3::zeros(); points];
+    let mut count = vec![0usize; points];
+    for (m, r) in model.iter().zip(recorded) {
+        for (p, (a, q)) in m.iter().zip(r).enumerate() {
+            if let Some(q) = q {
+                mean_m[p] += a.coords;
+                mean_q[p] += q.coords;
+                count[p] += 1;
+            }
+        }
+    }
+    for p in 0..points {
+        let n = count[p].max(1) as f64;
+        mean_m[p] /= n;
+        mean_q[p] /= n;
+    }
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (m, r) in model.iter().zip(recorded) {
+        for (p, (a, q)) in m.iter().zip(r).enumerate() {
+            if let Some(q) = q {
+                sum += ((a.coords - mean_m[p]) - (q.coords - mean_q[p])).norm();
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        f64::INFINITY
+    } else {
+        sum / n as f64
+    }
+}
+
 /// Reference amplitude of the two basis runs of [`linearised_start`].
 const BASIS_AMPLITUDE: f64 = 0.3;
 /// Phase shifts tried per family by [`linearised_start`].
@@ -477,6 +525,7 @@ struct CostRun<'a, S: MarkerSource + ?Sized, D> {
     drive_of: &'a D,
     traj: Trajectory,
     pairs: Pairs,
+    centred: bool,
 }
 
 impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
@@ -493,6 +542,7 @@ impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
             drive_of,
             traj: Trajectory::default(),
             pairs: Pairs::default(),
+            centred: false,
         }
     }
 
@@ -501,6 +551,9 @@ impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
         let drive = (self.drive_of)(x);
         self.source
             .run(&[(0.0, drive)], self.times, false, &mut self.traj)?;
+        if self.centred {
+            return Ok(centred_cost(&self.traj.markers, self.recorded));
+        }
         Ok(aligned_cost(&self.traj.markers, self.recorded, &mut self.pairs)?.0)
     }
 }
@@ -513,9 +566,31 @@ pub fn fit_recording(
     options: &FitOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Fit> {
-    let start = Instant::now();
     recording.validate()?;
     check_grid(recording.grid, model.grid())?;
+    fit_marker_frames(model, recording, options, progress)
+}
+
+/// The fit of [`fit_recording`] for a recording of any marker set: its points are the
+/// model's markers in the same order (`recording.grid` = `model.grid()`, (markers, 1) for a
+/// set other than the grid, e.g. bound by [`crate::anatomy::skin::register_to_surface`]);
+/// the grid's side limit does not apply. The first frame is registered to the rest markers
+/// by correspondence (rigid), as for the grid.
+pub fn fit_marker_frames(
+    model: &mut dyn MarkerSource,
+    recording: &Recording,
+    options: &FitOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Fit> {
+    let start = Instant::now();
+    recording.validate_frames()?;
+    if recording.grid != model.grid() {
+        return Err(Error::invalid(
+            "recording markers",
+            recording.points(),
+            format!("the model's {} markers", model.grid().0 * model.grid().1),
+        ));
+    }
     if options.max_evals < 10 {
         return Err(Error::invalid(
             "--max-evals",
@@ -645,10 +720,13 @@ pub fn fit_recording(
         None
     };
     let mut main_run = CostRun::new(&mut *model, &recorded, &model_times, &drive_of);
+    main_run.centred = options.marker_offsets;
     let mut cost = |x: &[f64]| main_run.cost(x);
-    let mut spare_run = spare_model
-        .as_deref_mut()
-        .map(|spare| CostRun::new(spare, &recorded, &model_times, &drive_of));
+    let mut spare_run = spare_model.as_deref_mut().map(|spare| {
+        let mut run = CostRun::new(spare, &recorded, &model_times, &drive_of);
+        run.centred = options.marker_offsets;
+        run
+    });
     let mut spare_cost = spare_run.as_mut().map(|run| move |x: &[f64]| run.cost(x));
     let m: Minimum = match options.method {
         Method::NelderMead => nelder_mead_parallel(
@@ -687,7 +765,11 @@ pub fn fit_recording(
     drive.diaphragm.phase = wrap_angle(drive.diaphragm.phase);
     let mut fitted = Trajectory::default();
     model.run(&[(0.0, drive_of(&m.x))], &model_times, true, &mut fitted)?;
-    let (_, correction) = aligned_cost(&fitted.markers, &recorded, &mut Pairs::default())?;
+    let correction = if options.marker_offsets {
+        RigidTransform::identity()
+    } else {
+        aligned_cost(&fitted.markers, &recorded, &mut Pairs::default())?.1
+    };
     let to_model = RigidTransform {
         rotation: correction.rotation * to_model.rotation,
         translation: correction.rotation * to_model.translation + correction.translation,

@@ -314,7 +314,7 @@ impl Markers {
             if !absent.is_empty() {
                 let _ = write!(msg, "; missing: {}", list(&absent));
             }
-            msg.push_str(" (registration of other marker sets is not supported yet)");
+            msg.push_str(" (`torso fit` registers other marker sets to the skin instead, docs/recordings.md)");
             return Err(Error::State(msg));
         }
         let order: Vec<usize> = (0..n).map(|k| index[grid_label(k).as_str()]).collect();

@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
 //! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
+//! | [`named`] | recordings of any marker set: registration to the skin without correspondences, binding, fit |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
@@ -22,6 +23,7 @@ pub mod clinical;
 pub mod figure;
 pub mod fitting;
 pub mod markers;
+pub mod named;
 pub mod optimize;
 pub mod principal;
 pub mod recording;
@@ -30,8 +32,9 @@ pub mod source;
 pub mod sweep;
 pub mod synth;
 
-pub use fitting::{Fit, FitOptions, Method, fit_recording};
+pub use fitting::{Fit, FitOptions, Method, fit_marker_frames, fit_recording};
 pub use markers::{Format, Markers, ReadOptions};
+pub use named::{BoundRecording, MarkerSetFit, bind_recording, fit_any_markers};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

@@ -405,6 +405,21 @@ impl Recording {
                 format!("1..{MAX_GRID_SIDE} rows and columns"),
             ));
         }
+        self.validate_frames()
+    }
+
+    /// The checks of [`Recording::validate`] other than the grid's size: times, frames,
+    /// provenance. A recording of a marker set other than the grid holds its markers as one
+    /// column, `grid = (markers, 1)`, which may exceed the grid's limit.
+    pub fn validate_frames(&self) -> Result<()> {
+        let (r, c) = self.grid;
+        if r == 0 || c == 0 {
+            return Err(Error::invalid(
+                "recording grid",
+                format!("{r}x{c}"),
+                "at least one point",
+            ));
+        }
         if self.times.len() != self.frames.len() || self.times.len() < 2 {
             return Err(Error::invalid(
                 "recording frames",

@@ -369,3 +369,63 @@ pub fn summary(fit: &Fit) -> String {
         fit.wall_s
     )
 }
+
+/// The `marker_set` entry of a fit of a marker set other than the grid: the registration of
+/// its first frame to the skin (similarity transform recording -> model, residuals) and the
+/// markers left out; `recorded` is the number of markers in the file.
+pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value {
+    let r = &bound.registration;
+    let t = &r.to_model;
+    let rot = t.rotation.to_rotation_matrix();
+    let rows: Vec<Vec<f64>> = (0..3)
+        .map(|i| (0..3).map(|j| rot[(i, j)]).collect())
+        .collect();
+    json!({
+        "method": "principal-axes start (24 axis orderings), trimmed ICP (best 80 %) against the skin surface, Umeyama similarity",
+        "markers_recorded": recorded,
+        "markers_bound": bound.set.len(),
+        "labels_bound": bound.set.labels,
+        "transform": {
+            "description": "recording frame -> model frame: p_model = scale R p_recording + t",
+            "rotation_matrix": rows,
+            "rotation_deg": t.rotation.angle().to_degrees(),
+            "translation_m": [t.translation.x, t.translation.y, t.translation.z],
+            "scale": t.scale,
+        },
+        "cost": "each marker's trajectory about its own mean over the recording (its constant offset from the skin point it is bound to left out)",
+        "rms_m": r.rms,
+        "trimmed_rms_m": r.trimmed_rms,
+        "iterations": r.iterations,
+        "excluded": bound.excluded.iter().map(|(l, d)| json!({
+            "label": l,
+            "distance_m": if d.is_finite() { json!(d) } else { Value::Null },
+            "reason": if d.is_finite() { "farther than 3 cm from the registered skin" } else { "not tracked in the first frame" },
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// A few lines on the registration of a marker set (see [`marker_set_json`]).
+pub fn marker_set_summary(bound: &super::BoundRecording, recorded: usize) -> String {
+    let r = &bound.registration;
+    let mut s = format!(
+        "marker set            {} of {} markers bound to the skin; registration rms {:.2} mm, scale {:.4}, rotation {:.1} deg",
+        bound.set.len(),
+        recorded,
+        r.rms * 1e3,
+        r.to_model.scale,
+        r.to_model.rotation.angle().to_degrees()
+    );
+    for (l, d) in &bound.excluded {
+        if d.is_finite() {
+            s.push_str(&format!(
+                "\nleft out              {l}: {:.1} mm from the skin",
+                d * 1e3
+            ));
+        } else {
+            s.push_str(&format!(
+                "\nleft out              {l}: not tracked in the first frame"
+            ));
+        }
+    }
+    s
+}

@@ -28,7 +28,7 @@ pub struct Trajectory {
 
 /// A model whose markers can be compared with a recording.
 pub trait MarkerSource {
-    /// The marker grid (rows, columns).
+    /// The marker grid (rows, columns); a marker set other than the grid is (markers, 1).
     fn grid(&self) -> (usize, usize);
 
     /// Marker positions of the rest state (model frame), used for registration.
@@ -100,10 +100,14 @@ impl TorsoMarkers {
 
     /// Wraps an already built torso; its current state becomes the rest state.
     pub fn from_torso(torso: Torso) -> Result<TorsoMarkers> {
-        let grid = (
-            torso.config().scene.grid_rows,
-            torso.config().scene.grid_cols,
-        );
+        // A marker set other than the grid is one column of its markers.
+        let grid = match torso.marker_set() {
+            Some(set) => (set.len(), 1),
+            None => (
+                torso.config().scene.grid_rows,
+                torso.config().scene.grid_cols,
+            ),
+        };
         let rest = torso.snapshot();
         Ok(TorsoMarkers {
             torso,
@@ -302,6 +306,7 @@ impl MarkerSource for TorsoMarkers {
     fn spare(&self) -> Result<Option<Box<dyn MarkerSource + Send>>> {
         let mut torso =
             Torso::with_compiled(self.torso.config().clone(), self.torso.compiled().clone())?;
+        torso.set_marker_set(self.torso.marker_set().cloned());
         torso.restore(&self.rest)?;
         Ok(Some(Box::new(TorsoMarkers {
             torso,

@@ -30,6 +30,33 @@ pub enum Camera {
     /// A camera about 1.2 m in front of the chest looking at it, tilted up to 15 degrees
     /// about a random axis and shifted up to 10 cm.
     Random,
+    /// A motion-capture laboratory's frame: z up, the subject turned by a random angle
+    /// (uniform over the full turn) about the vertical and standing at a random spot within
+    /// 2 m of the origin, the floor at z = 0 (the model's origin is on the floor).
+    Lab,
+}
+
+/// A random laboratory pose (see [`Camera::Lab`]): model (x anterior, y up, z right) ->
+/// lab (z up).
+fn lab_frame(rng: &mut Pcg64) -> RigidTransform {
+    // Model y (up) -> lab z, model x (anterior) -> lab x, model z (right) -> lab -y.
+    let upright = Rotation3::from_matrix_unchecked(nalgebra::Matrix3::new(
+        1.0, 0.0, 0.0, //
+        0.0, 0.0, -1.0, //
+        0.0, 1.0, 0.0,
+    ));
+    let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 2.0 * PI * rng.uniform());
+    let rotation = yaw * UnitQuaternion::from_rotation_matrix(&upright);
+    let translation = Vector3::new(
+        4.0 * (rng.uniform() - 0.5),
+        4.0 * (rng.uniform() - 0.5),
+        0.0,
+    );
+    RigidTransform {
+        rotation,
+        translation,
+        scale: 1.0,
+    }
 }
 
 /// Settings of a synthetic recording.
@@ -220,6 +247,7 @@ pub fn synthesize(model: &mut dyn MarkerSource, o: &SynthOptions) -> Result<Synt
     let camera = match o.camera {
         Camera::Identity => RigidTransform::identity(),
         Camera::Random => random_camera(&mut rng, &centroid),
+        Camera::Lab => lab_frame(&mut rng),
     };
     let (mut noise_sum, mut tracked) = (0.0, 0usize);
     let frames: Vec<Vec<Option<Point3<f64>>>> = traj

@@ -175,6 +175,8 @@ pub struct Torso {
     /// Each side's share of the observation (right, left), computed when first read.
     sides: Option<[observe::SideObservation; 2]>,
     markers: MarkerOutputs,
+    /// Marker set read instead of the grid ([`Torso::set_marker_set`]).
+    marker_set: Option<Arc<crate::anatomy::skin::MarkerSet>>,
     /// Jacobian pattern and scratch of the stiff method (built when it is used).
     jacobian: Option<Box<TorsoJacobian>>,
 }
@@ -220,6 +222,7 @@ impl Torso {
             observation: None,
             sides: None,
             markers: MarkerOutputs::default(),
+            marker_set: None,
             jacobian: (config.solver.method == Method::Rosenbrock)
                 .then(|| Box::new(TorsoJacobian::new(model))),
             config,

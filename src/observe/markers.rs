@@ -25,7 +25,7 @@
 use super::skinning::{
     BoundPoints, Handle, HandleKind, HandlePose, Skinning, SkinningFrame, SkinningOptions,
 };
-use crate::anatomy::skin::{FitOptions, MarkerGrid, Registration, Skin, SkinOptions};
+use crate::anatomy::skin::{FitOptions, MarkerGrid, MarkerSet, Registration, Skin, SkinOptions};
 use crate::anatomy::{Anatomy, Body, VertexRole};
 use crate::dynamics::kinematics::{rib_pose, sternum_pose};
 use crate::dynamics::{Layout, Model, RIBS};
@@ -168,7 +168,8 @@ impl PoseRig {
     }
 }
 
-/// Which grid a marker model carries: its size and the recording it is registered to.
+/// Which markers a marker model carries: the grid's size and the recording it is
+/// registered to, or another marker set bound to the rest skin.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct MarkerScene {
     /// Grid rows (1..=16).
@@ -177,6 +178,10 @@ pub struct MarkerScene {
     pub cols: usize,
     /// SLP recording whose first frame registers the grid (`None`: the model's own frame).
     pub slp_reference: Option<PathBuf>,
+    /// A marker set bound to the rest skin (model frame) read instead of the grid (`None`:
+    /// the grid). Its bindings index the triangles of the skin generated for the anatomy;
+    /// it cannot be combined with `slp_reference` (which registers the grid).
+    pub set: Option<Arc<MarkerSet>>,
 }
 
 impl Default for MarkerScene {
@@ -186,6 +191,7 @@ impl Default for MarkerScene {
             rows: 10,
             cols: 6,
             slp_reference: None,
+            set: None,
         }
     }
 }
@@ -203,6 +209,7 @@ pub struct MarkerScratch {
 pub struct MarkerModel {
     skin: Skin,
     grid: MarkerGrid,
+    set: MarkerSet,
     handles: Vec<Handle>,
     sources: Vec<HandleSource>,
     skinning: Skinning,
@@ -215,6 +222,16 @@ impl MarkerModel {
     /// Builds the marker model of `scene`: reads the recording's first frame when one is
     /// given ([`read_slp_first_frame`]), then [`MarkerModel::with_first_frame`].
     pub fn build(anatomy: &Anatomy, model: &Model, scene: &MarkerScene) -> Result<Self> {
+        if let Some(set) = &scene.set {
+            if scene.slp_reference.is_some() {
+                return Err(Error::invalid(
+                    "slp.reference",
+                    "set together with a marker set other than the grid",
+                    "no slp.reference (it registers the grid) or the grid",
+                ));
+            }
+            return MarkerModel::with_set(anatomy, model, scene.rows, scene.cols, set);
+        }
         let frame = match &scene.slp_reference {
             None => None,
             Some(path) => {
@@ -252,6 +269,35 @@ impl MarkerModel {
             Some(frame) => Some(skin.register(&grid, frame, &FitOptions::default())?),
             None => None,
         };
+        let set = MarkerSet::from_grid(&grid);
+        MarkerModel::assemble(anatomy, model, skin, grid, set, registration)
+    }
+
+    /// Builds the skin around `anatomy`'s bones and binds `set` (bindings on that skin's
+    /// triangles, e.g. from [`crate::anatomy::skin::register_to_surface`] or
+    /// [`MarkerSet::builtin`]) instead of the grid; the `rows` x `cols` grid is still placed
+    /// (for [`MarkerModel::grid`]) but not read. Outputs are in the model frame.
+    pub fn with_set(
+        anatomy: &Anatomy,
+        model: &Model,
+        rows: usize,
+        cols: usize,
+        set: &MarkerSet,
+    ) -> Result<Self> {
+        let skin = Skin::for_anatomy(anatomy, &SkinOptions::default())?;
+        set.check(skin.triangles.len())?;
+        let grid = MarkerGrid::place(&skin, rows, cols)?;
+        MarkerModel::assemble(anatomy, model, skin, grid, set.clone(), None)
+    }
+
+    fn assemble(
+        anatomy: &Anatomy,
+        model: &Model,
+        skin: Skin,
+        grid: MarkerGrid,
+        set: MarkerSet,
+        registration: Option<Registration>,
+    ) -> Result<Self> {
         let (handles, sources) = anatomy_handles(anatomy);
         let skinning = Skinning::new(
             &skin.vertices,
@@ -259,7 +305,7 @@ impl MarkerModel {
             &handles,
             &SkinningOptions::default(),
         )?;
-        let bound = skinning.bind(&skin.triangles, &grid.bindings())?;
+        let bound = skinning.bind(&skin.triangles, &set.bindings)?;
         let rig = PoseRig::new(model);
         if sources.iter().any(|s| match s {
             HandleSource::WallVertex(j) => *j as usize >= rig.vertex_rest.len(),
@@ -272,6 +318,7 @@ impl MarkerModel {
         Ok(MarkerModel {
             skin,
             grid,
+            set,
             handles,
             sources,
             skinning,
@@ -291,7 +338,12 @@ impl MarkerModel {
         &self.grid
     }
 
-    /// Number of markers (rows x columns).
+    /// The markers read: the grid's (labels `marker[k]`) or the scene's set.
+    pub fn set(&self) -> &MarkerSet {
+        &self.set
+    }
+
+    /// Number of markers (rows x columns, or the set's).
     pub fn len(&self) -> usize {
         self.bound.len()
     }

@@ -1,7 +1,9 @@
 //! The skin: a closed trunk surface from the neck to the hips generated from the subject's
 //! anthropometry (thesis 3.2 used MakeHuman; we build it from ANSUR II regressions), the
 //! SLP-like marker grid bound to it, its registration to a recording's first frame with
-//! skin fitting (thesis 3.2, figure 3.4), and export of meshes, animations and pictures.
+//! skin fitting (thesis 3.2, figure 3.4), other marker sets (built-in named sets placed from
+//! the landmarks, and recorded sets registered to the surface without correspondences and
+//! bound to it), and export of meshes, animations and pictures.
 //!
 //! Frame: ISB, x anterior, y superior, z right, metres, origin on the floor below the sacrum,
 //! midsagittal plane z = 0.
@@ -14,7 +16,9 @@ mod profile;
 mod reference;
 mod register;
 pub mod render;
+mod sets;
 mod smooth;
+mod surface;
 
 pub use anthropometry::TorsoDimensions;
 pub use markers::{MAX_GRID_SIZE, Marker, MarkerGrid, SurfaceBinding};
@@ -25,7 +29,11 @@ pub use reference::{
     trunk_spine, wall_points,
 };
 pub use register::{FitOptions, Registration, RigidTransform, SkinFitReport, register_rigid};
+pub use sets::{BUILTIN_SETS, MarkerSet};
 pub use smooth::{taubin_smooth, vertex_neighbours};
+pub use surface::{
+    AttachedMarker, MIN_SURFACE_MARKERS, SurfaceOptions, SurfaceRegistration, register_to_surface,
+};
 
 use crate::anatomy::{Anatomy, Sex, Subject};
 use crate::{Error, Result};

@@ -2,7 +2,8 @@
 //! the whole deformed skin on request.
 
 use super::Torso;
-use crate::observe::markers::{MAX_MARKERS, MarkerModel, MarkerScene};
+use crate::anatomy::skin::MarkerSet;
+use crate::observe::markers::{MAX_MARKERS, MarkerModel, MarkerOutputs, MarkerScene};
 use crate::{Error, Result};
 use nalgebra::Point3;
 use std::sync::Arc;
@@ -15,12 +16,28 @@ impl Torso {
             rows: self.config.scene.grid_rows,
             cols: self.config.scene.grid_cols,
             slp_reference: self.config.scene.slp_reference.clone(),
+            set: self.marker_set.clone(),
         }
     }
 
-    /// Number of markers of the grid (rows x columns).
+    /// Reads the markers of `set` (bound to the rest skin, model frame) instead of the grid;
+    /// `None` returns to the grid. The marker model is built on the next read.
+    pub fn set_marker_set(&mut self, set: Option<Arc<MarkerSet>>) {
+        self.marker_set = set;
+        self.markers = MarkerOutputs::default();
+    }
+
+    /// The marker set read instead of the grid, if any.
+    pub fn marker_set(&self) -> Option<&Arc<MarkerSet>> {
+        self.marker_set.as_ref()
+    }
+
+    /// Number of markers read: the grid's (rows x columns) or the set's.
     pub fn marker_count(&self) -> usize {
-        self.config.scene.grid_rows * self.config.scene.grid_cols
+        match &self.marker_set {
+            Some(s) => s.len(),
+            None => self.config.scene.grid_rows * self.config.scene.grid_cols,
+        }
     }
 
     /// The marker model (skin, weights, grid, registration), built on first use (a few tenths
