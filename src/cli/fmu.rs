@@ -1,5 +1,7 @@
-//! `torso fmu`: packages the FMI 2.0 co-simulation FMU and writes its model description.
+//! `torso fmu`: packages the FMI 2.0 or FMI 3.0 co-simulation FMU and writes the FMI 2.0 model
+//! description.
 
+use crate::fmi::fmi3::package::build_fmu3_for;
 use crate::fmi::package::{Binary, build_fmu_for, default_library, has_debug_info};
 use crate::fmi::xml::model_description;
 use crate::{Error, Result};
@@ -19,9 +21,13 @@ pub struct FmuArgs {
 pub enum FmuCommand {
     /// Write BreathingTorso.fmu (model description, shared library, resources, documentation).
     Build {
-        /// Where to write the FMU.
-        #[arg(long, default_value = "fmu/BreathingTorso.fmu")]
-        out: PathBuf,
+        /// Where to write the FMU (default: fmu/BreathingTorso.fmu, with --fmi-version 3
+        /// fmu/BreathingTorso3.fmu).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// FMI version of the FMU: 2 or 3 (the same library exports both interfaces).
+        #[arg(long = "fmi-version", default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+        fmi_version: u8,
         /// The cdylib to package (default: the newer of the one beside this executable,
         /// written by `cargo build --release`, and the one in its deps/ folder, refreshed by
         /// `cargo run` and `cargo test`).
@@ -52,7 +58,12 @@ pub fn run(args: FmuArgs) -> Result<()> {
             lib,
             binaries,
             resources,
+            fmi_version,
         } => {
+            let out = out.unwrap_or_else(|| match fmi_version {
+                3 => PathBuf::from("fmu/BreathingTorso3.fmu"),
+                _ => PathBuf::from("fmu/BreathingTorso.fmu"),
+            });
             let mut packaged = Vec::new();
             match lib {
                 Some(l) => packaged.push(Binary::host(&l)),
@@ -74,7 +85,10 @@ pub fn run(args: FmuArgs) -> Result<()> {
                     );
                 }
             }
-            let p = build_fmu_for(&packaged, resources.as_deref(), &out)?;
+            let p = match fmi_version {
+                3 => build_fmu3_for(&packaged, resources.as_deref(), &out)?,
+                _ => build_fmu_for(&packaged, resources.as_deref(), &out)?,
+            };
             println!(
                 "wrote {} ({} bytes): {}",
                 p.path.display(),
