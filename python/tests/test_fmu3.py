@@ -160,6 +160,17 @@ def test_markers_read_as_one_array_equal_to_the_fmi2_scalars():
         h2.close()
 
 
+def test_simulate_records_the_marker_array_as_markers_by_3():
+    kw = dict(stop_time=0.5, output_interval=0.05, start_values=QUIET)
+    r3 = simulate_fmu(fmu3_path(), output=["marker"], **kw)
+    scalars = [f"marker[{i + 1}].{a}" for i in range(N_MARKERS) for a in "xyz"]
+    r2 = simulate_fmu(fmu_path(), output=scalars, **kw)
+    assert r3["marker"].shape == (len(r2), N_MARKERS, 3)
+    fmi2 = np.stack([r2[n] for n in scalars], axis=1).reshape(len(r2), N_MARKERS, 3)
+    assert np.array_equal(r3["marker"], fmi2)
+    assert np.ptp(r3["marker"][:, 0, :], axis=0).max() > 0.0, "marker 1 does not move"
+
+
 def test_fmu_state_and_serialisation_replay_the_trajectory():
     h = Host3()
     try:
@@ -189,6 +200,20 @@ def test_fmu_state_and_serialisation_replay_the_trajectory():
         assert np.array_equal(first, other.run(1.0, 2.0, 0.05, names=("volume.lung", "volume.abdomen")))
     finally:
         other.close()
+    # In an instance of the FMI 2.0 FMU (same library, same state format and GUID).
+    h2 = Host()
+    try:
+        f = h2.initialize(start_values=QUIET)
+        f.setFMUstate(f.deSerializeFMUstate(blob))
+        vrs = [h2.vr["volume.lung"], h2.vr["volume.abdomen"]]
+        out = []
+        for k in range(20):
+            t = 1.0 + k * 0.05
+            f.doStep(currentCommunicationPoint=t, communicationStepSize=1.0 + (k + 1) * 0.05 - t)
+            out.append(f.getReal(vrs))
+        assert np.array_equal(first, np.array(out))
+    finally:
+        h2.close()
 
 
 def test_posture_enumeration_changes_the_result_as_in_fmi2():
