@@ -265,3 +265,30 @@ def test_refused_calls_are_errors_with_a_message():
         h.run(0.0, 0.2, 0.1)
     finally:
         h.close()
+
+
+def test_resource_path_is_native_and_strings_round_trip():
+    """fmpy passes FMI 3.0's resourcePath as a native path (here with spaces and a percent
+    sign, which FMI 2.0's URI would escape); a relative slp.reference is found in it."""
+    h = Host3()
+    try:
+        h.fmu.freeInstance()
+        spaced = pathlib.Path(tempfile.mkdtemp(prefix="bt fmu3 %20 ")) / "unzipped dir"
+        shutil.copytree(h.dir, spaced)
+        shutil.rmtree(h.dir, ignore_errors=True)
+        h.dir = str(spaced)
+        (spaced / "resources" / "first frame.csv").write_text("t,x\n0,0\n")
+        h.fmu = FMU3Slave(guid=h.md.guid, unzipDirectory=h.dir, modelIdentifier="BreathingTorso", instanceName="bt3")
+        h.fmu.instantiate(logMessage=lambda *a: h.messages.append(a))
+        h.fmu.setString([h.vr["slp.reference"]], ["first frame.csv"])
+        h.fmu.enterInitializationMode(startTime=0.0)
+        [path] = h.fmu.getString([h.vr["slp.reference"]])
+        assert pathlib.Path(path) == spaced / "resources" / "first frame.csv"
+        h.fmu.setString([h.vr["slp.reference"]], [""])
+        assert h.fmu.getString([h.vr["slp.reference"]]) == [""]
+        assert h.fmu.getBoolean([h.vr["drive.enabled"]]) == [True]
+        h.fmu.setBoolean([h.vr["drive.enabled"]], [False])
+        assert h.fmu.getBoolean([h.vr["drive.enabled"]]) == [False]
+    finally:
+        h.fmu.freeInstance()
+        shutil.rmtree(pathlib.Path(h.dir).parent, ignore_errors=True)
