@@ -292,3 +292,22 @@ def test_resource_path_is_native_and_strings_round_trip():
     finally:
         h.fmu.freeInstance()
         shutil.rmtree(pathlib.Path(h.dir).parent, ignore_errors=True)
+
+
+def test_both_fmus_ship_the_same_binaries():
+    """One library exports both interfaces: every platform of the FMI 2.0 FMU is in the FMI 3.0
+    FMU under its platform tuple, byte for byte (development and distributable builds alike:
+    scripts/test.sh and scripts/deploy.sh package both from the same files)."""
+    import zipfile
+    tuples = {"linux64": "x86_64-linux", "linux32": "x86-linux", "win64": "x86_64-windows",
+              "win32": "x86-windows", "darwin64": "x86_64-darwin"}
+
+    def binaries(path):
+        with zipfile.ZipFile(path) as z:
+            return {n.split("/")[1]: z.read(n) for n in z.namelist()
+                    if n.startswith("binaries/") and not n.endswith("/")}
+
+    b2, b3 = binaries(fmu_path()), binaries(fmu3_path())
+    assert b2 and {tuples[p] for p in b2} == set(b3)
+    for p, data in b2.items():
+        assert b3[tuples[p]] == data, p
