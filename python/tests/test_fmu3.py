@@ -311,3 +311,24 @@ def test_both_fmus_ship_the_same_binaries():
     assert b2 and {tuples[p] for p in b2} == set(b3)
     for p, data in b2.items():
         assert b3[tuples[p]] == data, p
+
+
+def test_reset_debug_logging_and_version():
+    h = Host3()
+    try:
+        assert h.fmu.getVersion() == "3.0"
+        h.start(float64=QUIET)
+        first = h.run(0.0, 0.5, 0.05)
+        h.fmu.setDebugLogging(True, ["logCalls"])
+        h.fmu.reset()
+        h.start(float64=QUIET)
+        calls = [m for s, c, m in h.messages if c == "logCalls"]
+        assert calls[0].startswith("fmi3Reset(") and any(m.startswith("fmi3EnterInitializationMode(") for m in calls), calls[:5]
+        h.fmu.setDebugLogging(False, [])
+        n = len(h.messages)
+        assert np.array_equal(first, h.run(0.0, 0.5, 0.05)), "a reset instance replays differently"
+        assert len(h.messages) == n, "messages after logging was switched off"
+        with pytest.raises(FMICallException):
+            h.fmu.setDebugLogging(True, ["noSuchCategory"])
+    finally:
+        h.close()
