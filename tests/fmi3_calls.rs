@@ -197,10 +197,39 @@ fn bad_arguments_are_errors_and_the_instance_goes_on() {
             fmi3Error
         );
         assert!(
-            last_message(&log).starts_with("fmi3GetFloat32"),
+            last_message(&log)
+                .starts_with("fmi3GetFloat32: value reference 1000 is not a Float32 variable"),
             "{}",
             last_message(&log)
         );
+        let mut i8s = [0i8; 1];
+        assert_eq!(
+            fmi3GetInt8(c, lung.as_ptr(), 1, i8s.as_mut_ptr(), 1),
+            fmi3Error
+        );
+        assert!(
+            last_message(&log).contains("not an Int8 variable"),
+            "{}",
+            last_message(&log)
+        );
+        // An Enumeration read as Int32 is refused, naming Int64.
+        let posture = [201u32];
+        let mut i32s = [0i32; 1];
+        assert_eq!(
+            fmi3GetInt32(c, posture.as_ptr(), 1, i32s.as_mut_ptr(), 1),
+            fmi3Error
+        );
+        assert!(
+            last_message(&log).contains("`posture`, an Enumeration, not an Int32"),
+            "{}",
+            last_message(&log)
+        );
+        let mut i64s = [9i64; 1];
+        assert_eq!(
+            fmi3GetInt64(c, posture.as_ptr(), 1, i64s.as_mut_ptr(), 1),
+            fmi3OK
+        );
+        assert_eq!(i64s, [0]);
 
         // Boolean bytes: any non-zero byte is true (tunable drive.enabled, vr 400).
         let enabled = [400u32];

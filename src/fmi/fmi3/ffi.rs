@@ -20,7 +20,7 @@
 #![allow(non_snake_case)]
 
 use super::types::*;
-use super::view::{Type3, expand};
+use super::view::{Type3, expand, with_article};
 use crate::fmi::ffi::{
     free_states, known, null_argument, show, show_strings, slice, slice_mut, store_state, string,
     with_instance,
@@ -559,7 +559,8 @@ unsafe fn no_variables_of(
                 None => null_argument(inst, function, "valueReferences[]"),
                 Some([]) => fmi2OK,
                 Some([first, ..]) => inst.error(&format!(
-                    "{function}: value reference {first} is not a {ty} variable: this FMU has none"
+                    "{function}: value reference {first} is not {} variable: this FMU has none",
+                    with_article(ty)
                 )),
             }
         })

@@ -96,6 +96,12 @@ impl Type3 {
     }
 }
 
+/// `name` with its indefinite article: "an Int32", "an Enumeration", "a Float64".
+pub fn with_article(name: &str) -> String {
+    let vowel = name.starts_with(['A', 'E', 'I', 'O']);
+    format!("{} {name}", if vowel { "an" } else { "a" })
+}
+
 /// Whether the variable is one of the scalar markers folded into the marker array.
 pub fn is_marker_scalar(v: &Variable) -> bool {
     matches!(v.role, Role::Output(Quantity::Marker { .. }))
@@ -170,8 +176,8 @@ pub fn expand(vrs: &[u32], ty: Type3) -> Result<Vec<u32>, String> {
             Some(_) if vr == VR_MARKER_ARRAY => {
                 if ty != Type3::Float64 {
                     return Err(format!(
-                        "value reference {vr} is `{MARKER_ARRAY}`, a Float64 array, not a {}",
-                        ty.name()
+                        "value reference {vr} is `{MARKER_ARRAY}`, a Float64 array, not {}",
+                        with_article(ty.name())
                     ));
                 }
                 for index in 0..MARKER_SLOTS {
@@ -192,10 +198,10 @@ pub fn expand(vrs: &[u32], ty: Type3) -> Result<Vec<u32>, String> {
                         _ => "",
                     };
                     return Err(format!(
-                        "value reference {vr} is `{}`, a {}, not a {}{hint}",
+                        "value reference {vr} is `{}`, {}, not {}{hint}",
                         v.name,
-                        found.name(),
-                        ty.name()
+                        with_article(found.name()),
+                        with_article(ty.name())
                     ));
                 }
                 out.push(vr);
@@ -236,6 +242,7 @@ mod tests {
         let posture = table().by_name("posture").unwrap();
         assert_eq!(type_of(posture), Type3::Enumeration(1));
         let err = expand(&[posture.vr], Type3::Int32).unwrap_err();
+        assert!(err.contains("an Enumeration, not an Int32"), "{err}");
         assert!(err.contains("Int64"), "{err}");
         let rows = table().by_name("grid.rows").unwrap();
         assert_eq!(type_of(rows), Type3::Int32);
