@@ -186,6 +186,21 @@ fn bad_arguments_are_errors_and_the_instance_goes_on() {
         );
         assert!(last_message(&log).contains("unknown value reference 2001"));
 
+        // A fixed parameter after initialization: the message names FMI 3.0 functions only.
+        let age = [100u32];
+        let forty = [40.0f64];
+        assert_eq!(
+            fmi3SetFloat64(c, age.as_ptr(), 1, forty.as_ptr(), 1),
+            fmi3Error
+        );
+        let m = last_message(&log);
+        assert!(
+            m.starts_with("fmi3SetFloat64: `subject.age` is a fixed parameter")
+                && m.contains("after fmi3ExitInitializationMode")
+                && !m.contains("fmi2"),
+            "{m}"
+        );
+
         // Types without variables: nothing to read is fine, any reference is an error.
         let mut f32s = [0.0f32; 1];
         assert_eq!(

@@ -42,10 +42,21 @@ thread_local! {
     static CURRENT: Cell<&'static str> = const { Cell::new("") };
 }
 
-/// `message` with a leading FMI 2.0 function name replaced by the running FMI 3.0 function.
+/// FMI 2.0 functions the shared instance layer names inside its messages (as what to call
+/// next), with their FMI 3.0 counterparts.
+const COUNTERPARTS: [(&str, &str); 5] = [
+    ("fmi2ExitInitializationMode", "fmi3ExitInitializationMode"),
+    ("fmi2SetFMUstate", "fmi3SetFMUState"),
+    ("fmi2Reset", "fmi3Reset"),
+    ("fmi2Instantiate", "fmi3InstantiateCoSimulation"),
+    ("fmi2SetupExperiment", "fmi3EnterInitializationMode"),
+];
+
+/// `message` with a leading FMI 2.0 function name replaced by the running FMI 3.0 function,
+/// and the FMI 2.0 functions it mentions by their FMI 3.0 counterparts.
 fn renamed(message: &str) -> String {
     let current = CURRENT.with(Cell::get);
-    match message.strip_prefix("fmi2") {
+    let mut out = match message.strip_prefix("fmi2") {
         Some(rest) if !current.is_empty() => {
             let end = rest
                 .find(|c: char| !c.is_ascii_alphanumeric())
@@ -53,7 +64,13 @@ fn renamed(message: &str) -> String {
             format!("{current}{}", &rest[end..])
         }
         _ => message.to_string(),
+    };
+    if !current.is_empty() {
+        for (two, three) in COUNTERPARTS {
+            out = out.replace(two, three);
+        }
     }
+    out
 }
 
 /// [`with_instance`] under an FMI 3.0 function name, with the FMI 3.0 status.
@@ -2054,6 +2071,10 @@ mod tests {
             "fmi3SetFloat64: `posture` is out of range"
         );
         assert_eq!(renamed("reset"), "reset");
+        assert_eq!(
+            renamed("fmi2SetReal: `posture` cannot change after fmi2ExitInitializationMode"),
+            "fmi3SetFloat64: `posture` cannot change after fmi3ExitInitializationMode"
+        );
         CURRENT.with(|f| f.set(""));
         assert_eq!(renamed("fmi2DoStep: x"), "fmi2DoStep: x");
     }
