@@ -55,6 +55,7 @@ stage "python venv" required bash scripts/python-env.sh
 # The C tests link the cdylib; the Python tests load the FMU.
 stage "release library" required cargo build --release
 stage "FMU" required target/release/torso fmu build --out fmu/BreathingTorso.fmu
+stage "FMU (FMI 3.0)" required target/release/torso fmu build --fmi-version 3 --out fmu/BreathingTorso3.fmu
 stage "cargo test" optional cargo test --release --no-fail-fast
 
 built_once() {

@@ -1,5 +1,7 @@
-//! `torso fmu`: packages the FMI 2.0 co-simulation FMU and writes its model description.
+//! `torso fmu`: packages the FMI 2.0 or FMI 3.0 co-simulation FMU and writes the FMI 2.0 model
+//! description.
 
+use crate::fmi::fmi3::package::build_fmu3_for;
 use crate::fmi::package::{Binary, build_fmu_for, build_fmu_with, default_library, has_debug_info};
 use crate::fmi::personal::from_fit_json;
 use crate::fmi::ssv::write as write_ssv;
@@ -21,9 +23,13 @@ pub struct FmuArgs {
 pub enum FmuCommand {
     /// Write BreathingTorso.fmu (model description, shared library, resources, documentation).
     Build {
-        /// Where to write the FMU.
-        #[arg(long, default_value = "fmu/BreathingTorso.fmu")]
-        out: PathBuf,
+        /// Where to write the FMU (default: fmu/BreathingTorso.fmu, with --fmi-version 3
+        /// fmu/BreathingTorso3.fmu, with --subject FIT.json fmu/FIT.fmu).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// FMI version of the FMU: 2 or 3 (the same library exports both interfaces).
+        #[arg(long = "fmi-version", default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+        fmi_version: u8,
         /// The cdylib to package (default: the newer of the one beside this executable,
         /// written by `cargo build --release`, and the one in its deps/ folder, refreshed by
         /// `cargo run` and `cargo test`).
@@ -66,7 +72,19 @@ pub fn run(args: FmuArgs) -> Result<()> {
             resources,
             subject,
             ssv,
+            fmi_version,
         } => {
+            // A personalised FMU is named after its fit result, so that it never replaces the
+            // generic FMU by default.
+            let out = out.unwrap_or_else(|| match (&subject, fmi_version) {
+                (Some(fit), _) => PathBuf::from("fmu").join(
+                    fit.with_extension("fmu")
+                        .file_name()
+                        .unwrap_or(std::ffi::OsStr::new("Subject.fmu")),
+                ),
+                (None, 3) => PathBuf::from("fmu/BreathingTorso3.fmu"),
+                (None, _) => PathBuf::from("fmu/BreathingTorso.fmu"),
+            });
             let mut packaged = Vec::new();
             match lib {
                 Some(l) => packaged.push(Binary::host(&l)),
@@ -89,7 +107,10 @@ pub fn run(args: FmuArgs) -> Result<()> {
                 }
             }
             let Some(fit) = subject else {
-                let p = build_fmu_for(&packaged, resources.as_deref(), &out)?;
+                let p = match fmi_version {
+                    3 => build_fmu3_for(&packaged, resources.as_deref(), &out)?,
+                    _ => build_fmu_for(&packaged, resources.as_deref(), &out)?,
+                };
                 println!(
                     "wrote {} ({} bytes): {}",
                     p.path.display(),
@@ -98,6 +119,13 @@ pub fn run(args: FmuArgs) -> Result<()> {
                 );
                 return Ok(());
             };
+            if fmi_version == 3 {
+                return Err(Error::invalid(
+                    "--fmi-version",
+                    "3 with --subject",
+                    "2: personalised FMUs are FMI 2.0 FMUs (the FMI 3.0 FMU is generic)",
+                ));
+            }
             let personal = from_fit_json(&fit)?;
             let table = personal.table()?;
             let p = build_fmu_with(

@@ -24,8 +24,9 @@ use fmi2Status::{fmi2Error, fmi2OK};
 /// is then refused.
 ///
 /// # Safety
-/// `c` must be null or a pointer returned by [`fmi2Instantiate`] and not yet freed.
-unsafe fn with_instance(
+/// `c` must be null or a pointer returned by [`fmi2Instantiate`] (or by
+/// `fmi3InstantiateCoSimulation`, which creates the same [`Instance`]) and not yet freed.
+pub(super) unsafe fn with_instance(
     c: fmi2Component,
     function: &str,
     mask: u8,
@@ -62,7 +63,7 @@ unsafe fn with_instance(
 ///
 /// # Safety
 /// A non-null `p` must point to `n` valid elements.
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+pub(super) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         Some(&[])
     } else if p.is_null() {
@@ -77,7 +78,7 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
 ///
 /// # Safety
 /// A non-null `p` must point to `n` valid, writable elements.
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+pub(super) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         Some(&mut [])
     } else if p.is_null() {
@@ -92,7 +93,7 @@ unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
 ///
 /// # Safety
 /// A non-null `p` must point to a NUL-terminated string.
-unsafe fn string(p: *const c_char) -> Option<String> {
+pub(super) unsafe fn string(p: *const c_char) -> Option<String> {
     if p.is_null() {
         return None;
     }
@@ -107,7 +108,7 @@ unsafe fn string(p: *const c_char) -> Option<String> {
 ///
 /// # Safety
 /// As for [`slice`].
-unsafe fn show<T: std::fmt::Debug>(p: *const T, n: usize) -> String {
+pub(super) unsafe fn show<T: std::fmt::Debug>(p: *const T, n: usize) -> String {
     match unsafe { slice(p, n) } {
         Some(values) => format!("{values:?}"),
         None => "NULL".into(),
@@ -118,7 +119,7 @@ unsafe fn show<T: std::fmt::Debug>(p: *const T, n: usize) -> String {
 ///
 /// # Safety
 /// As for [`slice`] and [`string`].
-unsafe fn show_strings(p: *const fmi2String, n: usize) -> String {
+pub(super) unsafe fn show_strings(p: *const fmi2String, n: usize) -> String {
     match unsafe { slice(p, n) } {
         Some(ptrs) => {
             let shown: Vec<String> = ptrs
@@ -134,7 +135,7 @@ unsafe fn show_strings(p: *const fmi2String, n: usize) -> String {
     }
 }
 
-fn null_argument(inst: &mut Instance, function: &str, argument: &str) -> fmi2Status {
+pub(super) fn null_argument(inst: &mut Instance, function: &str, argument: &str) -> fmi2Status {
     inst.error(&format!("{function}: argument {argument} must not be NULL"))
 }
 
@@ -336,7 +337,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
 }
 
 /// Frees every FMU state still held by `inst`.
-fn free_states(inst: &mut Instance) {
+pub(super) fn free_states(inst: &mut Instance) {
     for addr in inst.fmu_states.drain() {
         // SAFETY: every address in the set came from Box::into_raw of an FmuState.
         drop(unsafe { Box::from_raw(addr as *mut FmuState) });
@@ -659,7 +660,7 @@ pub unsafe extern "C" fn fmi2SetString(
 // FMU state
 
 /// Whether `p` is an FMU state handed out by this instance and not freed.
-fn known(inst: &Instance, p: fmi2FMUstate) -> bool {
+pub(super) fn known(inst: &Instance, p: fmi2FMUstate) -> bool {
     !p.is_null() && inst.fmu_states.contains(&(p as usize))
 }
 
@@ -668,7 +669,7 @@ fn known(inst: &Instance, p: fmi2FMUstate) -> bool {
 ///
 /// # Safety
 /// `slot` must be non-null and writable.
-unsafe fn store_state(
+pub(super) unsafe fn store_state(
     inst: &mut Instance,
     function: &str,
     slot: *mut fmi2FMUstate,

@@ -27,7 +27,7 @@ pub fn num(v: f64) -> String {
     if sci.len() < plain.len() { sci } else { plain }
 }
 
-fn causality(c: Causality) -> &'static str {
+pub(super) fn causality(c: Causality) -> &'static str {
     match c {
         Causality::Independent => "independent",
         Causality::Parameter => "parameter",
@@ -36,7 +36,7 @@ fn causality(c: Causality) -> &'static str {
     }
 }
 
-fn variability(v: Variability) -> &'static str {
+pub(super) fn variability(v: Variability) -> &'static str {
     match v {
         Variability::Fixed => "fixed",
         Variability::Tunable => "tunable",
@@ -45,7 +45,7 @@ fn variability(v: Variability) -> &'static str {
     }
 }
 
-fn initial(i: Initial) -> &'static str {
+pub(super) fn initial(i: Initial) -> &'static str {
     match i {
         Initial::Exact => "exact",
         Initial::Calculated => "calculated",
@@ -61,7 +61,7 @@ fn type_name(t: ScalarType) -> &'static str {
     }
 }
 
-fn bound(t: ScalarType, v: f64) -> String {
+pub(super) fn bound(t: ScalarType, v: f64) -> String {
     match t {
         ScalarType::Integer => format!("{}", v as i64),
         _ => num(v),
@@ -111,7 +111,7 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
     Ok(())
 }
 
-fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+pub(super) fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     w.create_element("UnitDefinitions")
         .write_inner_content(|w| {
             for u in UNITS {
