@@ -136,7 +136,9 @@ impl Shared {
         }
     }
 
-    /// Writes what is due: `force` writes whatever the throttle says.
+    /// Writes what is due: `force` writes whatever the throttle says. The text is written
+    /// while the state is locked, so that lines reach the output in the order of their
+    /// counts (a ticker's line never lands after a newer one).
     fn emit(&self, force: bool) {
         let Ok(mut st) = self.state.lock() else {
             return;
@@ -150,7 +152,6 @@ impl Shared {
                 st.last_draw = Some(now);
                 st.drawn = true;
                 let text = self.bar(&st);
-                drop(st);
                 self.write(&text);
             }
         } else {
@@ -160,7 +161,6 @@ impl Shared {
             if force || due {
                 st.last_line = Some(now);
                 let text = self.line(&st, false);
-                drop(st);
                 self.write(&text);
             }
         }
@@ -254,9 +254,15 @@ impl Progress {
     /// Writes one message line without breaking the bar: on a terminal the bar's line is
     /// cleared, the message written and the bar drawn again below it.
     pub fn message(&self, text: &str) {
+        // Under the state's lock, as every line (see `emit`).
+        let Ok(mut st) = self.shared.state.lock() else {
+            return;
+        };
         if self.shared.terminal {
-            self.shared.write(&format!("\r\x1b[K{text}\n"));
-            self.shared.emit(true);
+            st.last_draw = Some(Instant::now());
+            st.drawn = true;
+            let bar = self.shared.bar(&st);
+            self.shared.write(&format!("\r\x1b[K{text}\n{bar}"));
         } else {
             self.shared.write(&format!("{text}\n"));
         }
@@ -280,24 +286,21 @@ impl Progress {
     /// it will do), and the last line or the full bar is written with `detail`.
     pub fn finish(&self, detail: impl Into<String>) {
         self.stop_ticker();
-        let text = {
-            let Ok(mut st) = self.shared.state.lock() else {
-                return;
-            };
-            if st.done < st.total {
-                st.total = st.done;
-            }
-            st.detail = detail.into();
-            if self.shared.terminal {
-                self.shared.bar(&st) + "\n"
-            } else {
-                self.shared.line(&st, true)
-            }
+        let Ok(mut st) = self.shared.state.lock() else {
+            return;
         };
-        self.shared.write(&text);
-        if let Ok(mut st) = self.shared.state.lock() {
-            st.drawn = false;
+        if st.done < st.total {
+            st.total = st.done;
         }
+        st.detail = detail.into();
+        let text = if self.shared.terminal {
+            self.shared.bar(&st) + "\n"
+        } else {
+            self.shared.line(&st, true)
+        };
+        // Written under the state's lock, as every line (see `emit`).
+        self.shared.write(&text);
+        st.drawn = false;
     }
 }
 
@@ -305,7 +308,10 @@ impl Drop for Progress {
     fn drop(&mut self) {
         self.stop_ticker();
         // An unfinished bar (an error ended the work): end its line.
-        if self.shared.terminal && self.shared.state.lock().is_ok_and(|s| s.drawn) {
+        if let Ok(st) = self.shared.state.lock()
+            && self.shared.terminal
+            && st.drawn
+        {
             self.shared.write("\n");
         }
     }
@@ -362,6 +368,52 @@ mod tests {
                 && last.ends_with("done"),
             "{text}"
         );
+    }
+
+    /// A sink that takes its time to write, so that a line computed before another one
+    /// would have time to be overtaken were it written after releasing the state.
+    #[derive(Clone, Default)]
+    struct SlowSink(Sink);
+    impl Write for SlowSink {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            std::thread::sleep(Duration::from_micros(200));
+            self.0.write(b)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn lines_of_the_ticker_and_of_updates_come_in_count_order() {
+        let sink = SlowSink::default();
+        // Interval zero: every update writes a line, and the ticker one every 10 ms.
+        let p = Arc::new(Progress::to_writer(
+            "fit",
+            400,
+            "evaluations",
+            false,
+            Duration::ZERO,
+            Box::new(sink.clone()),
+        ));
+        let q = Arc::clone(&p);
+        let updater = std::thread::spawn(move || {
+            for k in 1..=400 {
+                q.update(k, "");
+            }
+        });
+        updater.join().unwrap();
+        p.finish("");
+        let text = sink.0.text();
+        let counts: Vec<usize> = text
+            .lines()
+            .map(|l| {
+                let done = l.trim_start_matches("fit: ").split('/').next().unwrap();
+                done.parse().unwrap()
+            })
+            .collect();
+        assert!(counts.len() >= 400, "{text}");
+        assert!(counts.windows(2).all(|w| w[0] <= w[1]), "{counts:?}");
     }
 
     #[test]
