@@ -9,6 +9,17 @@
 //!   ([`crate::stats::breaths::segment_breaths`], hysteresis 0.3 of the range, extrema at
 //!   least 0.1 breathing periods apart as for the recording ([`super::breathing`]), no
 //!   smoothing: the model's trajectory carries no noise).
+//! - The recording's ends: the fit puts its first frame at end-expiration, so a breath
+//!   often starts on the first frame and ends on the last, where a splitter cannot confirm
+//!   a trough. The fitted model is deterministic and noise-free, so [`BreathReport::of_fit`]
+//!   runs it half a breathing period ([`END_PADDING_PERIODS`]) before the first frame (the
+//!   fit settles one period before it) and after the last, cuts that longer series, and
+//!   keeps the breaths whose starting and ending troughs lie within the recording's span
+//!   ([`breaths_within`]). A trough up to one frame interval outside an end counts as on
+//!   it: a trough found on samples places the curve's minimum only within a frame either
+//!   side of its sample, and a fitted model whose troughs sit a fraction of a frame off the
+//!   recording's (a 1-frame shift is 1.6 deg of phase at 0.25 Hz and 56 Hz) would otherwise
+//!   lose a whole breath at either end.
 //! - Ti (trough to peak), Te (peak to next trough), Ttot = Ti + Te, Ti/Ttot, and
 //!   IE50 = TIF50 / TEF50, the tidal inspiratory flow at 50 % of the inspired volume over
 //!   the tidal expiratory flow at 50 % of the expired volume: the indices by which SLP is
@@ -20,6 +31,11 @@
 //!   including, the next one, so that the loop closes):
 //!   [`crate::stats::thoracoabdominal`] (Konno & Mead 1967; Lissajous method, Agostoni &
 //!   Mognoni 1966, Prisk, Hammer & Newth 2002), positive when the abdomen leads.
+//! - Summary: the mean and sample SD of each index over the breaths, except the phase
+//!   angle, an angle on the circle where +179 and -179 deg are 2 deg apart: its mean is the
+//!   circular mean direction and its spread the circular standard deviation
+//!   ([`circular_mean_sd_deg`]; Fisher 1993, Statistical Analysis of Circular Data, ch. 2;
+//!   Mardia & Jupp 2000, Directional Statistics, ch. 2).
 
 use super::Fit;
 use crate::model::{Config, Quantity, Torso};
@@ -42,29 +58,79 @@ pub struct Compartments {
     pub abdomen: Vec<f64>,
 }
 
+/// Breathing periods the per-breath report runs the fitted model before the recording's
+/// first frame and after its last (module doc): half a period reaches the expiration that
+/// ends on a trough at the first frame, and the inspiration that confirms a trough on the
+/// last.
+pub const END_PADDING_PERIODS: f64 = 0.5;
+
 /// Runs the fitted drive of `fit` on a model built from `config` from rest and reads the
 /// lung, rib-cage and abdominal volumes at the recording's times. The fit's time convention
 /// ([`super::fitting`]): the recording's first frame is model time 1/f.
 pub fn fitted_compartments(config: &Config, fit: &Fit) -> Result<Compartments> {
+    fitted_compartments_at(config, fit, &fit.times)
+}
+
+/// [`fitted_compartments`] at `times` (relative to the recording's first frame, increasing,
+/// none earlier than one breathing period before it, where the fitted run starts).
+pub fn fitted_compartments_at(config: &Config, fit: &Fit, times: &[f64]) -> Result<Compartments> {
     let mut c = config.clone();
     c.drive = fit.drive;
     c.drive.enabled = true;
     let settle = 1.0 / c.drive.frequency;
+    if let Some(&t) = times
+        .first()
+        .filter(|&&t| !(settle + t).is_finite() || settle + t < 0.0)
+    {
+        return Err(Error::invalid(
+            "time of the fitted model's run",
+            t,
+            format!("at least -{settle} s (one breathing period before the first frame)"),
+        ));
+    }
     let mut torso = Torso::new(c)?;
-    let n = fit.times.len();
+    let n = times.len();
     let mut out = Compartments {
-        times: fit.times.clone(),
+        times: times.to_vec(),
         lung: Vec::with_capacity(n),
         rib_cage: Vec::with_capacity(n),
         abdomen: Vec::with_capacity(n),
     };
-    for &t in &fit.times {
+    for &t in times {
         torso.advance_to(settle + t)?;
         out.lung.push(torso.read(Quantity::LungVolume)?);
         out.rib_cage.push(torso.read(Quantity::RibCageDisplaced)?);
         out.abdomen.push(torso.read(Quantity::AbdomenDisplaced)?);
     }
     Ok(out)
+}
+
+/// `times` (uniformly spaced, at least two) extended by `pad` [s] on both sides at their
+/// own spacing; also the number of times added before the first.
+pub fn padded_times(times: &[f64], pad: f64) -> Result<(Vec<f64>, usize)> {
+    let n = times.len();
+    if n < 2 {
+        return Err(Error::invalid(
+            "recording frames",
+            n,
+            "at least 2 for a per-breath report",
+        ));
+    }
+    let (t0, t1) = (times[0], times[n - 1]);
+    let h = (t1 - t0) / (n - 1) as f64;
+    if !(h > 0.0 && h.is_finite()) {
+        return Err(Error::invalid(
+            "recording times",
+            format!("{t0} s to {t1} s"),
+            "increasing times",
+        ));
+    }
+    let k = (pad / h).ceil().max(0.0) as usize;
+    let mut out = Vec::with_capacity(n + 2 * k);
+    out.extend((1..=k).rev().map(|i| t0 - i as f64 * h));
+    out.extend_from_slice(times);
+    out.extend((1..=k).map(|i| t1 + i as f64 * h));
+    Ok((out, k))
 }
 
 /// The indices of one breath (module doc).
@@ -151,6 +217,30 @@ pub fn breath_indices(c: &Compartments, frequency: f64) -> Result<Vec<BreathIndi
         .collect())
 }
 
+/// The breaths of `c` ([`breath_indices`]) whose starting and ending troughs lie within
+/// `from..=to` [s], a trough up to one frame interval of `c` outside either end counting
+/// as on it (module doc: the report's series runs beyond the recording; a sampled trough
+/// locates the minimum within a frame).
+pub fn breaths_within(
+    c: &Compartments,
+    frequency: f64,
+    from: f64,
+    to: f64,
+) -> Result<Vec<BreathIndices>> {
+    let n = c.times.len();
+    let h = if n > 1 {
+        (c.times[n - 1] - c.times[0]) / (n - 1) as f64
+    } else {
+        0.0
+    };
+    // One frame, and the rounding of times computed from it.
+    let slack = h * (1.0 + 1e-9);
+    Ok(breath_indices(c, frequency)?
+        .into_iter()
+        .filter(|b| b.onset_s >= from - slack && b.onset_s + b.ttot_s <= to + slack)
+        .collect())
+}
+
 /// Mean and sample SD (n - 1) of the finite values; NaN when there are none (SD: fewer
 /// than two).
 pub fn mean_sd(x: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -168,32 +258,83 @@ pub fn mean_sd(x: impl Iterator<Item = f64>) -> (f64, f64) {
     (m, sd)
 }
 
+/// Circular mean direction and circular standard deviation [deg] of the finite angles
+/// `deg` [deg] (Fisher 1993, Statistical Analysis of Circular Data, Cambridge University
+/// Press, ch. 2; Mardia & Jupp 2000, Directional Statistics, Wiley, ch. 2): with C and S
+/// the means of the cosines and sines, the mean direction is atan2(S, C), in (-180, 180],
+/// and the circular SD is sqrt(-2 ln R) with R = sqrt(C^2 + S^2) the mean resultant length
+/// (for small spreads close to the linear SD). NaN when there are no angles or they cancel
+/// (R = 0, no mean direction); the SD NaN for fewer than two, as [`mean_sd`].
+pub fn circular_mean_sd_deg(deg: impl Iterator<Item = f64>) -> (f64, f64) {
+    let v: Vec<f64> = deg.filter(|v| v.is_finite()).map(f64::to_radians).collect();
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let n = v.len() as f64;
+    let c = v.iter().map(|a| a.cos()).sum::<f64>() / n;
+    let s = v.iter().map(|a| a.sin()).sum::<f64>() / n;
+    let r = c.hypot(s);
+    // Below 1e-12 the direction is rounding noise.
+    if r < 1e-12 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mut mean = s.atan2(c).to_degrees();
+    if mean <= -180.0 {
+        mean += 360.0;
+    }
+    let sd = if v.len() > 1 {
+        (-2.0 * r.min(1.0).ln()).sqrt().to_degrees()
+    } else {
+        f64::NAN
+    };
+    (mean, sd)
+}
+
 /// The per-breath report of a fit.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BreathReport {
     /// The fitted model's volumes at the recording's times.
     pub compartments: Compartments,
-    /// One entry per whole breath of the fitted lung volume.
+    /// One entry per whole breath of the fitted lung volume within the recording's span.
     pub breaths: Vec<BreathIndices>,
 }
 
 impl BreathReport {
-    /// Runs the fitted model ([`fitted_compartments`]) and analyses its breaths.
+    /// Runs the fitted model from half a breathing period before the recording's first
+    /// frame to half a period after its last ([`fitted_compartments_at`],
+    /// [`END_PADDING_PERIODS`]), keeps the breaths within the recording's span
+    /// ([`breaths_within`]) and the volumes at the recording's times.
     pub fn of_fit(config: &Config, fit: &Fit) -> Result<BreathReport> {
-        let compartments = fitted_compartments(config, fit)?;
-        let breaths = breath_indices(&compartments, fit.drive.frequency)?;
+        let f = fit.drive.frequency;
+        let (times, before) = padded_times(&fit.times, END_PADDING_PERIODS / f)?;
+        let padded = fitted_compartments_at(config, fit, &times)?;
+        let (from, to) = (fit.times[0], fit.times[fit.times.len() - 1]);
+        let breaths = breaths_within(&padded, f, from, to)?;
+        let span = before..before + fit.times.len();
+        let compartments = Compartments {
+            times: fit.times.clone(),
+            lung: padded.lung[span.clone()].to_vec(),
+            rib_cage: padded.rib_cage[span.clone()].to_vec(),
+            abdomen: padded.abdomen[span].to_vec(),
+        };
         Ok(BreathReport {
             compartments,
             breaths,
         })
     }
 
-    /// Mean and SD of each index of [`INDICES`].
+    /// Mean and SD of each index of [`INDICES`]; the phase angle's circular
+    /// ([`circular_mean_sd_deg`]).
     pub fn stats(&self) -> Vec<(&'static str, f64, f64)> {
         INDICES
             .iter()
             .map(|(name, _, get)| {
-                let (m, sd) = mean_sd(self.breaths.iter().map(get));
+                let values = self.breaths.iter().map(get);
+                let (m, sd) = if *name == "phase_angle_deg" {
+                    circular_mean_sd_deg(values)
+                } else {
+                    mean_sd(values)
+                };
                 (*name, m, sd)
             })
             .collect()
@@ -228,13 +369,14 @@ impl BreathReport {
             .map(|(k, _, s)| (k.to_string(), num(*s)))
             .collect();
         json!({
-            "source": "the fitted model run from rest with the fitted drive over the recording's time span; breaths trough-peak-trough of its lung volume",
+            "source": "the fitted model run from rest with the fitted drive from half a breathing period before the recording's first frame to half a period after its last; breaths trough-peak-trough of its lung volume whose troughs lie within the recording's span (a trough on its first or last frame included)",
             "count": self.breaths.len(),
+            "statistics": "mean and sample SD (n - 1) of the breaths' values; phase_angle_deg: circular mean direction atan2(mean sin, mean cos) and circular SD sqrt(-2 ln R), R the mean resultant length (Fisher 1993; Mardia & Jupp 2000)",
             "mean": mean,
             "sd": sd,
             "definitions": {
                 "ie50": "TIF50/TEF50: tidal inspiratory flow at 50 % of the inspired volume over tidal expiratory flow at 50 % of the expired volume",
-                "rib_cage_share": "rib-cage swing / (rib-cage + abdominal swings) of the displaced volumes within the breath",
+                "rib_cage_share": "rib-cage swing / (rib-cage + abdominal swings) of the displaced volumes within the breath, a fraction (0-1; the printed table shows it in %)",
                 "phase_angle_deg": "Lissajous phase angle of the abdominal against the rib-cage displaced volume, sin(phi) = m/s (Agostoni & Mognoni 1966); positive: abdomen leads",
             },
         })
@@ -299,18 +441,21 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    /// A raised-cosine breath: inspiration of `ti` s, expiration of `te` s, tidal volume
-    /// `vt`, sampled at `rate` Hz for `breaths` breaths between a quarter-breath lead-in
-    /// (the end of an expiration) and a quarter-breath tail. Flow at half volume: vt pi / (2 ti) in, vt pi / (2 te) out, so
-    /// IE50 = te / ti.
-    fn cosine_breaths(ti: f64, te: f64, vt: f64, rate: f64, breaths: usize) -> Compartments {
+    /// Raised-cosine breaths at `times`: inspiration of `ti` s, expiration of `te` s, tidal
+    /// volume `vt`, a trough at `first_trough` and every ti + te from it (before it, the
+    /// end of an expiration). Flow at half volume: vt pi / (2 ti) in, vt pi / (2 te) out,
+    /// so IE50 = te / ti. Rib cage 0.4 of the volume in phase, abdomen 0.6 of it lagging
+    /// 0.1 breath.
+    fn cosine_compartments(
+        ti: f64,
+        te: f64,
+        vt: f64,
+        times: Vec<f64>,
+        first_trough: f64,
+    ) -> Compartments {
         let ttot = ti + te;
-        let lead = 0.25 * ttot;
-        let n = ((lead + breaths as f64 * ttot + lead) * rate) as usize;
-        let times: Vec<f64> = (0..n).map(|k| k as f64 / rate).collect();
-        // Before the first trough (t < lead) the signal is the end of an expiration.
         let shape = |t: f64| {
-            let u = (t - lead).rem_euclid(ttot);
+            let u = (t - first_trough).rem_euclid(ttot);
             if u < ti {
                 0.5 * (1.0 - (PI * u / ti).cos())
             } else {
@@ -318,7 +463,6 @@ mod tests {
             }
         };
         let lung: Vec<f64> = times.iter().map(|&t| 3.0 + vt * shape(t)).collect();
-        // Rib cage 0.4 of the volume in phase, abdomen 0.6 of it lagging 0.1 breath.
         let rib_cage = times.iter().map(|&t| 0.4 * vt * shape(t)).collect();
         let abdomen = times
             .iter()
@@ -330,6 +474,15 @@ mod tests {
             rib_cage,
             abdomen,
         }
+    }
+
+    /// [`cosine_compartments`] sampled at `rate` Hz for `breaths` breaths between a
+    /// quarter-breath lead-in (the end of an expiration) and a quarter-breath tail.
+    fn cosine_breaths(ti: f64, te: f64, vt: f64, rate: f64, breaths: usize) -> Compartments {
+        let lead = 0.25 * (ti + te);
+        let n = ((lead + breaths as f64 * (ti + te) + lead) * rate) as usize;
+        let times: Vec<f64> = (0..n).map(|k| k as f64 / rate).collect();
+        cosine_compartments(ti, te, vt, times, lead)
     }
 
     #[test]
@@ -417,6 +570,88 @@ mod tests {
         let t = r.table();
         assert_eq!(t.lines().count(), 1 + 4 + 2, "{t}");
         assert!(t.contains("Ti [s]") && t.contains("VT [L]") && t.contains("phase [deg]"));
+    }
+
+    /// A recording that starts and ends on a trough (as a fit's first frame, at
+    /// end-expiration): five whole breaths in 0..=5 Ttot. The series runs half a breath
+    /// beyond both ends, as the report's run of the fitted model, and every breath is kept,
+    /// the first starting on the first frame and the last ending on the last.
+    #[test]
+    fn breaths_starting_and_ending_on_the_recording_ends_are_all_kept() {
+        let (ti, te, vt, rate) = (1.6, 2.4, 0.5, 28.0_f64);
+        let ttot: f64 = ti + te;
+        let recording: Vec<f64> = (0..=(5.0 * ttot * rate).round() as usize)
+            .map(|k| k as f64 / rate)
+            .collect();
+        let (times, before) = padded_times(&recording, 0.5 * ttot).unwrap();
+        assert_eq!(before, (0.5 * ttot * rate).ceil() as usize);
+        assert_eq!(times.len(), recording.len() + 2 * before);
+        assert!((times[before] - 0.0).abs() < 1e-12);
+        let c = cosine_compartments(ti, te, vt, times, 0.0);
+        let b = breaths_within(&c, 1.0 / ttot, 0.0, 5.0 * ttot).unwrap();
+        assert_eq!(b.len(), 5, "{b:?}");
+        for (k, x) in b.iter().enumerate() {
+            assert!((x.onset_s - k as f64 * ttot).abs() < 1e-9, "{x:?}");
+            assert!((x.ttot_s - ttot).abs() < 1e-9, "{x:?}");
+            assert!((x.tidal_volume_l - vt).abs() < 1e-3 * vt, "{x:?}");
+        }
+        // A trough one frame outside an end still counts (a sampled trough places the
+        // minimum within a frame); two frames outside, the breath is not whole.
+        let h = 1.0 / rate;
+        for (from, to, count) in [
+            (h, 5.0 * ttot - h, 5),
+            (2.0 * h, 5.0 * ttot, 4),
+            (0.0, 5.0 * ttot - 2.0 * h, 4),
+            (2.0 * h, 5.0 * ttot - 2.0 * h, 3),
+        ] {
+            let b = breaths_within(&c, 1.0 / ttot, from, to).unwrap();
+            assert_eq!(b.len(), count, "{from} {to}: {b:?}");
+        }
+        let b = breaths_within(&c, 1.0 / ttot, 2.0 * h, 5.0 * ttot).unwrap();
+        assert!((b[0].onset_s - ttot).abs() < 1e-9, "{b:?}");
+        assert!(padded_times(&[0.0], 1.0).is_err());
+        assert!(padded_times(&[1.0, 1.0], 1.0).is_err());
+    }
+
+    #[test]
+    fn phase_angles_are_averaged_on_the_circle() {
+        // Paradoxical breaths either side of 180 deg: the plain mean would read 0
+        // (synchronous); on the circle they are 2 deg from 180.
+        let (m, sd) = circular_mean_sd_deg([178.0, -178.0, 178.0, -178.0].into_iter());
+        assert!((m.abs() - 180.0).abs() < 1e-9, "{m}");
+        // Each 2 deg from the mean: R = cos 2 deg, sqrt(-2 ln R) = 2.0001 deg.
+        assert!((sd - 2.0).abs() < 0.01, "{sd}");
+        // Small spreads: the circular SD is close to the root mean square deviation
+        // (8.165 deg for 10, 20, 30).
+        let (m, sd) = circular_mean_sd_deg([10.0, 20.0, 30.0, f64::NAN].into_iter());
+        assert!((m - 20.0).abs() < 1e-9, "{m}");
+        assert!((sd - (200.0_f64 / 3.0).sqrt()).abs() < 0.05, "{sd}");
+        let (m, sd) = circular_mean_sd_deg([-170.0].into_iter());
+        assert!((m + 170.0).abs() < 1e-9 && sd.is_nan());
+        let (m, _) = circular_mean_sd_deg([90.0, -90.0].into_iter());
+        assert!(m.is_nan());
+        assert!(circular_mean_sd_deg(std::iter::empty()).0.is_nan());
+        // The report's summary takes the circular statistics for the phase angle only.
+        let c = cosine_breaths(1.6, 2.4, 0.45, 28.0, 4);
+        let mut breaths = breath_indices(&c, 0.25).unwrap();
+        for (k, b) in breaths.iter_mut().enumerate() {
+            b.phase_angle_deg = if k % 2 == 0 { 178.0 } else { -178.0 };
+        }
+        let r = BreathReport {
+            breaths,
+            compartments: c,
+        };
+        let s = r.json_summary();
+        let phase = s["mean"]["phase_angle_deg"].as_f64().unwrap();
+        assert!((phase.abs() - 180.0).abs() < 1e-9, "{s}");
+        assert!((s["sd"]["phase_angle_deg"].as_f64().unwrap() - 2.0).abs() < 0.01);
+        assert!((s["mean"]["ti_s"].as_f64().unwrap() - 1.6).abs() < 0.04);
+        let t = r.table();
+        let mean_row = t
+            .lines()
+            .find(|l| l.trim_start().starts_with("mean"))
+            .unwrap();
+        assert!(mean_row.trim_end().ends_with("180.0"), "{t}");
     }
 
     #[test]
