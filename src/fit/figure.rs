@@ -1,10 +1,13 @@
 //! The figure of a fit (`<stem>_report.png` and its SVG twin), stacked panels 1400 px wide:
 //! the fitted lung volume over time with the breath onsets; the volumes displaced by the
 //! rib cage and by the abdomen (when the per-breath report was made); three markers of the
-//! midline recorded vs fitted; and a front view of the marker set (model frame: x anterior,
-//! y superior, z right; seen from the front, the subject's right on the viewer's left),
-//! each marker coloured by its RMS residual over the frames where it was tracked, with a
-//! colour bar (viridis anchors, Smith & van der Walt 2015, matplotlib's default map).
+//! midline recorded vs fitted (their ventral displacement); and a front view of the marker
+//! set ([`front_view`]), each marker coloured by its RMS residual over the frames where it
+//! was tracked, with a colour bar (viridis anchors, Smith & van der Walt 2015, matplotlib's
+//! default map). Directions are those of the model's anatomical frame (x anterior, y
+//! superior, z right), whatever frame the fit's markers are in ([`Fit::to_anatomy`]: under
+//! skin fitting they are in the recording's frame); the front view shows the subject's
+//! right on the viewer's left.
 
 use super::Fit;
 use super::clinical::BreathReport;
@@ -51,6 +54,42 @@ pub fn marker_rms(fit: &Fit) -> Vec<f64> {
                 f64::NAN
             }
         })
+        .collect()
+}
+
+/// The front view of the marker set at the first fitted frame: per marker, (-z, y) in the
+/// model's anatomical frame [m] (lateral, the subject's right to the left; superior), read
+/// through [`Fit::to_anatomy`] so that a fit whose markers are in the recording's frame
+/// (skin fitting) is seen from the front too. Empty without fitted frames.
+pub fn front_view(fit: &Fit) -> Vec<(f64, f64)> {
+    fit.fitted.markers.first().map_or_else(Vec::new, |first| {
+        first
+            .iter()
+            .map(|p| {
+                let a = fit.to_anatomy.apply(p);
+                (-a.z, a.y)
+            })
+            .collect()
+    })
+}
+
+/// The ventral (anatomical x) component of the displacement `p - base` [m] of a marker
+/// of `fit` (both in the fit's frame; [`Fit::to_anatomy`]).
+fn ventral(fit: &Fit, p: &nalgebra::Point3<f64>, base: &nalgebra::Point3<f64>) -> f64 {
+    (fit.to_anatomy.rotation * (p - base)).x
+}
+
+/// The fitted ventral displacement [mm] of marker `j` of `fit` from its first fitted frame,
+/// at each of the fit's times (the marker panel's fitted lines); empty for a marker the fit
+/// does not have.
+pub fn ventral_displacement(fit: &Fit, j: usize) -> Vec<f64> {
+    let Some(base) = fit.fitted.markers.first().and_then(|m| m.get(j)).copied() else {
+        return Vec::new();
+    };
+    fit.fitted
+        .markers
+        .iter()
+        .map(|m| ventral(fit, &m[j], &base) * 1e3)
         .collect()
 }
 
@@ -138,8 +177,9 @@ fn time_panels(fit: &Fit, report: Option<&BreathReport>) -> Vec<OwnedPanel> {
         let stats = r.stats();
         let get = |name: &str| stats.iter().find(|s| s.0 == name).map_or(f64::NAN, |s| s.1);
         title = format!(
-            "Fitted lung volume: {} breaths, VT {:.3} L, Ti/Ttot {:.2}, IE50 {:.2} (means); cost {:.2} mm",
+            "Fitted lung volume: {} breath{}, VT {:.3} L, Ti/Ttot {:.2}, IE50 {:.2} (means); cost {:.2} mm",
             r.breaths.len(),
+            if r.breaths.len() == 1 { "" } else { "s" },
             get("tidal_volume_l"),
             get("ti_ttot"),
             get("ie50"),
@@ -189,20 +229,15 @@ fn time_panels(fit: &Fit, report: Option<&BreathReport>) -> Vec<OwnedPanel> {
     let picks =
         [0, rows / 2, rows.saturating_sub(1)].map(|r| (r * cols + cols / 2).min(first.len() - 1));
     for (k, &j) in picks.iter().enumerate() {
-        let base = first[j].x;
+        let base = first[j];
         let (mut tr, mut yr) = (Vec::new(), Vec::new());
         for (t, f) in fit.times.iter().zip(&fit.recorded) {
             if let Some(q) = f.get(j).copied().flatten() {
                 tr.push(*t);
-                yr.push((q.x - base) * 1e3);
+                yr.push(ventral(fit, &q, &base) * 1e3);
             }
         }
-        let yf: Vec<f64> = fit
-            .fitted
-            .markers
-            .iter()
-            .map(|m| (m[j].x - base) * 1e3)
-            .collect();
+        let yf = ventral_displacement(fit, j);
         series.push((
             format!("marker[{}] recorded", j + 1),
             tr,
@@ -220,7 +255,7 @@ fn time_panels(fit: &Fit, report: Option<&BreathReport>) -> Vec<OwnedPanel> {
     }
     panels.push(OwnedPanel {
         title: "Markers: ventral displacement, recorded vs fitted".into(),
-        y_label: "x displacement [mm]".into(),
+        y_label: "ventral displacement [mm]".into(),
         series,
     });
     panels
@@ -235,10 +270,7 @@ fn draw_front<DB: DrawingBackend>(
     let e = |x: &dyn std::fmt::Debug| format!("{x:?}");
     let (plot, bar) = area.split_horizontally(WIDTH - 260);
     // Markers at their first fitted frame (the model's end-expiratory grid).
-    let Some(first) = fit.fitted.markers.first() else {
-        return Ok(());
-    };
-    let pts: Vec<(f64, f64)> = first.iter().map(|p| (-p.z, p.y)).collect();
+    let pts = front_view(fit);
     let (mut u0, mut u1, mut v0, mut v1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,

@@ -152,6 +152,11 @@ pub struct Fit {
     pub frequency: FrequencyEstimate,
     /// Recording frame -> model frame.
     pub to_model: RigidTransform,
+    /// The frame of `recorded` and `fitted.markers` -> the model's anatomical frame (x
+    /// anterior, y superior, z right): the identity, unless the model gave its markers in
+    /// the recording's frame (its skin fitted to the recording, `scene.slp_reference`),
+    /// when it is the model's registration (recording -> model). Views of the markers use it.
+    pub to_anatomy: RigidTransform,
     /// Mean distance between the registered first frame and the rest markers [m].
     pub registration_mean_m: f64,
     /// Skin fitting by the model (mean error before, after) [m], when it fitted its skin to
@@ -601,6 +606,7 @@ pub fn fit_marker_frames(
     // Registration of the first frame to the rest markers.
     let rest = model.rest_markers()?;
     let skin_fit = model.skin_fit()?;
+    let to_anatomy = model.to_anatomy()?;
     let (to_model, rms) = register_rigid(&rest, &recording.frames[0], false)?;
     let recorded: Vec<Vec<Option<Point3<f64>>>> = recording
         .frames
@@ -791,6 +797,7 @@ pub fn fit_marker_frames(
         delta_phase: wrap_angle(m.x[3] - m.x[2]),
         frequency,
         to_model,
+        to_anatomy,
         registration_mean_m,
         skin_fit,
         registration_rms_m: rms,

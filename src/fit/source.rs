@@ -8,6 +8,7 @@
 //! transient breath and one periodic breath only, when the breath has become periodic
 //! ([`TorsoMarkers::run_periodic`]).
 
+use crate::anatomy::skin::RigidTransform;
 use crate::model::{Config, Drive, Quantity, Sample, Snapshot, Torso};
 use crate::{Error, Result};
 use nalgebra::Point3;
@@ -38,6 +39,15 @@ pub trait MarkerSource {
     /// (mean before, mean after) [m], when the model registered and fitted its skin itself.
     fn skin_fit(&mut self) -> Result<Option<(f64, f64)>> {
         Ok(None)
+    }
+
+    /// The transform from the frame of the markers [`MarkerSource::run`] gives to the
+    /// model's anatomical frame (x anterior, y superior, z right): the identity, unless the
+    /// model registered its grid to a recording (`scene.slp_reference`) and gives its
+    /// markers in the recording's frame, when it is that registration's recording -> model
+    /// transform.
+    fn to_anatomy(&mut self) -> Result<RigidTransform> {
+        Ok(RigidTransform::identity())
     }
 
     /// Runs `schedule` from the rest state and records the markers (and the lung volume
@@ -299,6 +309,13 @@ impl MarkerSource for TorsoMarkers {
         Ok(model
             .registration()
             .map(|r| (r.fit.mean_before, r.fit.mean_after)))
+    }
+
+    fn to_anatomy(&mut self) -> Result<RigidTransform> {
+        let model = self.torso.marker_model()?;
+        Ok(model
+            .registration()
+            .map_or_else(RigidTransform::identity, |r| r.to_model))
     }
 
     /// Another torso on the same compiled model (the skin and marker model are shared), at
