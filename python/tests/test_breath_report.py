@@ -1,9 +1,12 @@
-"""The per-breath report of `torso fit` checked by an independent implementation (numpy and
-scipy): breath timing by scipy.signal.find_peaks on the fitted lung volume the fit writes,
-tidal volume, IE50 from the numerical flow (numpy.gradient) at half the tidal volume, the
-rib-cage share and the Lissajous phase angle recomputed from the written compartment
-volumes; and python/fit_slp.py reading the same recordings as `torso fit` (grid CSV, C3D,
-TRC, CSV of named markers) with the same progress lines.
+"""The per-breath report of `torso fit` checked against numpy and scipy: breath timing by
+scipy.signal.find_peaks on the fitted lung volume the fit writes, tidal volume, IE50 from
+the numerical flow (numpy.gradient) at half the tidal volume, and the rib-cage share
+recomputed from the written compartment volumes; the phase angle by two routes: a Python
+port of the report's own Lissajous rule (`_lissajous`, the same algorithm, which checks the
+Rust arithmetic and sign convention, not the method), and an independent one, the phase
+difference of the fundamentals (least-squares sine fits at the breathing frequency) of the
+rib-cage and abdominal volumes; and python/fit_slp.py reading the same recordings as
+`torso fit` (grid CSV, C3D, TRC, CSV of named markers) with the same progress lines.
 
 Needs target/release/torso; skipped, with the reason printed, while it is missing. The fmpy
 run needs fmu/BreathingTorso.fmu too.
@@ -37,10 +40,12 @@ def _torso(*args):
 
 
 def _lissajous(rc, ab):
-    """sin(phi) = m / s (Agostoni & Mognoni 1966), written afresh: m from the abdominal
+    """sin(phi) = m / s (Agostoni & Mognoni 1966), a Python port of the report's rule
+    (src/stats/thoracoabdominal.rs, not an independent derivation): m from the abdominal
     values where the rib cage crosses its mid-excursion (closed loop), s the abdominal
-    excursion; beyond 90 deg when the two move in opposite directions; negative when the
-    abdomen lags (clockwise loop with the rib cage on x)."""
+    excursion; beyond 90 deg when the two move in opposite directions (negative
+    covariance); negative when the abdomen lags, i.e. when the loop, rib cage on x and
+    abdomen on y, runs counter-clockwise (positive shoelace area)."""
     mid = 0.5 * (rc.min() + rc.max())
     a, b = rc - mid, np.roll(rc, -1) - mid
     ab_next = np.roll(ab, -1)
@@ -56,11 +61,74 @@ def _lissajous(rc, ab):
     return -phi if area > 0 else phi
 
 
+def fundamental(t, x, f):
+    """Least-squares fit of x = c + a sin(2 pi f t + theta): (theta [rad], a, largest
+    absolute residual). The residual is what the signal holds beyond its fundamental
+    (harmonics, drift)."""
+    w = 2.0 * np.pi * f * np.asarray(t)
+    design = np.column_stack([np.ones_like(w), np.sin(w), np.cos(w)])
+    coef, *_ = np.linalg.lstsq(design, x, rcond=None)
+    residual = x - design @ coef
+    return math.atan2(coef[2], coef[1]), math.hypot(coef[1], coef[2]), float(np.max(np.abs(residual)))
+
+
+def fundamental_phase_deg(t, rc, ab, f):
+    """Phase of the abdominal volume's fundamental minus the rib cage's [deg], wrapped to
+    (-180, 180] (positive: abdomen leads, the report's sign), and the bound [deg] within
+    which the Lissajous angle of the same signals must lie around it.
+
+    For two pure sinusoids the Lissajous angle equals this phase difference exactly. Beyond
+    the fundamental, a residual of at most e_x (rib cage) and e_y (abdomen) times the
+    fundamental's amplitude moves the mid-excursion crossings by at most e_x rad of phase,
+    hence the abdominal values there by (e_x + e_y) times its amplitude (m by twice that),
+    and the abdominal excursion s by 2 e_y; so sin(phi) moves by at most
+    e_x + e_y (1 + |sin phi|), and phi by that over cos(phi) (first order; radians)."""
+    th_rc, a_rc, r_rc = fundamental(t, rc, f)
+    th_ab, a_ab, r_ab = fundamental(t, ab, f)
+    d = math.degrees(th_ab - th_rc)
+    d = (d + 180.0) % 360.0 - 180.0
+    d = 180.0 if d == -180.0 else d
+    ex, ey = r_rc / a_rc, r_ab / a_ab
+    phi = math.radians(d)
+    cos = abs(math.cos(phi))
+    bound = math.degrees((ex + ey * (1.0 + abs(math.sin(phi)))) / cos) if cos > 0.1 else math.inf
+    return d, bound
+
+
+def circular_mean_deg(values):
+    """Circular mean direction [deg] (Fisher 1993; Mardia & Jupp 2000)."""
+    r = np.radians(values)
+    return math.degrees(math.atan2(np.mean(np.sin(r)), np.mean(np.cos(r))))
+
+
+def circular_sd_deg(values):
+    """Circular standard deviation sqrt(-2 ln R) [deg], R the mean resultant length."""
+    r = np.radians(values)
+    return math.degrees(math.sqrt(-2.0 * math.log(math.hypot(np.mean(np.sin(r)), np.mean(np.cos(r))))))
+
+
 def test_lissajous_reference_recovers_sine_phases():
     u = np.linspace(0, 2 * np.pi, 200, endpoint=False)
     for phi in (0.0, 25.0, -70.0, 140.0):
         got = _lissajous(0.2 * np.sin(u), 0.5 * np.sin(u + math.radians(phi)) + 1.0)
         assert got == pytest.approx(phi, abs=0.2)
+
+
+def test_fundamental_phase_recovers_sine_phases_and_bounds_harmonics():
+    t = np.linspace(0.0, 12.0, 600, endpoint=False)
+    f = 0.25
+    u = 2 * np.pi * f * t
+    for phi in (0.0, 25.0, -70.0, 140.0):
+        d, bound = fundamental_phase_deg(t, 0.2 * np.sin(u) + 3.0, 0.5 * np.sin(u + math.radians(phi)), f)
+        assert d == pytest.approx(phi, abs=1e-9)
+        assert bound < 1e-9
+    # A second harmonic of 5 % on the rib cage: the Lissajous angle of one breath moves,
+    # within the stated bound.
+    rc = 0.2 * (np.sin(u) + 0.05 * np.sin(2 * u + 0.7))
+    ab = 0.5 * np.sin(u + math.radians(20.0))
+    d, bound = fundamental_phase_deg(t, rc, ab, f)
+    one = slice(0, 200)
+    assert abs(_lissajous(rc[one], ab[one]) - d) <= bound
 
 
 def test_breath_report_agrees_with_numpy_and_scipy(tmp_path):
@@ -78,12 +146,35 @@ def test_breath_report_agrees_with_numpy_and_scipy(tmp_path):
     span = lung.max() - lung.min()
     peaks, _ = find_peaks(lung, prominence=0.3 * span)
     troughs, _ = find_peaks(-lung, prominence=0.3 * span)
+    # find_peaks never reports a sample at either end, nor one next to it (its prominence
+    # is cut off by the end); a trough on or beside the first or last frame (the recording
+    # starts at end-expiration) is the lowest sample of the quarter breath at that end,
+    # when that sample is not the quarter's inner boundary (a slope running out of it).
+    quarter = int(round(0.25 / result["drive.frequency"] / h))
+    n = len(lung)
+    for lo in (0, n - 1 - quarter):
+        k = lo + int(np.argmin(lung[lo:lo + quarter + 1]))
+        inner = lo + quarter if lo == 0 else lo
+        if k != inner:
+            troughs = np.union1d(troughs, [k])
+    # The truth's breaths: a synthetic recording starts at end-expiration and, without
+    # variability, its troughs follow every 1/f, so it holds floor(duration f) whole breaths.
+    truth = json.loads((tmp_path / "truth.json").read_text())
+    assert truth["variability"] == 0
+    expected = math.floor(truth["duration_s"] * truth["drive.frequency"] + 1e-9)
     breaths = result["breaths"]
-    assert len(breaths) >= 3
+    assert len(breaths) == expected == 5
+    checked = 0
     for b in breaths:
         i0 = int(round(b["onset_s"] / h))
         ip = int(round((b["onset_s"] + b["ti_s"]) / h))
         i1 = int(round((b["onset_s"] + b["ttot_s"]) / h))
+        # A trough up to one frame outside the recording counts as on its end (the
+        # report's rule); such a breath has a sample the CSV does not hold.
+        assert -1 <= i0 and i1 <= len(t), b
+        if i0 < 0 or i1 >= len(t):
+            continue
+        checked += 1
         # scipy's extrema are the report's within one frame
         assert np.min(np.abs(troughs - i0)) <= 1, (b, troughs)
         assert np.min(np.abs(peaks - ip)) <= 1, (b, peaks)
@@ -105,12 +196,27 @@ def test_breath_report_agrees_with_numpy_and_scipy(tmp_path):
         swing = lambda x: x[seg].max() - x[seg].min()  # noqa: E731
         assert swing(rc) / (swing(rc) + swing(ab)) == pytest.approx(b["rib_cage_share"], abs=1e-3)
         assert _lissajous(rc[seg], ab[seg]) == pytest.approx(b["phase_angle_deg"], abs=0.3)
+    assert checked >= len(breaths) - 2
     summary = result["breaths_summary"]
     assert summary["count"] == len(breaths)
-    for key in ("ti_s", "te_s", "tidal_volume_l", "phase_angle_deg"):
+    for key in ("ti_s", "te_s", "tidal_volume_l"):
         values = [b[key] for b in breaths]
         assert summary["mean"][key] == pytest.approx(np.mean(values), abs=1e-12)
         assert summary["sd"][key] == pytest.approx(np.std(values, ddof=1), abs=1e-12)
+    phases = [b["phase_angle_deg"] for b in breaths]
+    assert summary["mean"]["phase_angle_deg"] == pytest.approx(circular_mean_deg(phases), abs=1e-9)
+    assert summary["sd"]["phase_angle_deg"] == pytest.approx(circular_sd_deg(phases), abs=1e-9)
+
+    # Independently of the Lissajous rule: the phase difference of the fundamentals over
+    # the whole breaths, within the bound the signals' departure from a sinusoid sets
+    # (fundamental_phase_deg).
+    i0 = max(0, int(round(breaths[0]["onset_s"] / h)))
+    i1 = min(len(t), int(round((breaths[-1]["onset_s"] + breaths[-1]["ttot_s"]) / h)))
+    whole = slice(i0, i1)
+    d, bound = fundamental_phase_deg(t[whole], rc[whole], ab[whole], result["drive.frequency"])
+    print(f"phase: report {summary['mean']['phase_angle_deg']:+.2f} deg, fundamentals {d:+.2f} deg, "
+          f"bound {bound:.2f} deg")
+    assert abs(summary["mean"]["phase_angle_deg"] - d) <= bound
 
 
 def test_fit_slp_reads_every_format_torso_fit_reads(tmp_path):
