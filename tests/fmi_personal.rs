@@ -850,3 +850,28 @@ fn instantiation_errors_say_where_the_parameter_set_was_looked_for() {
         "{last}"
     );
 }
+
+/// `torso fmu build --subject FIT` without `--out` names the FMU after the fit result,
+/// `fmu/<stem>.fmu` with `fmu/<stem>.ssv` beside it, and leaves the generic FMU's name alone.
+#[test]
+fn without_out_the_fmu_is_named_after_the_fit() {
+    let fit = &built().fit;
+    let cwd = dir().join("default_name");
+    let _ = std::fs::remove_dir_all(&cwd);
+    std::fs::create_dir_all(&cwd).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["fmu", "build", "--subject", fit.to_str().unwrap()])
+        .current_dir(&cwd)
+        .output()
+        .unwrap();
+    let msg =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{msg}");
+    assert_eq!(fit.file_stem().unwrap(), "result");
+    let fmu = cwd.join("fmu").join("result.fmu");
+    assert!(msg.contains("wrote fmu/result.fmu"), "{msg}");
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+    assert!(zip.by_name(&format!("resources/{PARAMETERS}")).is_ok());
+    assert!(cwd.join("fmu").join("result.ssv").is_file());
+    assert!(!cwd.join("fmu").join("BreathingTorso.fmu").exists());
+}
