@@ -784,6 +784,7 @@ fn instantiation_errors_say_where_the_parameter_set_was_looked_for() {
         .err()
         .unwrap();
     let last = log.last().unwrap();
+    assert!(!last.contains("  "), "{last}");
     assert!(
         last.contains(&format!("GUID {guid} does not match"))
             && last.contains(&format!("no parameter set was found at {}", set.display()))
@@ -809,6 +810,7 @@ fn instantiation_errors_say_where_the_parameter_set_was_looked_for() {
         .err()
         .unwrap();
     let last = log.last().unwrap();
+    assert!(!last.contains("  "), "{last}");
     assert!(
         last.contains(&format!(
             "the parameter set {} makes this a personalised FMU with GUID {edited_guid}",

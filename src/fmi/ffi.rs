@@ -356,16 +356,20 @@ fn guid_mismatch(
     let set = resources.map(|r| r.join(super::personal::PARAMETERS));
     let source = match &set {
         Some(path) if table.personalisation().is_some() => format!(
-            "the parameter set {} makes this a personalised FMU with GUID {ours}: the model              description and that parameter set differ (was the set edited, or copied from              another personalised FMU?)",
+            "the parameter set {} makes this a personalised FMU with GUID {ours}: the model \
+             description and that parameter set differ (was the set edited, or copied from \
+             another personalised FMU?)",
             path.display()
         ),
         Some(path) => format!(
-            "no parameter set was found at {}, so this is the generic FMU, GUID {ours}; a              personalised FMU needs its resources/{} (is it missing from the unpacked FMU?)",
+            "no parameter set was found at {}, so this is the generic FMU, GUID {ours}; a \
+             personalised FMU needs its resources/{} (is it missing from the unpacked FMU?)",
             path.display(),
             super::personal::PARAMETERS
         ),
         None => format!(
-            "no parameter set was looked for (no usable resource location), so this is the              generic FMU, GUID {ours}; a personalised FMU reads its resources/{}",
+            "no parameter set was looked for (no usable resource location), so this is the \
+             generic FMU, GUID {ours}; a personalised FMU reads its resources/{}",
             super::personal::PARAMETERS
         ),
     };
