@@ -9,7 +9,7 @@
 use breathing_torso::fmi::instance::Instance;
 use breathing_torso::fmi::personal::{PARAMETERS, table_in};
 use breathing_torso::fmi::ssv;
-use breathing_torso::fmi::types::fmi2Status::fmi2OK;
+use breathing_torso::fmi::types::fmi2Status::{fmi2Error, fmi2OK};
 use breathing_torso::fmi::variables::{Value, table};
 use quick_xml::Reader;
 use quick_xml::events::Event;
@@ -480,4 +480,400 @@ fn a_subject_on_another_grid_has_that_grids_markers() {
         .to_string();
         assert!(e.contains(name), "{e}");
     }
+}
+
+/// Copies the folder `from` to `to` (created), files and subfolders.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let p = entry.unwrap().path();
+        let target = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_dir(&p, &target);
+        } else {
+            std::fs::copy(&p, &target).unwrap();
+        }
+    }
+}
+
+/// A copy of the unpacked personalised FMU at `dir()/<name>` (replacing any earlier one).
+fn unpacked_copy(name: &str) -> PathBuf {
+    let to = dir().join(name);
+    let _ = std::fs::remove_dir_all(&to);
+    copy_dir(&built().unpacked, &to);
+    to
+}
+
+/// Instances made through the exported functions, as an importer makes them, with a logger
+/// that records (status, category, message). x86-64 only: the logger is a Rust function
+/// called through the variadic C type (tests/fmi_status.rs explains why that is sound there).
+#[cfg(target_arch = "x86_64")]
+mod exported {
+    use breathing_torso::fmi::ffi::*;
+    use breathing_torso::fmi::types::fmi2Status::{self, *};
+    use breathing_torso::fmi::types::*;
+    use std::ffi::{CStr, CString};
+    use std::os::raw::{c_char, c_int, c_void};
+    use std::path::Path;
+    use std::ptr::null_mut;
+    use std::sync::Mutex;
+
+    pub type Messages = Mutex<Vec<(c_int, String, String)>>;
+
+    unsafe extern "C" fn record(
+        env: *mut c_void,
+        _name: *const c_char,
+        status: c_int,
+        category: *const c_char,
+        _format: *const c_char,
+        message: *const c_char,
+    ) {
+        let text = |p: *const c_char| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
+        let log = unsafe { &*(env as *const Messages) };
+        if let Ok(mut log) = log.lock() {
+            log.push((status, text(category), text(message)));
+        }
+    }
+
+    pub struct Fmu {
+        pub c: fmi2Component,
+        pub log: Box<Messages>,
+    }
+
+    /// The `file:` URI of a folder (the test folders need no escapes).
+    pub fn uri(dir: &Path) -> String {
+        format!("file://{}", dir.display())
+    }
+
+    /// `fmi2Instantiate` with `guid` and the resource location `resources`: the instance, or
+    /// the messages logged when it returned NULL.
+    pub fn instantiate(guid: &str, resources: &str) -> Result<Fmu, Vec<String>> {
+        let log: Box<Messages> = Box::default();
+        // SAFETY: the same arguments in the same registers on x86-64.
+        let logger: fmi2CallbackLogger = Some(unsafe {
+            std::mem::transmute::<
+                unsafe extern "C" fn(
+                    *mut c_void,
+                    *const c_char,
+                    c_int,
+                    *const c_char,
+                    *const c_char,
+                    *const c_char,
+                ),
+                unsafe extern "C" fn(
+                    fmi2ComponentEnvironment,
+                    fmi2String,
+                    fmi2Status,
+                    fmi2String,
+                    fmi2String,
+                    ...
+                ),
+            >(record)
+        });
+        let callbacks = fmi2CallbackFunctions {
+            logger,
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: &*log as *const Messages as *mut c_void,
+        };
+        let guid = CString::new(guid).unwrap();
+        let resources = CString::new(resources).unwrap();
+        let c = unsafe {
+            fmi2Instantiate(
+                c"personal".as_ptr(),
+                fmi2CoSimulation,
+                guid.as_ptr(),
+                resources.as_ptr(),
+                &callbacks,
+                0,
+                0,
+            )
+        };
+        if c.is_null() {
+            return Err(log.lock().unwrap().iter().map(|m| m.2.clone()).collect());
+        }
+        Ok(Fmu { c, log })
+    }
+
+    impl Fmu {
+        /// The last message logged, if any.
+        pub fn last_message(&self) -> String {
+            let log = self.log.lock().unwrap();
+            log.last().map(|m| m.2.clone()).unwrap_or_default()
+        }
+
+        pub fn set_string(&mut self, vr: u32, value: &str) -> fmi2Status {
+            let s = CString::new(value).unwrap();
+            unsafe { fmi2SetString(self.c, [vr].as_ptr(), 1, [s.as_ptr()].as_ptr()) }
+        }
+
+        /// Setup at t = 0, initialization mode in and out.
+        pub fn start(&mut self) {
+            unsafe {
+                assert_eq!(fmi2SetupExperiment(self.c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
+                assert_eq!(fmi2EnterInitializationMode(self.c), fmi2OK);
+                assert_eq!(
+                    fmi2ExitInitializationMode(self.c),
+                    fmi2OK,
+                    "{}",
+                    self.last_message()
+                );
+            }
+        }
+
+        /// Steps `k0..k1` of `h` seconds, reading `vrs` after each.
+        pub fn steps(&mut self, k0: usize, k1: usize, h: f64, vrs: &[u32]) -> Vec<Vec<f64>> {
+            (k0..k1)
+                .map(|k| {
+                    let mut out = vec![0.0; vrs.len()];
+                    unsafe {
+                        assert_eq!(fmi2DoStep(self.c, k as f64 * h, h, 1), fmi2OK);
+                        assert_eq!(
+                            fmi2GetReal(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()),
+                            fmi2OK
+                        );
+                    }
+                    out
+                })
+                .collect()
+        }
+
+        /// The instance's state, serialized.
+        pub fn serialize(&mut self) -> Vec<u8> {
+            unsafe {
+                let mut state: fmi2FMUstate = null_mut();
+                assert_eq!(fmi2GetFMUstate(self.c, &mut state), fmi2OK);
+                let mut size = 0usize;
+                assert_eq!(fmi2SerializedFMUstateSize(self.c, state, &mut size), fmi2OK);
+                let mut bytes = vec![0u8; size];
+                assert_eq!(
+                    fmi2SerializeFMUstate(self.c, state, bytes.as_mut_ptr() as *mut fmi2Byte, size),
+                    fmi2OK
+                );
+                assert_eq!(fmi2FreeFMUstate(self.c, &mut state), fmi2OK);
+                bytes
+            }
+        }
+
+        /// Deserializes `bytes` and sets the state: the status of fmi2SetFMUstate.
+        pub fn restore(&mut self, bytes: &[u8]) -> fmi2Status {
+            unsafe {
+                let mut state: fmi2FMUstate = null_mut();
+                let status = fmi2DeSerializeFMUstate(
+                    self.c,
+                    bytes.as_ptr() as *const fmi2Byte,
+                    bytes.len(),
+                    &mut state,
+                );
+                assert_eq!(status, fmi2OK, "{}", self.last_message());
+                let status = fmi2SetFMUstate(self.c, state);
+                assert_eq!(fmi2FreeFMUstate(self.c, &mut state), fmi2OK);
+                status
+            }
+        }
+    }
+
+    impl Drop for Fmu {
+        fn drop(&mut self) {
+            unsafe { fmi2FreeInstance(self.c) };
+        }
+    }
+}
+
+/// FMI 2.0 lets a state serialized by one instance be restored in another, and importers
+/// unpack an FMU to a fresh folder for every run: a state saved in a copy unpacked in `u1`
+/// restores in a copy unpacked in `u2` (with `u1` gone), in an initialised instance and in a
+/// freshly instantiated one, and both continue exactly as the saving instance did. A state
+/// saved with another skin reference is still refused, naming the parameter as given.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn a_saved_state_restores_in_a_copy_unpacked_elsewhere() {
+    use exported::{instantiate, uri};
+    let (guid, _) = variables(&model_description());
+    let u1 = unpacked_copy("u1");
+    let u2 = unpacked_copy("u2");
+    let t = table_in(Some(&u2.join("resources"))).unwrap();
+    let vrs = [
+        t.by_name("volume.lung").unwrap().vr,
+        t.by_name("marker[1].x").unwrap().vr,
+        t.by_name("marker[2].z").unwrap().vr,
+    ];
+    let h = 0.05;
+    let (bytes, expected) = {
+        let mut a = instantiate(&guid, &uri(&u1.join("resources"))).unwrap();
+        a.start();
+        a.steps(0, 10, h, &vrs);
+        let bytes = a.serialize();
+        (bytes, a.steps(10, 30, h, &vrs))
+    };
+    std::fs::remove_dir_all(&u1).unwrap();
+    // The state names the skin reference as the FMU does, relative to resources/.
+    let text = String::from_utf8_lossy(&bytes);
+    assert!(!text.contains(&*u1.to_string_lossy()), "{text}");
+    let resources2 = uri(&u2.join("resources"));
+    let mut initialised = instantiate(&guid, &resources2).unwrap();
+    initialised.start();
+    assert_eq!(
+        initialised.restore(&bytes),
+        fmi2OK,
+        "{}",
+        initialised.last_message()
+    );
+    assert_eq!(initialised.steps(10, 30, h, &vrs), expected);
+    let mut fresh = instantiate(&guid, &resources2).unwrap();
+    assert_eq!(fresh.restore(&bytes), fmi2OK, "{}", fresh.last_message());
+    assert_eq!(fresh.steps(10, 30, h, &vrs), expected);
+
+    // Another skin reference (same content, another name) is another fixed parameter.
+    let subject = u2.join("resources").join("subject");
+    std::fs::copy(
+        subject.join("result_reference.csv"),
+        subject.join("other_reference.csv"),
+    )
+    .unwrap();
+    let reference = t.by_name("slp.reference").unwrap().vr;
+    let other = {
+        let mut c = instantiate(&guid, &resources2).unwrap();
+        assert_eq!(
+            c.set_string(reference, "subject/other_reference.csv"),
+            fmi2OK
+        );
+        c.start();
+        c.steps(0, 2, h, &vrs);
+        c.serialize()
+    };
+    let mut b = instantiate(&guid, &resources2).unwrap();
+    b.start();
+    assert_eq!(b.restore(&other), fmi2Error);
+    let why = b.last_message();
+    assert!(
+        why.contains(
+            "`slp.reference` \"subject/result_reference.csv\" here, \
+             \"subject/other_reference.csv\" in the state"
+        ),
+        "{why}"
+    );
+    // The refused state changed nothing.
+    assert_eq!(
+        b.steps(0, 1, h, &vrs),
+        initialised_first_step(&guid, &resources2, h, &vrs)
+    );
+}
+
+#[cfg(target_arch = "x86_64")]
+fn initialised_first_step(guid: &str, resources: &str, h: f64, vrs: &[u32]) -> Vec<Vec<f64>> {
+    let mut f = exported::instantiate(guid, resources).unwrap();
+    f.start();
+    f.steps(0, 1, h, vrs)
+}
+
+/// When the GUID does not match, `fmi2Instantiate` says whether a parameter set was looked
+/// for, where, and what it gave; notes on the way (an unusable resource location) are logged
+/// before it returns NULL; a bad value in the set is named with its line and column.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn instantiation_errors_say_where_the_parameter_set_was_looked_for() {
+    use exported::{instantiate, uri};
+    let (guid, _) = variables(&model_description());
+    // The set missing: the generic table, and the path looked at.
+    let missing = unpacked_copy("missing_set");
+    let set = missing.join("resources").join(PARAMETERS);
+    std::fs::remove_file(&set).unwrap();
+    let log = instantiate(&guid, &uri(&missing.join("resources")))
+        .err()
+        .unwrap();
+    let last = log.last().unwrap();
+    assert!(!last.contains("  "), "{last}");
+    assert!(
+        last.contains(&format!("GUID {guid} does not match"))
+            && last.contains(&format!("no parameter set was found at {}", set.display()))
+            && last.contains(&format!("the generic FMU, GUID {}", table().guid())),
+        "{last}"
+    );
+    // The set edited: found, and the GUID it gives.
+    let edited = unpacked_copy("edited_set");
+    let set = edited.join("resources").join(PARAMETERS);
+    let mut values = ssv::parse(&std::fs::read_to_string(&set).unwrap(), "set").unwrap();
+    for (name, v) in values.iter_mut() {
+        if name == "subject.age" {
+            *v = Value::Real(77.0);
+        }
+    }
+    std::fs::write(&set, ssv::write("subject", &values)).unwrap();
+    let edited_guid = table_in(Some(&edited.join("resources")))
+        .unwrap()
+        .guid()
+        .to_string();
+    assert_ne!(edited_guid, guid);
+    let log = instantiate(&guid, &uri(&edited.join("resources")))
+        .err()
+        .unwrap();
+    let last = log.last().unwrap();
+    assert!(!last.contains("  "), "{last}");
+    assert!(
+        last.contains(&format!(
+            "the parameter set {} makes this a personalised FMU with GUID {edited_guid}",
+            set.display()
+        )),
+        "{last}"
+    );
+    // An unusable resource location: the note, then the message saying no set was looked for.
+    let log = instantiate(&guid, "http://example.invalid/resources")
+        .err()
+        .unwrap();
+    assert_eq!(log.len(), 2, "{log:?}");
+    assert!(
+        log[0].contains("resources unavailable") && log[0].contains("fmuResourceLocation"),
+        "{log:?}"
+    );
+    assert!(
+        log[1].contains("no parameter set was looked for"),
+        "{log:?}"
+    );
+    // A value that is not a number: the set's path, line and column.
+    let text = std::fs::read_to_string(&set).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    // The value of subject.age is on the line after its ssv:Parameter.
+    let i = 1 + lines
+        .iter()
+        .position(|l| l.contains("name=\"subject.age\""))
+        .unwrap();
+    let col = lines[i].find("value=").unwrap();
+    lines[i] = format!("{}value=\"old\"/>", &lines[i][..col]);
+    std::fs::write(&set, lines.join("\n")).unwrap();
+    let (line, col) = (i + 1, col + 1);
+    let log = instantiate(&guid, &uri(&edited.join("resources")))
+        .err()
+        .unwrap();
+    let last = log.last().unwrap();
+    assert!(
+        last.contains(&format!("{}:{line}:{col}: `subject.age`", set.display())),
+        "{last}"
+    );
+}
+
+/// `torso fmu build --subject FIT` without `--out` names the FMU after the fit result,
+/// `fmu/<stem>.fmu` with `fmu/<stem>.ssv` beside it, and leaves the generic FMU's name alone.
+#[test]
+fn without_out_the_fmu_is_named_after_the_fit() {
+    let fit = &built().fit;
+    let cwd = dir().join("default_name");
+    let _ = std::fs::remove_dir_all(&cwd);
+    std::fs::create_dir_all(&cwd).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["fmu", "build", "--subject", fit.to_str().unwrap()])
+        .current_dir(&cwd)
+        .output()
+        .unwrap();
+    let msg =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{msg}");
+    assert_eq!(fit.file_stem().unwrap(), "result");
+    let fmu = cwd.join("fmu").join("result.fmu");
+    assert!(msg.contains("wrote fmu/result.fmu"), "{msg}");
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+    assert!(zip.by_name(&format!("resources/{PARAMETERS}")).is_ok());
+    assert!(cwd.join("fmu").join("result.ssv").is_file());
+    assert!(!cwd.join("fmu").join("BreathingTorso.fmu").exists());
 }

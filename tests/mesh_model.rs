@@ -10,7 +10,7 @@ mod mesh_support;
 use breathing_torso::anatomy::skin::Skin;
 use breathing_torso::anatomy::{Anatomy, Subject, SubjectMesh};
 use breathing_torso::capi::*;
-use breathing_torso::fmi::instance::{Instance, LogSink};
+use breathing_torso::fmi::instance::{FmuState, Instance, LogSink};
 use breathing_torso::fmi::table;
 use breathing_torso::fmi::types::fmi2Status::{self, *};
 use breathing_torso::mesh::{PrepareOptions, TriMesh, io, pipeline};
@@ -440,6 +440,73 @@ fn fmu_sets_the_mesh_directory_and_refuses_a_bad_one_without_losing_the_instance
     assert_eq!(inst.do_step(0.5, 0.5), fmi2OK);
 }
 
+/// The prepared subject mesh copied into `resources/subject_mesh` of a new scratch folder
+/// standing for an unpacked FMU; returns its resources folder.
+fn resources_with_mesh(name: &str) -> PathBuf {
+    let resources = scratch(name).join("resources");
+    let to = resources.join("subject_mesh");
+    std::fs::create_dir_all(&to).unwrap();
+    for entry in std::fs::read_dir(prepared_dir()).unwrap() {
+        let p = entry.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    resources
+}
+
+/// A relative `subject.mesh_dir` is found in the generic FMU's resources/, kept as given, and
+/// a state saved with it restores in an instance whose resources are another copy (the first
+/// one deleted), continuing exactly as the saving instance did.
+#[test]
+fn a_relative_mesh_directory_moves_with_the_fmus_resources() {
+    let t = table();
+    let var = t.by_name("subject.mesh_dir").unwrap().vr;
+    let lod = t.by_name("scene.level_of_detail").unwrap().vr;
+    let lung = t.by_name("volume.lung").unwrap().vr;
+    let (a_res, b_res) = (
+        resources_with_mesh("moved_a"),
+        resources_with_mesh("moved_b"),
+    );
+    let steps = |inst: &mut Instance, k0: usize, k1: usize| -> Vec<f64> {
+        (k0..k1)
+            .map(|k| {
+                assert_eq!(inst.do_step(k as f64 * 0.1, 0.1), fmi2OK);
+                let mut v = [0.0];
+                assert_eq!(inst.get_real(&[lung], &mut v), fmi2OK);
+                v[0]
+            })
+            .collect()
+    };
+    let mut a = Instance::new("a", Some(a_res.clone()), None, false);
+    assert_eq!(a.set_integer(&[lod], &[LOD as i32]), fmi2OK);
+    let given = "subject_mesh".to_string();
+    assert_eq!(a.set_string(&[var], std::slice::from_ref(&given)), fmi2OK);
+    let mut got = [std::ptr::null(); 1];
+    assert_eq!(a.get_string(&[var], &mut got), fmi2OK);
+    assert_eq!(unsafe { CStr::from_ptr(got[0]) }.to_str().unwrap(), given);
+    assert_eq!(a.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(a.enter_initialization_mode(), fmi2OK);
+    assert_eq!(a.exit_initialization_mode(), fmi2OK);
+    steps(&mut a, 0, 3);
+    let bytes = a.get_fmu_state().to_bytes();
+    let expected = steps(&mut a, 3, 8);
+    drop(a);
+    std::fs::remove_dir_all(a_res.parent().unwrap()).unwrap();
+    let state = FmuState::from_bytes(&bytes).unwrap();
+    let mut b = Instance::new("b", Some(b_res), None, false);
+    assert_eq!(b.set_fmu_state(&state), fmi2OK);
+    assert_eq!(steps(&mut b, 3, 8), expected);
+    // Without resources the relative folder is nowhere: refused, naming the parameter.
+    let (mut c, log) = instance();
+    assert_eq!(c.set_fmu_state(&state), fmi2Error);
+    let last = log.borrow().last().unwrap().1.clone();
+    assert!(
+        last.contains("subject.mesh_dir") && last.contains("subject_mesh"),
+        "{last}"
+    );
+}
+
 #[test]
 fn c_abi_builds_on_a_mesh_directory_and_reports_a_bad_one() {
     unsafe {
@@ -533,11 +600,15 @@ fn a_fit_on_a_subject_mesh_carries_the_mesh_in_the_fmus_resources() {
     assert!(resources.join("subject/mesh/skin.obj").is_file());
     let t = table_in(Some(&resources)).unwrap();
     assert_ne!(t.guid(), table().guid());
-    let inst = Instance::with_table("mesh", Some(resources.clone()), None, false, t).unwrap();
+    let mut inst = Instance::with_table("mesh", Some(resources.clone()), None, false, t).unwrap();
+    // Kept as given (relative to resources/), found there when the model is built.
     assert_eq!(
         inst.config().subject_mesh_dir,
-        Some(resources.join("subject/mesh"))
+        Some(PathBuf::from("subject/mesh"))
     );
+    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
     // The same relative folder in the generic FMU's resources.
     let var = table().by_name("subject.mesh_dir").unwrap().vr;
     let mut generic = Instance::new("g", Some(resources.clone()), None, false);

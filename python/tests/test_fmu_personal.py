@@ -3,10 +3,13 @@ with `torso fmu build --subject`. fmpy validates it; its start values are the fi
 simulated with no parameter set gives the same lung volume and markers as the generic FMU
 (built from the same library) with the `.ssv` written beside it applied as start values
 (within 1e-12 relative); every `.ssv` parameter is a parameter of both FMUs with the same
-type; packaged with the distributable binaries it stays at most 4 MB.
+type; packaged with the distributable binaries it stays at most 4 MB; a state serialized in
+one unpack folder restores in a copy unpacked in another (the first one deleted) and continues
+identically.
 """
 
 import json
+import shutil
 import subprocess
 import xml.etree.ElementTree as ET
 import zipfile
@@ -14,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description, simulate_fmu
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -114,6 +118,55 @@ def test_personalised_fmu_equals_generic_with_the_ssv(built):
     assert np.ptp(generic["volume.lung"]) > 0.05
     # Without the parameter set the generic FMU is another subject.
     assert np.max(np.abs(plain["marker[1].x"] - generic["marker[1].x"])) > 1e-6
+
+
+def test_a_state_serialized_in_one_unpack_folder_restores_in_another(built, tmp_path):
+    """Importers unpack an FMU to a fresh folder per run, and FMI 2.0 lets a serialized state
+    be restored in another instance: the skin reference, relative to resources/, must not tie
+    the state to the folder it was saved in."""
+    md = read_model_description(str(built["personal"]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outputs = [vr["volume.lung"], vr["marker[1].x"]]
+    h = 0.05
+
+    def slave(folder):
+        extract(str(built["personal"]), str(folder))
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(folder),
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName=folder.name)
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        return fmu
+
+    def run(fmu, k0, k1):
+        out = []
+        for k in range(k0, k1):
+            fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            out.append(fmu.getReal(outputs))
+        return out
+
+    u1, u2 = tmp_path / "u1", tmp_path / "u2"
+    a = slave(u1)
+    run(a, 0, 10)
+    state = a.getFMUstate()
+    data = a.serializeFMUstate(state)
+    a.freeFMUstate(state)
+    expected = run(a, 10, 30)
+    a.terminate()
+    a.freeInstance()
+    shutil.rmtree(u1)
+    b = slave(u2)
+    try:
+        state = b.deSerializeFMUstate(data)
+        b.setFMUstate(state)  # raises on fmi2Error
+        b.freeFMUstate(state)
+        assert run(b, 10, 30) == expected
+        [reference] = b.getString([vr["slp.reference"]])
+        assert reference == b"subject/result_reference.csv"
+    finally:
+        b.terminate()
+        b.freeInstance()
 
 
 def test_packaged_with_the_distributable_binaries_it_is_at_most_4_mb(built, tmp_path):

@@ -268,7 +268,13 @@ pub unsafe extern "C" fn fmi2Instantiate(
 ) -> fmi2Component {
     let result = catch_unwind(AssertUnwindSafe(|| unsafe {
         let name = string(instanceName).unwrap_or_default();
-        let fail = |message: String| {
+        // Notes on the way (e.g. an unusable resource location) are logged before a failure's
+        // message, since they often explain it.
+        let mut notes: Vec<String> = Vec::new();
+        let fail = |notes: &[String], message: String| {
+            for note in notes {
+                log_without_instance(functions, &name, note);
+            }
             log_without_instance(functions, &name, &format!("fmi2Instantiate: {message}"));
             std::ptr::null_mut::<c_void>()
         };
@@ -276,15 +282,17 @@ pub unsafe extern "C" fn fmi2Instantiate(
             return std::ptr::null_mut();
         }
         if name.is_empty() {
-            return fail("instanceName must be a non-empty string".into());
+            return fail(&notes, "instanceName must be a non-empty string".into());
         }
         if fmuType != fmi2CoSimulation {
-            return fail(format!(
-                "fmuType = {fmuType}: this FMU supports co-simulation (fmi2CoSimulation = 1) only"
-            ));
+            return fail(
+                &notes,
+                format!(
+                    "fmuType = {fmuType}: this FMU supports co-simulation (fmi2CoSimulation = 1) only"
+                ),
+            );
         }
         let guid = string(fmuGUID);
-        let mut notes = Vec::new();
         let resources = match string(fmuResourceLocation) {
             None => None,
             Some(uri) => match file_uri_to_path(&uri) {
@@ -299,14 +307,14 @@ pub unsafe extern "C" fn fmi2Instantiate(
         // so its GUID, follow from it.
         let fmu_table = match super::personal::table_in(resources.as_deref()) {
             Ok(t) => t,
-            Err(e) => return fail(e.to_string()),
+            Err(e) => return fail(&notes, e.to_string()),
         };
         if guid.as_deref() != Some(fmu_table.guid()) {
-            return fail(format!(
-                "GUID {} does not match this FMU's {}: the model description and the binary differ",
-                guid.as_deref().unwrap_or("(null)"),
-                fmu_table.guid()
-            ));
+            let given = guid.as_deref().unwrap_or("(null)");
+            return fail(
+                &notes,
+                guid_mismatch(given, resources.as_deref(), fmu_table),
+            );
         }
         let sink = make_sink(&*functions, &name);
         let logging = loggingOn != fmi2False;
@@ -315,7 +323,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
         } else {
             match Instance::with_table(&name, resources, sink, logging, fmu_table) {
                 Ok(inst) => inst,
-                Err(e) => return fail(e.to_string()),
+                Err(e) => return fail(&notes, e.to_string()),
             }
         };
         inst.trace(|| {
@@ -334,6 +342,38 @@ pub unsafe extern "C" fn fmi2Instantiate(
         Box::into_raw(Box::new(inst)) as fmi2Component
     }));
     result.unwrap_or(std::ptr::null_mut())
+}
+
+/// The message of a GUID that is not the FMU's: which GUID the library computed and from
+/// what, i.e. whether a personalised FMU's parameter set was looked for, where, and what it
+/// gave (`table` is the table the library found).
+fn guid_mismatch(
+    given: &str,
+    resources: Option<&std::path::Path>,
+    table: &super::variables::Table,
+) -> String {
+    let ours = table.guid();
+    let set = resources.map(|r| r.join(super::personal::PARAMETERS));
+    let source = match &set {
+        Some(path) if table.personalisation().is_some() => format!(
+            "the parameter set {} makes this a personalised FMU with GUID {ours}: the model \
+             description and that parameter set differ (was the set edited, or copied from \
+             another personalised FMU?)",
+            path.display()
+        ),
+        Some(path) => format!(
+            "no parameter set was found at {}, so this is the generic FMU, GUID {ours}; a \
+             personalised FMU needs its resources/{} (is it missing from the unpacked FMU?)",
+            path.display(),
+            super::personal::PARAMETERS
+        ),
+        None => format!(
+            "no parameter set was looked for (no usable resource location), so this is the \
+             generic FMU, GUID {ours}; a personalised FMU reads its resources/{}",
+            super::personal::PARAMETERS
+        ),
+    };
+    format!("GUID {given} does not match: {source}")
 }
 
 /// Frees every FMU state still held by `inst`.

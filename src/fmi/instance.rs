@@ -172,16 +172,23 @@ pub struct Instance {
     /// The variables of the FMU this instance belongs to: the generic table or a personalised
     /// one ([`Table::personalised`]).
     table: &'static Table,
-    /// The configuration the start values describe (string parameters resolved), which the
-    /// instance starts from and `fmi2Reset` returns to.
+    /// The configuration the start values describe, which the instance starts from and
+    /// `fmi2Reset` returns to. Like `config`, it holds `slp.reference` and
+    /// `subject.mesh_dir` as given ([`Instance::resolved`]).
     start: Config,
     resources: Option<PathBuf>,
     sink: Option<LogSink>,
     categories: u32,
     phase: Phase,
+    /// The parameters' values. `slp.reference` and `subject.mesh_dir` are kept as given (a
+    /// relative path stays relative to the FMU's `resources/`), so that the configuration,
+    /// and a state saved from it, means the same in every unpack folder; they are resolved
+    /// against this instance's resources when the model is built ([`Instance::resolved`]).
     config: Config,
     rtol_explicit: bool,
     inputs: [f64; Input::COUNT],
+    /// The model, built from [`Instance::resolved`] `config` (its configuration holds the
+    /// resolved paths).
     torso: Option<Torso>,
     /// Snapshot of `torso` taken right after it was built (its fresh state).
     fresh: Option<Snapshot>,
@@ -287,7 +294,11 @@ impl FmuState {
                 table.guid()
             )));
         }
-        saved.config.validate()?;
+        // The paths are checked when the restoring instance resolves them against its own
+        // resources (a relative subject mesh folder means nothing in the working folder).
+        let mut paths_aside = saved.config.clone();
+        paths_aside.subject_mesh_dir = None;
+        paths_aside.validate()?;
         for (input, v) in Input::all().into_iter().zip(saved.inputs) {
             let vr = match input {
                 Input::Activation(g) => super::variables::VR_ACTIVATION + g.index() as u32,
@@ -355,7 +366,26 @@ fn type_name(t: ScalarType) -> &'static str {
 /// A pending change collected by a setter before it is committed.
 enum Change {
     Input(Input, f64),
-    Parameter(Parameter, Value),
+    /// A parameter and its value; for `slp.reference` and `subject.mesh_dir` the value is
+    /// the resolved path (which the setter checks) and the string the value as given (which
+    /// the configuration keeps).
+    Parameter(Parameter, Value, Option<String>),
+}
+
+/// The configuration's field of a path parameter (`slp.reference`, `subject.mesh_dir`).
+fn path_field(config: &mut Config, p: Parameter) -> Option<&mut Option<PathBuf>> {
+    match p {
+        Parameter::SlpReference => Some(&mut config.scene.slp_reference),
+        Parameter::MeshDir => Some(&mut config.subject_mesh_dir),
+        _ => None,
+    }
+}
+
+/// Puts a path parameter's value as given into `config` (the empty string: none).
+fn keep_given(config: &mut Config, p: Parameter, given: &str) {
+    if let Some(field) = path_field(config, p) {
+        *field = (!given.is_empty()).then(|| PathBuf::from(given));
+    }
 }
 
 impl Instance {
@@ -383,7 +413,16 @@ impl Instance {
         table: &'static Table,
     ) -> Result<Instance> {
         let mut inst = Instance::fresh(name, resources, sink, logging_on, table, start_config());
-        let start = table.start_config_with(&mut |p, value| inst.resolve_path(p, value))?;
+        // Resolved to check that every start value can be used (files present, mesh readable),
+        // then kept as given.
+        let mut start = table.start_config_with(&mut |p, value| inst.resolve_path(p, value))?;
+        for (name, value) in table.personalisation().map_or(&[][..], |p| &p.starts[..]) {
+            if let (Some(var), Value::String(given)) = (table.by_name(name), value)
+                && let Role::Parameter(p) = var.role
+            {
+                keep_given(&mut start, p, given);
+            }
+        }
         inst.config = start.clone();
         inst.start = start;
         Ok(inst)
@@ -658,13 +697,31 @@ impl Instance {
         Ok(candidate.display().to_string())
     }
 
+    /// `config` with its `slp.reference` and `subject.mesh_dir` resolved against this
+    /// instance's resources ([`Instance::resolve_path`]): the configuration a model is built
+    /// from. An error names the parameter and where its file was looked for.
+    fn resolved(&self, config: &Config) -> Result<Config> {
+        let mut out = config.clone();
+        for p in [Parameter::SlpReference, Parameter::MeshDir] {
+            let given = path_field(&mut out, p)
+                .and_then(|f| f.as_ref())
+                .map(|path| path.to_string_lossy().into_owned());
+            if let Some(given) = given {
+                let path = self.resolve_path(p, &given)?;
+                keep_given(&mut out, p, &path);
+            }
+        }
+        Ok(out)
+    }
+
     /// Builds the model from the configuration if it is not built yet; a model kept by
     /// `fmi2Reset` whose fixed configuration (everything but the drive) is the current one is
     /// restored to its fresh state instead, which gives the same state as a rebuild.
     fn ensure_torso(&mut self) -> Result<&mut Torso> {
         if self.torso.is_none() {
+            let config = self.resolved(&self.config)?;
             let reused = match self.spare.take() {
-                Some((mut torso, fresh)) if same_fixed_config(torso.config(), &self.config) => {
+                Some((mut torso, fresh)) if same_fixed_config(torso.config(), &config) => {
                     torso.restore(&fresh).ok().map(|_| (torso, fresh))
                 }
                 _ => None,
@@ -672,7 +729,7 @@ impl Instance {
             let (mut torso, fresh) = match reused {
                 Some(pair) => pair,
                 None => {
-                    let torso = Torso::new(self.config.clone())?;
+                    let torso = Torso::new(config)?;
                     let fresh = torso.snapshot();
                     (torso, fresh)
                 }
@@ -819,16 +876,18 @@ impl Instance {
                         var.name
                     )));
                 }
-                let value = match (p, value) {
+                // A path is resolved now, so that a missing file is refused when set, and
+                // kept as given.
+                let (value, given) = match (p, value) {
                     (Parameter::SlpReference | Parameter::MeshDir, Value::String(s)) => {
                         match self.resolve_path(p, &s) {
-                            Ok(path) => Value::String(path),
+                            Ok(path) => (Value::String(path), Some(s)),
                             Err(e) => return Err(self.error(&format!("{function}: {e}"))),
                         }
                     }
-                    (_, v) => v,
+                    (_, v) => (v, None),
                 };
-                Ok(Change::Parameter(p, value))
+                Ok(Change::Parameter(p, value, given))
             }
             Role::Time | Role::Output(_) => {
                 let what = if var.causality == Causality::Output {
@@ -855,9 +914,12 @@ impl Instance {
         for change in changes {
             match change {
                 Change::Input(input, v) => inputs[input.index()] = v,
-                Change::Parameter(p, v) => {
+                Change::Parameter(p, v, given) => {
                     if let Err(e) = p.set(&mut config, v) {
                         return self.error(&format!("{function}: {e}"));
+                    }
+                    if let Some(given) = given {
+                        keep_given(&mut config, p, &given);
                     }
                     rtol_explicit |= p == Parameter::SolverRtol;
                     if p.is_tunable() {
@@ -1135,7 +1197,9 @@ impl Instance {
     /// changes) a state saved with other fixed parameters, as it refuses setting them: the
     /// model is the one its parameters built. Before `fmi2ExitInitializationMode`, when fixed
     /// parameters may still be set, the state's are taken and the model is rebuilt when they
-    /// differ.
+    /// differ. A state holds `slp.reference` and `subject.mesh_dir` as they were given, so a
+    /// state saved by an instance unpacked in one folder applies in an instance unpacked in
+    /// another: a relative path names the file in this instance's resources.
     pub fn set_fmu_state(&mut self, state: &FmuState) -> fmi2Status {
         let s = &state.saved;
         let initialised = !matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
@@ -1152,17 +1216,18 @@ impl Instance {
         let torso = match &state.snapshot {
             None => None,
             Some(snapshot) => {
-                let same_model = |c: &Config| {
-                    let mut c = c.clone();
-                    c.drive = s.config.drive;
-                    c == s.config
+                // The state's paths are resolved against this instance's resources.
+                let resolved = match self.resolved(&s.config) {
+                    Ok(c) => c,
+                    Err(e) => return self.error(&format!("fmi2SetFMUstate: {e}")),
                 };
-                let reuse = matches!(&self.torso, Some(t) if same_model(t.config()));
+                let reuse =
+                    matches!(&self.torso, Some(t) if same_fixed_config(t.config(), &resolved));
                 let mut torso = match (reuse, self.torso.take()) {
                     (true, Some(t)) => t,
                     (_, current) => {
                         self.torso = current;
-                        match Torso::new(s.config.clone()) {
+                        match Torso::new(resolved) {
                             Ok(t) => {
                                 rebuilt_fresh = Some(t.snapshot());
                                 t

@@ -60,44 +60,81 @@ pub fn write(name: &str, parameters: &[(String, Value)]) -> String {
     text
 }
 
-/// Reads the parameters of a `.ssv` text (`path` names it in errors, with the line). Every
-/// parameter must hold exactly one of `ssv:Real`, `ssv:Integer`, `ssv:Boolean`, `ssv:String`.
+/// The 1-based line and column (in characters) of byte `at` of `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (
+        before.matches('\n').count() + 1,
+        before[line_start..].chars().count() + 1,
+    )
+}
+
+/// Byte offset of attribute `key` (its name) inside the markup `text[start..end]`, if there.
+fn attribute_at(text: &str, start: usize, end: usize, key: &str) -> Option<usize> {
+    let tag = text.get(start..end)?;
+    let mut from = 0;
+    while let Some(i) = tag[from..].find(key).map(|i| i + from) {
+        let preceded = tag[..i].ends_with(|c: char| c.is_ascii_whitespace());
+        let followed = tag[i + key.len()..].trim_start().starts_with('=');
+        if preceded && followed {
+            return Some(start + i);
+        }
+        from = i + key.len();
+    }
+    None
+}
+
+/// Reads the parameters of a `.ssv` text (`path` names it in errors, with the line and column
+/// of the element, or of the attribute, that is wrong). Every parameter must hold exactly one
+/// of `ssv:Real`, `ssv:Integer`, `ssv:Boolean`, `ssv:String`.
 pub fn parse(text: &str, path: &str) -> Result<Vec<(String, Value)>> {
     let mut reader = Reader::from_str(text);
     reader.config_mut().trim_text(true);
-    let err = |at: u64, message: String| {
-        let at = usize::try_from(at).unwrap_or(usize::MAX).min(text.len());
-        let line = text.as_bytes()[..at]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
+    let err = |at: usize, message: String| {
+        let (line, column) = line_column(text, at);
         Error::Parse {
             path: path.to_string(),
             line,
-            column: 0,
+            column,
             message,
         }
     };
+    let offset = |p: u64| usize::try_from(p).unwrap_or(usize::MAX).min(text.len());
     let mut out = Vec::new();
     let mut root_seen = false;
     let mut current: Option<(String, Option<Value>)> = None;
     loop {
-        let at = reader.buffer_position();
-        let event = reader
-            .read_event()
-            .map_err(|e| err(at, format!("not well-formed XML: {e}")))?;
+        let before = offset(reader.buffer_position());
+        let event = reader.read_event().map_err(|e| {
+            err(
+                offset(reader.error_position()),
+                format!("not well-formed XML: {e}"),
+            )
+        })?;
+        let end = offset(reader.buffer_position());
+        // Text is trimmed, so the event's markup starts at the first non-blank byte after the
+        // previous event (which is where `<` of an element is).
+        let at = text[before..end]
+            .find(|c: char| !c.is_ascii_whitespace())
+            .map_or(before, |i| before + i);
         let empty = matches!(event, Event::Empty(_));
         match event {
             Event::Start(e) | Event::Empty(e) => {
+                // Where attribute `key` is written (else the element).
+                let key_at = |key: &str| attribute_at(text, at, end, key).unwrap_or(at);
                 let attr = |e: &BytesStart, key: &str| -> Result<Option<String>> {
                     match e.try_get_attribute(key) {
                         Ok(Some(a)) => a
                             .unescape_value()
                             .map(|v| Some(v.into_owned()))
-                            .map_err(|x| err(at, format!("attribute `{key}`: {x}"))),
+                            .map_err(|x| err(key_at(key), format!("attribute `{key}`: {x}"))),
                         Ok(None) => Ok(None),
-                        Err(x) => Err(err(at, format!("attribute `{key}`: {x}"))),
+                        Err(x) => Err(err(key_at(key), format!("attribute `{key}`: {x}"))),
                     }
                 };
                 let local = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
@@ -150,23 +187,25 @@ pub fn parse(text: &str, path: &str) -> Result<Vec<(String, Value)>> {
                                 format!("parameter `{name}` holds more than one value"),
                             ));
                         }
-                        let text = attr(&e, "value")?.ok_or_else(|| {
+                        let raw = attr(&e, "value")?.ok_or_else(|| {
                             err(at, format!("ssv:{local} of `{name}` without a `value`"))
                         })?;
-                        let bad = |what: &str| err(at, format!("`{name}`: {text:?} is not {what}"));
+                        let bad = |what: &str| {
+                            err(key_at("value"), format!("`{name}`: {raw:?} is not {what}"))
+                        };
                         *value = Some(match local.as_str() {
                             "Real" => {
-                                Value::Real(text.trim().parse().map_err(|_| bad("a real number"))?)
+                                Value::Real(raw.trim().parse().map_err(|_| bad("a real number"))?)
                             }
                             "Integer" => {
-                                Value::Integer(text.trim().parse().map_err(|_| bad("an integer"))?)
+                                Value::Integer(raw.trim().parse().map_err(|_| bad("an integer"))?)
                             }
-                            "Boolean" => Value::Boolean(match text.trim() {
+                            "Boolean" => Value::Boolean(match raw.trim() {
                                 "true" | "1" => true,
                                 "false" | "0" => false,
                                 _ => return Err(bad("a boolean (true, false, 1, 0)")),
                             }),
-                            _ => Value::String(text),
+                            _ => Value::String(raw),
                         });
                     }
                     _ => {}
@@ -252,6 +291,57 @@ mod tests {
         let back = parse(&text, "t.ssv").unwrap();
         assert_eq!(back, set());
         check(super::super::variables::table(), &back, "t.ssv").unwrap();
+    }
+
+    /// A set written by hand, blank lines and odd spacing included, with `value` put at a
+    /// known line and column.
+    fn by_hand(age: &str, mass: &str) -> String {
+        format!(
+            "<?xml version=\"1.0\"?>\n\
+             <ssv:ParameterSet xmlns:ssv=\"{SSV_NAMESPACE}\" version=\"1.0\" name=\"s\">\n\
+             <ssv:Parameters>\n\
+             <ssv:Parameter name=\"subject.age\">\n\
+             \n\
+             \x20 <ssv:Real value=\"{age}\"/>\n\
+             </ssv:Parameter>\n\
+             <ssv:Parameter name=\"subject.mass\">\n\
+             \x20  <ssv:Real   value=\"{mass}\"/></ssv:Parameter>\n\
+             </ssv:Parameters>\n\
+             </ssv:ParameterSet>\n"
+        )
+    }
+
+    #[test]
+    fn errors_name_the_line_and_column_of_the_bad_value() {
+        let good = by_hand("41", "70");
+        assert_eq!(good.lines().nth(5), Some("  <ssv:Real value=\"41\"/>"));
+        assert_eq!(parse(&good, "h.ssv").unwrap().len(), 2);
+        // The age's `value` is on line 6, column 13; the mass's on line 9, column 16.
+        let e = parse(&by_hand("old", "70"), "h.ssv")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("h.ssv:6:13: `subject.age`"), "{e}");
+        let e = parse(&by_hand("41", "heavy"), "h.ssv")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("h.ssv:9:16: `subject.mass`"), "{e}");
+        // An element out of place is named where it starts: line 6, column 3.
+        let stray = by_hand("41", "70").replace(
+            "<ssv:Parameter name=\"subject.age\">\n\n",
+            "<ssv:Parameter name=\"subject.age\"/>\n\n",
+        );
+        let e = parse(&stray, "h.ssv").unwrap_err().to_string();
+        assert!(
+            e.starts_with("h.ssv:4:1: parameter `subject.age` holds no"),
+            "{e}"
+        );
+        // Malformed XML: the misspelt end tag at line 9, column 28.
+        let broken = by_hand("41", "70").replace("/></ssv:Parameter>", "/></ssv:Parametre>");
+        let e = parse(&broken, "h.ssv").unwrap_err().to_string();
+        assert!(e.starts_with("h.ssv:9:28: not well-formed"), "{e}");
+        // A multi-byte character counts as one column.
+        assert_eq!(line_column("\u{e9}\u{e9}x", 4), (1, 3));
+        assert_eq!(line_column("ab\ncd", 3), (2, 1));
     }
 
     #[test]
