@@ -637,6 +637,10 @@ pub struct SweepArgs {
     /// With --mismatch: base seed of the recordings (marker set k uses seed + k).
     #[arg(long, default_value_t = 301)]
     pub seed: u64,
+    /// With --mismatch: fit the grid as `torso fit --skin-fit` does (the rest-pose reference
+    /// grids are written to --out) rather than with rigid registration alone.
+    #[arg(long)]
+    pub skin_fit: bool,
 }
 
 /// Runs `torso fit-sweep --mismatch`.
@@ -670,6 +674,7 @@ fn sweep_mismatch(args: &SweepArgs) -> Result<()> {
         rtol: args.rtol,
         jobs: args.jobs,
         seed: args.seed,
+        grid_skin_fit: args.skin_fit.then(|| args.out.clone()),
         ..MismatchOptions::default()
     };
     options.validate()?;
@@ -714,7 +719,8 @@ fn sweep_mismatch(args: &SweepArgs) -> Result<()> {
     }
     let text = table(&rows);
     let command = format!(
-        "torso fit-sweep --mismatch --duration {} --truth-lod {} --fit-lods {} --marker-sets {} --max-evals {} --rtol {} --seed {} --jobs {}",
+        "torso fit-sweep --mismatch{} --duration {} --truth-lod {} --fit-lods {} --marker-sets {} --max-evals {} --rtol {} --seed {} --jobs {}",
+        if args.skin_fit { " --skin-fit" } else { "" },
         args.duration,
         args.truth_lod,
         args.fit_lods,

@@ -82,6 +82,10 @@ pub struct MismatchOptions {
     pub jobs: usize,
     /// Base seed: marker set k uses `seed + k`.
     pub seed: u64,
+    /// Folder for the rest-pose reference grids of a skin fit of the grid
+    /// ([`super::fitting::fit_with_skin`], as `torso fit --skin-fit`); None: the grid is
+    /// fitted with rigid registration alone, as `torso fit` does by default.
+    pub grid_skin_fit: Option<std::path::PathBuf>,
 }
 
 impl Default for MismatchOptions {
@@ -98,6 +102,7 @@ impl Default for MismatchOptions {
             rtol: 1e-6,
             jobs: 1,
             seed: 301,
+            grid_skin_fit: None,
         }
     }
 }
@@ -300,8 +305,9 @@ pub fn make_truth(o: &MismatchOptions, index: usize) -> Result<MismatchTruth> {
     })
 }
 
-/// Fits `recording` (of `truth`'s marker set) at level of detail `lod`; returns the fit and
-/// the fitting model's configuration.
+/// Fits `recording` (of `truth`'s marker set: its noisy recording or its noise-free twin) at
+/// level of detail `lod`; returns the fit and the fitted model's configuration (with its
+/// fitted skin under [`MismatchOptions::grid_skin_fit`]).
 pub fn fit_truth_recording(
     o: &MismatchOptions,
     truth: &MismatchTruth,
@@ -316,9 +322,27 @@ pub fn fit_truth_recording(
         threads: 1,
         ..FitOptions::default()
     };
+    let mut fitted_config = config.clone();
     let fit = if truth.labels.is_empty() {
-        let mut source = TorsoMarkers::new(config.clone())?;
-        fit_recording(&mut source, recording, &options, progress)?
+        if let Some(dir) = &o.grid_skin_fit {
+            // One reference file per level of detail and recording (noisy or noise-free).
+            let tag = if std::ptr::eq(recording, &truth.clean) {
+                "clean"
+            } else {
+                "noisy"
+            };
+            let reference = dir.join(format!(
+                "mismatch_{}_lod{lod}_{tag}_reference.csv",
+                truth.marker_set
+            ));
+            let fit =
+                super::fitting::fit_with_skin(&config, recording, &reference, &options, progress)?;
+            fitted_config.scene.slp_reference = Some(reference);
+            fit
+        } else {
+            let mut source = TorsoMarkers::new(config.clone())?;
+            fit_recording(&mut source, recording, &options, progress)?
+        }
     } else {
         let markers = Markers {
             labels: truth.labels.clone(),
@@ -337,7 +361,7 @@ pub fn fit_truth_recording(
         )?
         .fit
     };
-    Ok((fit, config))
+    Ok((fit, fitted_config))
 }
 
 /// The worst breath-by-breath timing errors of a fit's recording breaths against the drive's.
@@ -604,7 +628,11 @@ pub fn run_mismatch(
             let (fit, fitted_vt, wall) = find(false)?;
             let (floor, _, _) = find(true)?;
             rows.push(MismatchRow {
-                marker_set: t.marker_set.clone(),
+                marker_set: if t.labels.is_empty() && o.grid_skin_fit.is_some() {
+                    format!("{} (skin fit)", t.marker_set)
+                } else {
+                    t.marker_set.clone()
+                },
                 fit_lod: lod,
                 true_ti_ttot: t.ti_ttot,
                 fitted_ti_ttot: fit.drive.inspiratory_fraction,
