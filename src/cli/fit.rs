@@ -609,27 +609,170 @@ pub struct SweepArgs {
     /// Search method: nelder-mead, multistart or cmaes.
     #[arg(long, default_value = "nelder-mead")]
     pub method: String,
-    /// Largest number of cost evaluations per fit.
-    #[arg(long, default_value_t = 120)]
-    pub max_evals: usize,
-    /// Recordings fitted at once.
-    #[arg(long, default_value_t = 1)]
+    /// Largest number of cost evaluations per fit [default: 120; 200 with --mismatch].
+    #[arg(long)]
+    pub max_evals: Option<usize>,
+    /// Recordings fitted at once (threads).
+    #[arg(long, visible_alias = "threads", default_value_t = 1)]
     pub jobs: usize,
     /// Run only the cases whose label contains this text (e.g. `woman`, `supine forced`).
     #[arg(long)]
     pub only: Option<String>,
+    /// The sweep under model mismatch instead (docs/fit_report.md): recordings made at
+    /// --truth-lod by a subject 8 % taller and heavier, Ti/Ttot drawn in 0.38-0.45, 10 %
+    /// breath-to-breath variation, 0.5 mm noise, 2 % dropped points, for each of
+    /// --marker-sets, each fitted at every --fit-lods with the default subject and the
+    /// Ti/Ttot read off the recording; --lod and --only do not apply.
+    #[arg(long)]
+    pub mismatch: bool,
+    /// With --mismatch: level of detail of the model making the recordings.
+    #[arg(long, default_value_t = 2)]
+    pub truth_lod: u32,
+    /// With --mismatch: levels of detail the recordings are fitted at, comma separated.
+    #[arg(long, default_value = "0,1")]
+    pub fit_lods: String,
+    /// With --mismatch: marker sets, comma separated (grid, chest30, oep89).
+    #[arg(long, default_value = "grid,chest30,oep89")]
+    pub marker_sets: String,
+    /// With --mismatch: base seed of the recordings (marker set k uses seed + k).
+    #[arg(long, default_value_t = 301)]
+    pub seed: u64,
+    /// With --mismatch: fit the grid as `torso fit --skin-fit` does (the rest-pose reference
+    /// grids are written to --out) rather than with rigid registration alone.
+    #[arg(long)]
+    pub skin_fit: bool,
+}
+
+/// Runs `torso fit-sweep --mismatch`.
+fn sweep_mismatch(args: &SweepArgs) -> Result<()> {
+    use crate::fit::mismatch::{MismatchOptions, run_mismatch, table};
+    let fit_lods = args
+        .fit_lods
+        .split(',')
+        .map(|t| {
+            t.trim().parse::<u32>().map_err(|_| {
+                Error::invalid(
+                    "--fit-lods",
+                    &args.fit_lods,
+                    "levels 0, 1, 2 separated by commas",
+                )
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let options = MismatchOptions {
+        duration: args.duration,
+        truth_lod: args.truth_lod,
+        fit_lods,
+        marker_sets: args
+            .marker_sets
+            .split(',')
+            .map(|t| t.trim().to_string())
+            .collect(),
+        max_evals: args
+            .max_evals
+            .unwrap_or(crate::fit::mismatch::ACCEPT_EVALUATIONS),
+        rtol: args.rtol,
+        jobs: args.jobs,
+        seed: args.seed,
+        grid_skin_fit: args.skin_fit.then(|| args.out.clone()),
+        ..MismatchOptions::default()
+    };
+    options.validate()?;
+    Method::from_name(&args.method)?;
+    if args.method != "nelder-mead" {
+        return Err(Error::invalid(
+            "--method",
+            &args.method,
+            "nelder-mead with --mismatch",
+        ));
+    }
+    prepare_output_dir(&args.out)?;
+    let start = std::time::Instant::now();
+    let (truths, rows) = run_mismatch(&options, &|m| println!("{m}"))?;
+    let mut recordings = Vec::new();
+    for t in &truths {
+        let path = args.out.join(format!("mismatch_{}.csv", t.marker_set));
+        if t.labels.is_empty() {
+            t.synthetic.recording.write(&path)?;
+        } else {
+            Markers {
+                labels: t.labels.clone(),
+                times: t.synthetic.recording.times.clone(),
+                frames: t.synthetic.recording.frames.clone(),
+                units: Units::Metres,
+                format: crate::fit::Format::MarkerCsv,
+                provenance: Vec::new(),
+            }
+            .write(&path)?;
+        }
+        recordings.push(serde_json::json!({
+            "marker_set": t.marker_set,
+            "recording": path.display().to_string(),
+            "ti_ttot": t.ti_ttot,
+            "noise_floor_m": t.synthetic.noise_floor_m,
+            "drive_breaths": t.breaths.iter().map(|b| serde_json::json!({"onset_s": b.0, "period_s": b.1})).collect::<Vec<_>>(),
+            "truth_tidal_volumes_l": t.tidal_volumes_l,
+            "truth_mean_tidal_volume_l": t.mean_tidal_volume_l(),
+            "truth_drive": crate::fit::report::drive_fmi(&t.synthetic.truth),
+            "wall_s": t.wall_s,
+        }));
+    }
+    let text = table(&rows);
+    let command = format!(
+        "torso fit-sweep --mismatch{} --duration {} --truth-lod {} --fit-lods {} --marker-sets {} --max-evals {} --rtol {} --seed {} --jobs {}",
+        if args.skin_fit { " --skin-fit" } else { "" },
+        args.duration,
+        args.truth_lod,
+        args.fit_lods,
+        args.marker_sets,
+        options.max_evals,
+        args.rtol,
+        args.seed,
+        args.jobs
+    );
+    let md = args.out.join("mismatch.md");
+    std::fs::write(&md, format!("{command}\n\n{text}")).map_err(|e| Error::io(&md, e))?;
+    let js = args.out.join("mismatch.json");
+    let body = serde_json::to_string_pretty(&serde_json::json!({
+        "command": command,
+        "truth_subject": crate::fit::report::subject_fmi(&crate::fit::mismatch::truth_subject()),
+        "variability": options.variability,
+        "noise_m": options.noise,
+        "dropout": options.dropout,
+        "recordings": recordings,
+        "cases": rows.iter().map(|r| r.json()).collect::<Vec<_>>(),
+    }))
+    .map_err(|e| Error::State(format!("mismatch JSON: {e}")))?;
+    std::fs::write(&js, body + "\n").map_err(|e| Error::io(&js, e))?;
+    println!("{text}");
+    let failed = rows.iter().filter(|r| !r.failures().is_empty()).count();
+    println!(
+        "{} of {} cases meet every criterion; {:.1} s; wrote {} and {}",
+        rows.len() - failed,
+        rows.len(),
+        start.elapsed().as_secs_f64(),
+        md.display(),
+        js.display()
+    );
+    Ok(())
 }
 
 /// Runs `torso fit-sweep`.
 pub fn sweep(args: &SweepArgs) -> Result<()> {
     use crate::fit::sweep::{SweepOptions, case_config, default_cases, run_sweep_with, table};
+    if args.mismatch {
+        return sweep_mismatch(args);
+    }
+    let max_evals = args
+        .max_evals
+        .unwrap_or(crate::fit::sweep::ACCEPT_EVALUATIONS);
     let options = SweepOptions {
         duration: args.duration,
         level_of_detail: args.lod,
         rtol: args.rtol,
         fit: FitOptions {
             method: Method::from_name(&args.method)?,
-            max_evals: args.max_evals,
+            max_evals,
             ..FitOptions::default()
         },
         jobs: args.jobs,
@@ -660,7 +803,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
     prepare_output_dir(&args.out)?;
     let start = std::time::Instant::now();
     // Progress over every case's evaluations; a finished case counts its whole budget.
-    let bar = Progress::new("fit-sweep", cases.len() * args.max_evals, "evaluations");
+    let bar = Progress::new("fit-sweep", cases.len() * max_evals, "evaluations");
     let counts = std::sync::Mutex::new(vec![0usize; cases.len()]);
     let finished = std::sync::atomic::AtomicUsize::new(0);
     let show = |counts: &[usize]| {
@@ -681,7 +824,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
                 counts.lock(),
                 cases.iter().position(|c| c.label == r.case.label),
             ) {
-                c[i] = args.max_evals;
+                c[i] = max_evals;
                 finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
                 show(&c);
             }
@@ -696,7 +839,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
         },
         &|i, n| {
             if let Ok(mut c) = counts.lock() {
-                c[i] = n.min(args.max_evals);
+                c[i] = n.min(max_evals);
                 show(&c);
             }
         },
@@ -742,7 +885,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
     let text = table(&rows);
     let header = format!(
         "torso fit-sweep --duration {} --lod {} --rtol {} --method {} --max-evals {} --jobs {}\n\n",
-        args.duration, args.lod, args.rtol, args.method, args.max_evals, args.jobs
+        args.duration, args.lod, args.rtol, args.method, max_evals, args.jobs
     );
     let md = args.out.join("sweep.md");
     std::fs::write(&md, header + &text).map_err(|e| Error::io(&md, e))?;
@@ -752,7 +895,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
         "level_of_detail": args.lod,
         "rtol": args.rtol,
         "method": args.method,
-        "max_evals": args.max_evals,
+        "max_evals": max_evals,
         "jobs": args.jobs,
         "cases": json_rows,
     }))

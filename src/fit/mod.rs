@@ -16,6 +16,7 @@
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
 //! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
 //! | [`sweep`] | the acceptance sweep: six synthetic recordings fitted back, errors against truth |
+//! | [`mismatch`] | the acceptance under model mismatch: recordings of another model fitted, judged against it |
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
 pub mod breathing;
@@ -23,6 +24,7 @@ pub mod clinical;
 pub mod figure;
 pub mod fitting;
 pub mod markers;
+pub mod mismatch;
 pub mod named;
 pub mod optimize;
 pub mod principal;
