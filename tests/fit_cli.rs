@@ -92,3 +92,63 @@ fn synth_rejects_bad_options() {
     let (ok, msg) = torso(&["synth", "--out", o, "--truth", t, "--dropout", "0.9"]);
     assert!(!ok && msg.contains("--dropout"), "{msg}");
 }
+
+/// Under `--skin-fit` the model's markers are in the recording's (camera) frame; the breaths
+/// must still be found with inspiration moving the chest ventrally, so `--ti-ttot auto` reads
+/// the recording's Ti/Ttot and not its complement. Seed 6 draws a camera in which the
+/// camera's x points dorsally (the complement, 0.578, was found before the fix).
+#[test]
+fn skin_fit_reads_the_inspiratory_fraction_in_the_anatomical_frame() {
+    let dir = std::env::temp_dir().join(format!("fit_cli_skin_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rec = dir.join("rec.csv");
+    let truth = dir.join("rec.truth.json");
+    let out = dir.join("result.json");
+    let (ok, text) = torso(&[
+        "synth",
+        "--lod",
+        "0",
+        "--rtol",
+        "1e-4",
+        "--duration",
+        "18",
+        "--ti-ttot",
+        "0.4",
+        "--seed",
+        "6",
+        "--out",
+        rec.to_str().unwrap(),
+        "--truth",
+        truth.to_str().unwrap(),
+    ]);
+    assert!(ok, "{text}");
+    let (ok, text) = torso(&[
+        "fit",
+        "--slp",
+        rec.to_str().unwrap(),
+        "--lod",
+        "0",
+        "--rtol",
+        "1e-4",
+        "--max-evals",
+        "50",
+        "--ti-ttot",
+        "auto",
+        "--skin-fit",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{text}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let found = json["recording_breaths"]["median_ti_ttot"]
+        .as_f64()
+        .unwrap();
+    // The SLP-against-pneumotachograph limit for Ti, 0.22 s (Motamedi-Fakhr et al. 2017), is
+    // 0.055 of this 4 s breath.
+    assert!(
+        (found - 0.4).abs() < 0.22 / 4.0,
+        "Ti/Ttot found {found}, true 0.4"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

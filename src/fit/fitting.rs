@@ -632,7 +632,13 @@ pub fn fit_marker_frames(
         f,
         (0.05, 2.0),
     )?;
-    let ventral: f64 = pd.loadings.iter().map(|l| l.x).sum();
+    // Ventral is +x of the model's anatomical frame; the markers' frame is that of the
+    // recording when the model fitted its skin to it (`to_anatomy` then turns it back).
+    let ventral: f64 = pd
+        .loadings
+        .iter()
+        .map(|l| (to_anatomy.rotation * l).x)
+        .sum();
     let sign = if ventral < 0.0 { -1.0 } else { 1.0 };
     let t0 = recording.times[0];
     let times: Vec<f64> = recording.times.iter().map(|t| t - t0).collect();
