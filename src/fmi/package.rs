@@ -252,38 +252,30 @@ pub fn build_fmu_for(
     build_fmu_with(binaries, resources, out, table(), &[])
 }
 
-/// Writes the FMU whose variables are `table` (the generic one or a personalised one) to
-/// `out`, as [`build_fmu_for`] does, with the `extra` entries (full entry name, content):
-/// those under `documentation/` follow `documentation/index.html`, those under
-/// `resources/` follow the folder `resources`' files. Any other name is refused.
-pub fn build_fmu_with(
+/// Reads and checks the shared libraries of an FMU: at least one, each platform known
+/// ([`PLATFORMS`]) and given once, each file of its platform's executable format. Returns
+/// the zip entries `binaries/<folder>/BreathingTorso.<ext>` with their bytes, `folder`
+/// naming a platform's folder (FMI 2.0: the platform itself; FMI 3.0: its platform tuple;
+/// `None`: a platform the FMI version has no folder for).
+pub(crate) fn read_binaries(
     binaries: &[Binary],
-    resources: Option<&Path>,
-    out: &Path,
-    table: &Table,
-    extra: &[(String, Vec<u8>)],
-) -> Result<Packaged> {
-    if let Some((name, _)) = extra
-        .iter()
-        .find(|(n, _)| !(n.starts_with("documentation/") || n.starts_with("resources/")))
-    {
-        return Err(Error::invalid(
-            "FMU entry",
-            name,
-            "a file under documentation/ or resources/",
-        ));
-    }
+    folder: &dyn Fn(&str) -> Option<String>,
+) -> Result<Vec<(String, Vec<u8>)>> {
     if binaries.is_empty() {
         return Err(Error::State("an FMU needs at least one binary".into()));
     }
+    let known = || PLATFORMS.iter().map(|p| p.0).collect::<Vec<_>>().join(", ");
     let mut libraries = Vec::with_capacity(binaries.len());
     for (i, b) in binaries.iter().enumerate() {
-        let Some(&(platform, ext, format)) = PLATFORMS.iter().find(|p| p.0 == b.platform) else {
-            let known: Vec<&str> = PLATFORMS.iter().map(|p| p.0).collect();
+        let Some((&(platform, ext, format), dir)) = PLATFORMS
+            .iter()
+            .find(|p| p.0 == b.platform)
+            .and_then(|p| folder(p.0).map(|d| (p, d)))
+        else {
             return Err(Error::invalid(
                 "platform",
                 &b.platform,
-                format!("one of {}", known.join(", ")),
+                format!("one of {}", known()),
             ));
         };
         if binaries[..i].iter().any(|o| o.platform == b.platform) {
@@ -308,8 +300,33 @@ pub fn build_fmu_with(
                 found.map_or("no executable format".to_string(), |f| format!("{f:?}"))
             )));
         }
-        libraries.push((format!("binaries/{platform}/{MODEL_IDENTIFIER}.{ext}"), lib));
+        libraries.push((format!("binaries/{dir}/{MODEL_IDENTIFIER}.{ext}"), lib));
     }
+    Ok(libraries)
+}
+
+/// Writes the FMU whose variables are `table` (the generic one or a personalised one) to
+/// `out`, as [`build_fmu_for`] does, with the `extra` entries (full entry name, content):
+/// those under `documentation/` follow `documentation/index.html`, those under
+/// `resources/` follow the folder `resources`' files. Any other name is refused.
+pub fn build_fmu_with(
+    binaries: &[Binary],
+    resources: Option<&Path>,
+    out: &Path,
+    table: &Table,
+    extra: &[(String, Vec<u8>)],
+) -> Result<Packaged> {
+    if let Some((name, _)) = extra
+        .iter()
+        .find(|(n, _)| !(n.starts_with("documentation/") || n.starts_with("resources/")))
+    {
+        return Err(Error::invalid(
+            "FMU entry",
+            name,
+            "a file under documentation/ or resources/",
+        ));
+    }
+    let libraries = read_binaries(binaries, &|platform| Some(platform.to_string()))?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }

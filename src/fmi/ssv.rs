@@ -11,8 +11,7 @@
 use super::variables::{Table, Value};
 use crate::{Error, Result};
 use quick_xml::Reader;
-use quick_xml::Writer;
-use quick_xml::events::{BytesDecl, BytesStart, Event};
+use quick_xml::events::{BytesStart, Event};
 
 /// XML namespace of SSP 1.0 parameter values.
 pub const SSV_NAMESPACE: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
@@ -21,9 +20,7 @@ pub const SSV_NAMESPACE: &str = "http://ssp-standard.org/SSP1/SystemStructurePar
 /// Reals are written in their shortest round-trip form, so reading the file gives the same
 /// `f64`s.
 pub fn write(name: &str, parameters: &[(String, Value)]) -> String {
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    let result: std::io::Result<()> = (|| {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    super::xml::xml_document(|w| {
         w.create_element("ssv:ParameterSet")
             .with_attribute(("xmlns:ssv", SSV_NAMESPACE))
             .with_attribute(("version", "1.0"))
@@ -52,12 +49,7 @@ pub fn write(name: &str, parameters: &[(String, Value)]) -> String {
                 Ok(())
             })?;
         Ok(())
-    })();
-    // Writing into a Vec cannot fail.
-    debug_assert!(result.is_ok());
-    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
-    text.push('\n');
-    text
+    })
 }
 
 /// The 1-based line and column (in characters) of byte `at` of `text`.

@@ -232,14 +232,25 @@ pub fn model_description() -> String {
     model_description_for(table())
 }
 
+/// An XML document's text: the declaration (version 1.0, UTF-8), then what `body` writes,
+/// indented by two spaces, ending in a newline. Writing into memory cannot fail.
+pub(crate) fn xml_document(body: impl FnOnce(&mut Writer<Vec<u8>>) -> io::Result<()>) -> String {
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    let result = w
+        .write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .and_then(|()| body(&mut w));
+    debug_assert!(result.is_ok());
+    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
 /// The complete `modelDescription.xml` text of the FMU whose variables are `t` (the generic
 /// table or a personalised one, [`super::variables::Table::personalised`]).
 pub fn model_description_for(t: &Table) -> String {
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     let version = env!("CARGO_PKG_VERSION");
     let tool = format!("breathing-torso {version}");
-    let result: io::Result<()> = (|| {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    xml_document(|w| {
         w.create_element("fmiModelDescription")
             .with_attribute(("fmiVersion", "2.0"))
             .with_attribute(("modelName", MODEL_IDENTIFIER))
@@ -287,12 +298,7 @@ pub fn model_description_for(t: &Table) -> String {
                 Ok(())
             })?;
         Ok(())
-    })();
-    // Writing into a Vec cannot fail.
-    debug_assert!(result.is_ok());
-    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
-    text.push('\n');
-    text
+    })
 }
 
 fn escape_html(s: &str) -> String {

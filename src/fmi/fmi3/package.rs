@@ -6,8 +6,7 @@
 //! library is checked to be a binary of its platform's format, as for the FMI 2.0 FMU.
 
 use super::xml::{TERMINALS_PATH, model_description, terminals_and_icons};
-use crate::fmi::package::{Binary, BinaryFormat, PLATFORMS, Packaged, collect_files};
-use crate::fmi::variables::MODEL_IDENTIFIER;
+use crate::fmi::package::{Binary, Packaged, collect_files, read_binaries};
 use crate::{Error, Result};
 use std::fs;
 use std::io::Write;
@@ -35,50 +34,9 @@ pub fn build_fmu3_for(
     resources: Option<&Path>,
     out: &Path,
 ) -> Result<Packaged> {
-    if binaries.is_empty() {
-        return Err(Error::State("an FMU needs at least one binary".into()));
-    }
-    let mut libraries = Vec::with_capacity(binaries.len());
-    for (i, b) in binaries.iter().enumerate() {
-        let known = || PLATFORMS.iter().map(|p| p.0).collect::<Vec<_>>().join(", ");
-        let Some(&(platform, ext, format)) = PLATFORMS.iter().find(|p| p.0 == b.platform) else {
-            return Err(Error::invalid(
-                "platform",
-                &b.platform,
-                format!("one of {}", known()),
-            ));
-        };
-        let Some(tuple) = platform_tuple(platform) else {
-            return Err(Error::invalid(
-                "platform",
-                platform,
-                format!("one of {}", known()),
-            ));
-        };
-        if binaries[..i].iter().any(|o| o.platform == b.platform) {
-            return Err(Error::State(format!(
-                "platform {platform} is given twice; an FMU has one binary per platform"
-            )));
-        }
-        let lib = fs::read(&b.path).map_err(|e| {
-            Error::io(
-                &b.path,
-                std::io::Error::new(
-                    e.kind(),
-                    format!("{e} (build it first: cargo build --release --lib)"),
-                ),
-            )
-        })?;
-        let found = BinaryFormat::of(&lib);
-        if found != Some(format) {
-            return Err(Error::State(format!(
-                "{} is {}, not a {platform} shared library ({format:?})",
-                b.path.display(),
-                found.map_or("no executable format".to_string(), |f| format!("{f:?}"))
-            )));
-        }
-        libraries.push((format!("binaries/{tuple}/{MODEL_IDENTIFIER}.{ext}"), lib));
-    }
+    let libraries = read_binaries(binaries, &|platform| {
+        platform_tuple(platform).map(str::to_string)
+    })?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }

@@ -13,7 +13,6 @@ use crate::fmi::variables::{
 use crate::fmi::xml::{bound, causality, initial, num, variability, write_units};
 use crate::model::Quantity;
 use quick_xml::Writer;
-use quick_xml::events::{BytesDecl, Event};
 use std::io;
 
 /// Capability attributes of `<CoSimulation>`, each honoured by the code (or, for the false
@@ -209,11 +208,9 @@ fn write_structure(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
 /// carry it, so that a state serialised through either interface restores through the other.
 pub fn model_description() -> String {
     let t = table();
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     let version = env!("CARGO_PKG_VERSION");
     let tool = format!("breathing-torso {version}");
-    let result: io::Result<()> = (|| {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    super::super::xml::xml_document(|w| {
         w.create_element("fmiModelDescription")
             .with_attribute(("fmiVersion", "3.0"))
             .with_attribute(("modelName", MODEL_IDENTIFIER))
@@ -261,12 +258,7 @@ pub fn model_description() -> String {
                 Ok(())
             })?;
         Ok(())
-    })();
-    // Writing into a Vec cannot fail.
-    debug_assert!(result.is_ok());
-    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
-    text.push('\n');
-    text
+    })
 }
 
 /// The members of the two buses: the activation inputs (`activation.<group>`, member
@@ -293,9 +285,7 @@ pub fn bus_members() -> (Vec<&'static Variable>, Vec<&'static Variable>) {
 /// connect by member name).
 pub fn terminals_and_icons() -> String {
     let (activations, volumes) = bus_members();
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    let result: io::Result<()> = (|| {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    super::super::xml::xml_document(|w| {
         w.create_element("fmiTerminalsAndIcons")
             .with_attribute(("fmiVersion", "3.0"))
             .write_inner_content(|w| {
@@ -335,9 +325,5 @@ pub fn terminals_and_icons() -> String {
                 Ok(())
             })?;
         Ok(())
-    })();
-    debug_assert!(result.is_ok());
-    let mut text = String::from_utf8(w.into_inner()).unwrap_or_default();
-    text.push('\n');
-    text
+    })
 }
