@@ -152,3 +152,43 @@ fn skin_fit_reads_the_inspiratory_fraction_in_the_anatomical_frame() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn fit_size_estimates_the_subject_and_carries_it_into_the_result() {
+    // data/recordings/chest30_lab.c3d: a man of 1.89 m and 81 kg (its .truth.json), fitted
+    // from the default 1.75 m and 75 kg.
+    let dir = std::env::temp_dir().join(format!("fit_cli_size_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("r.json");
+    let (ok, msg) = torso(&[
+        "fit",
+        "--slp",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/recordings/chest30_lab.c3d"
+        ),
+        "--lod",
+        "0",
+        "--fit-size",
+        "--max-evals",
+        "10",
+        "--threads",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert!(msg.contains("subject size"), "{msg}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let size = &json["subject_size"];
+    let stature = size["stature_m"].as_f64().unwrap();
+    let mass = size["mass_kg"].as_f64().unwrap();
+    assert_eq!(size["stature_given_m"].as_f64(), Some(1.75));
+    assert!((stature / 1.89 - 1.0).abs() < 0.04, "stature {stature}");
+    assert!((mass / 81.0 - 1.0).abs() < 0.04, "mass {mass}");
+    assert!(size["registration_rms_m"].as_f64() <= size["registration_rms_given_m"].as_f64());
+    // The fitted model is the estimated subject's (what `torso fmu build --subject` bakes).
+    assert_eq!(json["subject"]["subject.stature"].as_f64(), Some(stature));
+    assert_eq!(json["subject"]["subject.mass"].as_f64(), Some(mass));
+}

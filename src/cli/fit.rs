@@ -12,6 +12,7 @@ use crate::fit::report::{
     LOD_KEY, marker_set_json, marker_set_summary, model_provenance, provenance_differences,
     summary, write_fit_report,
 };
+use crate::fit::size::{SizeOptions, estimate_size};
 use crate::fit::{
     FitOptions, Markers, Method, ReadOptions, Recording, TorsoMarkers, Units, fit_any_markers,
     fit_recording,
@@ -102,6 +103,18 @@ pub struct FitArgs {
     /// and a polish from the first optimum follows (both within --max-evals).
     #[arg(long)]
     pub skin_fit: bool,
+    /// Compare each grid marker's trajectory about its own mean over the recording, as named
+    /// marker sets always are: the subject's static shape then stays out of the cost and only
+    /// the markers' motion is fitted (for a subject whose shape differs from the model's).
+    /// Default for named sets; off for the grid (the thesis's eq. 3.1).
+    #[arg(long)]
+    pub marker_offsets: bool,
+    /// Estimate the subject's stature and mass from the recording's first frame before the
+    /// fit, starting from --stature and --mass (sex, age, breast size and posture as given):
+    /// the pair whose model registers best to the markers (docs/recordings.md). The result
+    /// JSON's `subject_size` says what was found; its `model` carries the estimate.
+    #[arg(long)]
+    pub fit_size: bool,
     /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search: a number
     /// (0.2-0.8; 0.5 is the sine of thesis eq. 2.4) or `auto`, the median Ti/Ttot of the
     /// recording's breaths (docs/drive.md).
@@ -234,9 +247,48 @@ pub fn fit_file(
     out: &Path,
     options: &FitOptions,
     skin_fit: bool,
+    fit_size: bool,
 ) -> Result<crate::fit::Fit> {
     let (recording, mut config) = read_for_fit(recording_path, read, model)?;
     prepare_output_file(out)?;
+    let size = if fit_size {
+        let (first, grid) = match &recording {
+            ForFit::Grid(r) => (&r.frames[0], true),
+            ForFit::Named(m) => (&m.frames[0], false),
+        };
+        let size = estimate_size(
+            &config,
+            first,
+            grid,
+            &SurfaceOptions::default(),
+            &SizeOptions::default(),
+        )
+        .map_err(|e| Error::State(format!("{}: {e}", recording_path.display())))?;
+        println!(
+            "subject size          stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
+            config.subject.stature,
+            size.subject.stature,
+            config.subject.mass,
+            size.subject.mass,
+            size.start_rms_m * 1e3,
+            size.rms_m * 1e3,
+            size.evaluations
+        );
+        let json = serde_json::json!({
+            "method": "stature and mass minimising the first frame's rigid registration residual (bounded Nelder-Mead)",
+            "stature_given_m": config.subject.stature,
+            "mass_given_kg": config.subject.mass,
+            "stature_m": size.subject.stature,
+            "mass_kg": size.subject.mass,
+            "registration_rms_given_m": size.start_rms_m,
+            "registration_rms_m": size.rms_m,
+            "model_builds": size.evaluations,
+        });
+        config.subject = size.subject;
+        Some(json)
+    } else {
+        None
+    };
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
     let bar = Progress::new("fit", options.max_evals, "evaluations");
@@ -266,7 +318,10 @@ pub fn fit_file(
                 recording_path,
                 out,
                 &bar,
-                Some(&named_set),
+                FitExtras {
+                    named_set: Some(&named_set),
+                    size: size.as_ref(),
+                },
             );
         }
     };
@@ -285,7 +340,26 @@ pub fn fit_file(
             bar.update(n, format!("best cost {:.3} mm", b * 1e3))
         })?
     };
-    finish_fit(fit, &config, &model, recording_path, out, &bar, None)
+    finish_fit(
+        fit,
+        &config,
+        &model,
+        recording_path,
+        out,
+        &bar,
+        FitExtras {
+            named_set: None,
+            size: size.as_ref(),
+        },
+    )
+}
+
+/// What a fit adds to its result JSON beyond the fit itself.
+struct FitExtras<'a> {
+    /// The registration of a named marker set and the number of markers recorded.
+    named_set: Option<&'a (crate::fit::BoundRecording, usize)>,
+    /// The subject-size search (`--fit-size`), as written under `subject_size`.
+    size: Option<&'a serde_json::Value>,
 }
 
 /// Ends a fit of `recording_path`: closes the progress bar, runs the fitted model's breaths
@@ -299,8 +373,9 @@ fn finish_fit(
     recording_path: &Path,
     out: &Path,
     bar: &Progress,
-    named_set: Option<&(crate::fit::BoundRecording, usize)>,
+    extras: FitExtras,
 ) -> Result<crate::fit::Fit> {
+    let FitExtras { named_set, size } = extras;
     // The search's count leaves out the linearised start's runs; the fit's count is whole.
     bar.update(fit.evaluations, "");
     bar.finish(format!("best cost {:.3} mm", fit.cost_m * 1e3));
@@ -314,15 +389,26 @@ fn finish_fit(
         Some(&breath),
         Some(&breaths),
     )?;
+    let mut extra = Vec::new();
     if let Some((bound, recorded)) = named_set {
+        extra.push(("marker_set", marker_set_json(bound, *recorded)));
+    }
+    if let Some(size) = size {
+        extra.push(("subject_size", size.clone()));
+    }
+    if !extra.is_empty() {
         let text =
             std::fs::read_to_string(&outputs.json).map_err(|e| Error::io(&outputs.json, e))?;
         let mut json: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| Error::State(format!("{}: {e}", outputs.json.display())))?;
-        json["marker_set"] = marker_set_json(bound, *recorded);
+        for (key, value) in extra {
+            json[key] = value;
+        }
         let text = serde_json::to_string_pretty(&json)
             .map_err(|e| Error::State(format!("result JSON: {e}")))?;
         std::fs::write(&outputs.json, text + "\n").map_err(|e| Error::io(&outputs.json, e))?;
+    }
+    if let Some((bound, recorded)) = named_set {
         println!("{}", marker_set_summary(bound, *recorded));
     }
     println!("{}", summary(&fit));
@@ -372,6 +458,7 @@ pub fn main(args: &FitArgs) -> Result<()> {
         seed: args.seed,
         threads: args.threads.unwrap_or_else(default_threads),
         inspiratory_fraction: inspiratory_fraction(&args.ti_ttot)?,
+        marker_offsets: args.marker_offsets,
         ..FitOptions::default()
     };
     if !(1..=2).contains(&options.threads) {
@@ -385,6 +472,7 @@ pub fn main(args: &FitArgs) -> Result<()> {
         &args.out,
         &options,
         args.skin_fit,
+        args.fit_size,
     )
     .map(|_| ())
 }
@@ -543,6 +631,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             ..FitOptions::default()
         },
         false,
+        false,
     )?;
     println!("what these figures mean:");
     for note in FIT_NOTES {
@@ -641,6 +730,14 @@ pub struct SweepArgs {
     /// grids are written to --out) rather than with rigid registration alone.
     #[arg(long)]
     pub skin_fit: bool,
+    /// With --mismatch: fit the grid with each marker compared about its own mean (as
+    /// `torso fit --marker-offsets`).
+    #[arg(long)]
+    pub marker_offsets: bool,
+    /// With --mismatch: estimate the subject's stature and mass from each recording's first
+    /// frame before fitting (as `torso fit --fit-size`).
+    #[arg(long)]
+    pub fit_size: bool,
 }
 
 /// Runs `torso fit-sweep --mismatch`.
@@ -675,6 +772,8 @@ fn sweep_mismatch(args: &SweepArgs) -> Result<()> {
         jobs: args.jobs,
         seed: args.seed,
         grid_skin_fit: args.skin_fit.then(|| args.out.clone()),
+        grid_marker_offsets: args.marker_offsets,
+        fit_size: args.fit_size,
         ..MismatchOptions::default()
     };
     options.validate()?;
@@ -719,8 +818,13 @@ fn sweep_mismatch(args: &SweepArgs) -> Result<()> {
     }
     let text = table(&rows);
     let command = format!(
-        "torso fit-sweep --mismatch{} --duration {} --truth-lod {} --fit-lods {} --marker-sets {} --max-evals {} --rtol {} --seed {} --jobs {}",
+        "torso fit-sweep --mismatch{}{} --duration {} --truth-lod {} --fit-lods {} --marker-sets {} --max-evals {} --rtol {} --seed {} --jobs {}",
         if args.skin_fit { " --skin-fit" } else { "" },
+        if args.marker_offsets {
+            " --marker-offsets"
+        } else {
+            ""
+        },
         args.duration,
         args.truth_lod,
         args.fit_lods,

@@ -86,6 +86,13 @@ pub struct MismatchOptions {
     /// ([`super::fitting::fit_with_skin`], as `torso fit --skin-fit`); None: the grid is
     /// fitted with rigid registration alone, as `torso fit` does by default.
     pub grid_skin_fit: Option<std::path::PathBuf>,
+    /// Fit the grid with each marker compared about its own mean
+    /// ([`FitOptions::marker_offsets`], as `torso fit --marker-offsets`); the named sets
+    /// always are.
+    pub grid_marker_offsets: bool,
+    /// Estimate the subject's stature and mass from each recording's first frame before
+    /// fitting ([`super::size::estimate_size`], as `torso fit --fit-size`).
+    pub fit_size: bool,
 }
 
 impl Default for MismatchOptions {
@@ -103,6 +110,8 @@ impl Default for MismatchOptions {
             jobs: 1,
             seed: 301,
             grid_skin_fit: None,
+            grid_marker_offsets: false,
+            fit_size: false,
         }
     }
 }
@@ -315,11 +324,22 @@ pub fn fit_truth_recording(
     lod: u32,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<(Fit, Config)> {
-    let config = fit_config(o, lod)?;
+    let mut config = fit_config(o, lod)?;
+    if o.fit_size {
+        let size = super::size::estimate_size(
+            &config,
+            &recording.frames[0],
+            truth.labels.is_empty(),
+            &SurfaceOptions::default(),
+            &super::size::SizeOptions::default(),
+        )?;
+        config.subject = size.subject;
+    }
     let options = FitOptions {
         max_evals: o.max_evals,
         inspiratory_fraction: None,
         threads: 1,
+        marker_offsets: truth.labels.is_empty() && o.grid_marker_offsets,
         ..FitOptions::default()
     };
     let mut fitted_config = config.clone();
@@ -439,6 +459,9 @@ pub struct MismatchRow {
     pub wall_s: f64,
     /// The fitted drive.
     pub fitted: Drive,
+    /// The fitting model's stature [m] and mass [kg] (estimated from the recording under
+    /// [`MismatchOptions::fit_size`], otherwise the default subject's).
+    pub fitted_subject: (f64, f64),
 }
 
 impl MismatchRow {
@@ -510,6 +533,7 @@ impl MismatchRow {
             "floor_fit_evaluations": self.floor_evaluations,
             "wall_s": self.wall_s,
             "fitted": super::report::drive_fmi(&self.fitted),
+            "fitted_subject": {"stature_m": self.fitted_subject.0, "mass_kg": self.fitted_subject.1},
             "pass": self.verdicts().iter().map(|(k, v)| (k.to_string(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
             "failures": self.failures(),
         })
@@ -606,14 +630,17 @@ pub fn run_mismatch(
         };
         let wall = start.elapsed().as_secs_f64();
         done(&format!(
-            "{} at level of detail {lod}{}: {} evaluations, {:.1} s, residual {:.3} mm",
+            "{} at level of detail {lod}{}: {} evaluations, {:.1} s, residual {:.3} mm, subject {:.3} m {:.1} kg",
             t.marker_set,
             if clean { " (noise-free)" } else { "" },
             fit.evaluations,
             wall,
-            fit.cost_m * 1e3
+            fit.cost_m * 1e3,
+            config.subject.stature,
+            config.subject.mass
         ));
-        Ok((fit, fitted_vt, wall))
+        let subject = (config.subject.stature, config.subject.mass);
+        Ok((fit, fitted_vt, wall, subject))
     })?;
     let mut rows = Vec::new();
     for (k, t) in truths.iter().enumerate() {
@@ -625,13 +652,24 @@ pub fn run_mismatch(
                     .map(|i| &fits[i])
                     .ok_or_else(|| Error::State("mismatch sweep: a fit is missing".into()))
             };
-            let (fit, fitted_vt, wall) = find(false)?;
-            let (floor, _, _) = find(true)?;
+            let (fit, fitted_vt, wall, subject) = find(false)?;
+            let (floor, _, _, _) = find(true)?;
             rows.push(MismatchRow {
-                marker_set: if t.labels.is_empty() && o.grid_skin_fit.is_some() {
-                    format!("{} (skin fit)", t.marker_set)
-                } else {
-                    t.marker_set.clone()
+                marker_set: {
+                    let grid = t.labels.is_empty();
+                    let how: Vec<&str> = [
+                        (grid && o.grid_skin_fit.is_some(), "skin fit"),
+                        (grid && o.grid_marker_offsets, "offsets"),
+                        (o.fit_size, "size fitted"),
+                    ]
+                    .into_iter()
+                    .filter_map(|(on, name)| on.then_some(name))
+                    .collect();
+                    if how.is_empty() {
+                        t.marker_set.clone()
+                    } else {
+                        format!("{} ({})", t.marker_set, how.join(", "))
+                    }
                 },
                 fit_lod: lod,
                 true_ti_ttot: t.ti_ttot,
@@ -647,6 +685,7 @@ pub fn run_mismatch(
                 floor_evaluations: floor.evaluations,
                 wall_s: *wall,
                 fitted: fit.drive,
+                fitted_subject: *subject,
             });
         }
     }

@@ -17,6 +17,7 @@
 //! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
 //! | [`sweep`] | the acceptance sweep: six synthetic recordings fitted back, errors against truth |
 //! | [`mismatch`] | the acceptance under model mismatch: recordings of another model fitted, judged against it |
+//! | [`size`] | the subject's stature and mass from a recording's first frame (registration residual) |
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
 pub mod breathing;
@@ -30,6 +31,7 @@ pub mod optimize;
 pub mod principal;
 pub mod recording;
 pub mod report;
+pub mod size;
 pub mod source;
 pub mod sweep;
 pub mod synth;

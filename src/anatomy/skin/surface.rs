@@ -57,6 +57,10 @@ pub struct SurfaceOptions {
     pub finalists: usize,
     /// Allowed range of the scale when estimated.
     pub scale_range: (f64, f64),
+    /// A known approximate registration (recorded frame -> model frame) to refine instead
+    /// of the principal-axes scan: the same markers on a slightly different skin, say
+    /// (the subject-size search, [`crate::fit::size`]).
+    pub start: Option<RigidTransform>,
 }
 
 impl Default for SurfaceOptions {
@@ -69,6 +73,7 @@ impl Default for SurfaceOptions {
             max_iterations: 100,
             finalists: 8,
             scale_range: (0.7, 1.4),
+            start: None,
         }
     }
 }
@@ -434,8 +439,17 @@ pub fn register_to_surface(
     let mut iterations = 0;
     let mut candidates = Vec::with_capacity(24 * SPINS);
     let long_axis = nalgebra::Unit::new_normalize(skin_axes.column(0).into_owned());
+    if let Some(t) = options.start {
+        candidates.push(Candidate {
+            t,
+            trimmed_rms: f64::INFINITY,
+            score: f64::INFINITY,
+        });
+    }
+    let scan = if options.start.is_some() { 0 } else { 24 };
     for (p, k) in axis_rotations()
         .into_iter()
+        .take(scan)
         .flat_map(|p| (0..SPINS).map(move |k| (p, k)))
     {
         let spin = UnitQuaternion::from_axis_angle(
