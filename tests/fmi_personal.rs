@@ -1059,3 +1059,80 @@ fn a_named_marker_sets_fmu_reads_the_markers_off_the_skin() {
     );
     assert!(moved > 1e-4, "the markers move with breathing ({moved} m)");
 }
+
+/// A named set's fit result without its bindings, or with a bad one, is refused naming the
+/// file and the entry; a personalised FMU whose `markers.json` was damaged is refused at
+/// `fmi2Instantiate` naming the file, and one whose binding was edited no longer matches its
+/// GUID.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn a_named_sets_bindings_are_checked_in_the_fit_and_in_the_fmu() {
+    use breathing_torso::fmi::personal::MARKERS;
+    use exported::{instantiate, uri};
+    let (fit, unpacked) = named_built();
+    let dir = std::env::temp_dir().join(format!("fmi_personal_named_bad_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fit).unwrap()).unwrap();
+    let mut no_bindings = json.clone();
+    no_bindings["marker_set"]
+        .as_object_mut()
+        .unwrap()
+        .remove("bindings");
+    let mut bad_bary = json.clone();
+    bad_bary["marker_set"]["bindings"][2]["barycentric"] = serde_json::json!([0.5, 0.6, -0.1]);
+    for (name, value, expect) in [
+        (
+            "no_bindings.json",
+            &no_bindings,
+            "missing key `bindings` in `marker_set`",
+        ),
+        (
+            "bad_bary.json",
+            &bad_bary,
+            "barycentric coordinates >= 0 summing to 1",
+        ),
+    ] {
+        let file = dir.join(name);
+        std::fs::write(&file, value.to_string()).unwrap();
+        let (ok, msg) = torso(&[
+            "fmu",
+            "build",
+            "--subject",
+            file.to_str().unwrap(),
+            "--out",
+            dir.join("x.fmu").to_str().unwrap(),
+        ]);
+        assert!(!ok, "{msg}");
+        assert!(
+            msg.contains(expect) && msg.contains(&file.display().to_string()),
+            "{msg}"
+        );
+    }
+    let good_guid = table_in(Some(&unpacked.join("resources")))
+        .unwrap()
+        .guid()
+        .to_string();
+    let copy = dir.join("copy");
+    copy_dir(unpacked, &copy);
+    let markers = copy.join("resources").join(MARKERS);
+    let text = std::fs::read_to_string(&markers).unwrap();
+    std::fs::write(&markers, &text[..text.len() / 2]).unwrap();
+    let messages = instantiate(&good_guid, &uri(&copy.join("resources")))
+        .err()
+        .unwrap()
+        .join("\n");
+    assert!(
+        messages.contains(&markers.display().to_string()),
+        "{messages}"
+    );
+    let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edited["bindings"][0]["triangle"] = serde_json::json!(0);
+    std::fs::write(&markers, edited.to_string()).unwrap();
+    let messages = instantiate(&good_guid, &uri(&copy.join("resources")))
+        .err()
+        .unwrap()
+        .join("\n");
+    assert!(messages.contains("GUID"), "{messages}");
+}

@@ -118,16 +118,36 @@ impl MarkerSet {
                 .get("barycentric")
                 .and_then(|v| v.as_array())
                 .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
-                .filter(|a: &Vec<f64>| a.len() == 3)
-                .ok_or_else(|| bad("barycentric", "three numbers"))?;
+                .filter(|a: &Vec<f64>| {
+                    a.len() == 3
+                        && a.iter().all(|v| v.is_finite() && *v >= -1e-9)
+                        && (a.iter().sum::<f64>() - 1.0).abs() < 1e-9
+                })
+                .ok_or_else(|| {
+                    bad(
+                        "barycentric",
+                        "three barycentric coordinates >= 0 summing to 1",
+                    )
+                })?;
+            if set.labels.iter().any(|l| l == label) {
+                return Err(bad(
+                    "label",
+                    "a label not given before (labels are distinct)",
+                ));
+            }
             set.labels.push(label.to_string());
             set.bindings.push(SurfaceBinding {
                 triangle,
                 barycentric: [bary[0], bary[1], bary[2]],
             });
         }
-        set.check(usize::MAX)
-            .map_err(|e| Error::State(format!("{source}: {e}")))?;
+        if set.is_empty() {
+            return Err(Error::invalid(
+                format!("{source}: bindings"),
+                "[]",
+                "at least one marker",
+            ));
+        }
         Ok(set)
     }
 
