@@ -370,7 +370,8 @@ int bt_time(struct BtTorso *h, double *t);
 
 /**
  * Reads any numeric FMI variable by value reference (`BT_VR_*` constants): outputs, inputs,
- * parameters, time. Markers beyond the grid read 0.
+ * parameters, time. `BT_VR_MARKER(i, axis)` takes any i up to 256 (the largest grid, 16 x
+ * 16), beyond the FMU's `BT_MARKER_SLOTS`; markers beyond the grid read 0.
  *
  * # Safety
  * `h` must be NULL or a live handle; `value` NULL or writable.
@@ -378,7 +379,8 @@ int bt_time(struct BtTorso *h, double *t);
 int bt_read(struct BtTorso *h, uint32_t vr, double *value);
 
 /**
- * Reads any numeric FMI variable by name (`"volume.lung"`, `"marker[3].y"`, ...).
+ * Reads any numeric FMI variable by name (`"volume.lung"`, `"marker[3].y"`, ...; grid
+ * markers up to `marker[256]`, as [`bt_read`]).
  *
  * # Safety
  * `h` must be NULL or a live handle; `name` NULL or NUL-terminated; `value` NULL or writable.
@@ -508,8 +510,8 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{5b791663-d03f-235a-7d53-18449d124202}"
-#define BT_MARKER_SLOTS 256
+#define BT_FMI_GUID "{02eb7f44-1b05-16a3-f5d5-85cb4084cec7}"
+#define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
 #define BT_VR_ACTIVATION_EXTERNAL_INTERCOSTALS 2u
@@ -588,5 +590,6 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #define BT_VR_SOLVER_STEPS 3000u
 #define BT_VR_SOLVER_REJECTED_STEPS 3001u
 #define BT_VR_SOLVER_RHS_EVALUATIONS 3002u
-/* marker[i].x|y|z for i = 1..BT_MARKER_SLOTS, axis 0 = x, 1 = y, 2 = z */
+/* marker[i].x|y|z, axis 0 = x, 1 = y, 2 = z: i = 1..BT_MARKER_SLOTS are the FMU's outputs (the
+   default 10 x 6 grid); bt_read takes i up to 256 (a grid of up to 16 x 16) */
 #define BT_VR_MARKER(i, axis) (2000u + 3u * ((unsigned)(i) - 1u) + (unsigned)(axis))

@@ -19,6 +19,9 @@
 #
 # The same binaries are packaged a second time as the FMI 3.0 FMU, BreathingTorso3.fmu beside
 # the FMI 2.0 one (the library exports both interfaces), under the same size limit.
+# python/tests/test_fmu_win64.py (run by scripts/test.sh after this script) then runs each
+# FMU's win64 DLL under Wine against its linux64 binary: tests/c/fmi_run.c the FMI 2.0
+# calling sequence, tests/c/fmi3_run.c the FMI 3.0 one.
 #
 # Usage: bash scripts/deploy.sh [--platforms linux64,win64] [--out fmu/BreathingTorso.fmu]
 set -euo pipefail

@@ -75,7 +75,7 @@ stage "distributable FMU: stripped linux64 (glibc 2.17) and win64 binaries, chec
   optional bash scripts/deploy.sh --out fmu/BreathingTorso.fmu
 
 if ! command -v wine >/dev/null && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-  echo "== wine (runs the win64 binary against linux64 in python/tests/test_fmu_win64.py)"
+  echo "== wine (runs the win64 binary against linux64, FMI 2.0 and FMI 3.0, in python/tests/test_fmu_win64.py)"
   (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends wine wine64) \
     >/dev/null 2>&1 || echo "wine could not be installed: the win64 test will say it is skipped" >&2
 fi

@@ -107,6 +107,7 @@ fn header_compiles_as_c11_and_cpp() {
         "#include \"breathing_torso.h\"\n\
          _Static_assert(BT_VR_MARKER(1, 0) == 2000u, \"marker 1 x\");\n\
          _Static_assert(BT_VR_MARKER(256, 2) == 2767u, \"marker 256 z\");\n\
+         _Static_assert(BT_MARKER_SLOTS == 60, \"the default 10 x 6 grid's markers\");\n\
          int main(void) { BtConfig c; return bt_config_default(&c); }\n",
     )
     .unwrap();

@@ -62,12 +62,19 @@ fn table_is_consistent() {
             .iter()
             .filter(|v| v.name.starts_with("marker["))
             .count(),
-        768
+        3 * 60,
+        "the generic FMU's marker outputs are the default 10 x 6 grid's 60 markers (issue 22)"
     );
+    let defaults = breathing_torso::Config::default().scene;
+    assert_eq!(
+        usize::from(breathing_torso::fmi::variables::MARKER_SLOTS),
+        defaults.grid_rows * defaults.grid_cols
+    );
+    assert!(t.by_name("marker[61].x").is_none());
     for name in [
         "activation.diaphragm",
         "volume.lung",
-        "marker[256].z",
+        "marker[60].z",
         "solver.rhs_evaluations",
         "slp.reference",
         "posture",
@@ -131,4 +138,105 @@ fn ranges_agree_with_config_validate() {
             );
         }
     }
+}
+
+/// The generic FMU has the default grid's 60 markers as outputs, but the C library built on
+/// the same table keeps grids of up to 16 x 16: `bt_read` and `bt_read_by_name` take the
+/// markers beyond the 60th, equal to `bt_read_markers`, and refuse those beyond 256.
+#[test]
+fn the_c_library_reads_grid_markers_beyond_the_fmus_outputs() {
+    use breathing_torso::capi::*;
+    use breathing_torso::fmi::variables::{MARKER_SLOTS, marker_vr};
+    unsafe {
+        let mut config = std::mem::zeroed::<BtConfig>();
+        assert_eq!(bt_config_default(&mut config), BT_OK);
+        config.level_of_detail = 0;
+        assert_eq!(
+            bt_config_set(&mut config, c"grid.rows".as_ptr(), 16.0),
+            BT_OK
+        );
+        assert_eq!(
+            bt_config_set(&mut config, c"grid.cols".as_ptr(), 16.0),
+            BT_OK
+        );
+        let h = bt_create(&config);
+        assert!(!h.is_null());
+        let mut xyz = vec![0.0; 3 * 256];
+        let mut count = 0usize;
+        assert_eq!(
+            bt_read_markers(h, xyz.as_mut_ptr(), xyz.len(), &mut count),
+            BT_OK
+        );
+        assert_eq!(count, 256);
+        for index in [MARKER_SLOTS, 100, 255] {
+            for axis in 0..3u8 {
+                let mut v = f64::NAN;
+                assert_eq!(bt_read(h, marker_vr(index, axis), &mut v), BT_OK);
+                assert_eq!(v, xyz[3 * usize::from(index) + usize::from(axis)]);
+                assert!(v != 0.0);
+                let name = std::ffi::CString::new(format!(
+                    "marker[{}].{}",
+                    index + 1,
+                    ["x", "y", "z"][usize::from(axis)]
+                ))
+                .unwrap();
+                let mut w = f64::NAN;
+                assert_eq!(bt_read_by_name(h, name.as_ptr(), &mut w), BT_OK);
+                assert_eq!(w, v);
+            }
+        }
+        let mut v = 0.0;
+        assert_ne!(bt_read(h, marker_vr(256, 0), &mut v), BT_OK);
+        assert_ne!(bt_read_by_name(h, c"marker[257].x".as_ptr(), &mut v), BT_OK);
+        assert_ne!(bt_read_by_name(h, c"marker[0].x".as_ptr(), &mut v), BT_OK);
+        bt_destroy(h);
+    }
+}
+
+/// The generic FMU refuses a grid with more markers than its 60 outputs (rather than reading
+/// the first 60 of a larger grid), naming the grid and the personalised FMU; a smaller grid
+/// runs, its markers beyond rows x cols reading 0.
+#[test]
+fn the_generic_fmu_refuses_a_grid_beyond_its_marker_outputs() {
+    use breathing_torso::fmi::instance::Instance;
+    use breathing_torso::fmi::types::fmi2Status::fmi2OK;
+    use std::sync::{Arc, Mutex};
+    let log = Arc::new(Mutex::new(Vec::<String>::new()));
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let run = |rows: i32, cols: i32| {
+        let sink_log = log.clone();
+        let sink: breathing_torso::fmi::instance::LogSink =
+            Box::new(move |_s, _c: &str, m: &str| sink_log.lock().unwrap().push(m.to_string()));
+        let mut inst = Instance::new("grid", None, Some(sink), false);
+        assert_eq!(
+            inst.set_integer(&[vr("scene.level_of_detail")], &[0]),
+            fmi2OK
+        );
+        assert_eq!(
+            inst.set_integer(&[vr("grid.rows"), vr("grid.cols")], &[rows, cols]),
+            fmi2OK
+        );
+        assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
+        assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+        (inst.exit_initialization_mode(), inst)
+    };
+    let (status, _) = run(16, 4);
+    assert_ne!(status, fmi2OK);
+    let msg = log.lock().unwrap().join("\n");
+    assert!(
+        msg.contains("grid.rows x grid.cols")
+            && msg.contains("16 x 4 = 64")
+            && msg.contains("at most 60")
+            && msg.contains("--subject"),
+        "{msg}"
+    );
+    let (status, mut inst) = run(5, 6);
+    assert_eq!(status, fmi2OK);
+    let mut v = [0.0; 2];
+    assert_eq!(
+        inst.get_real(&[vr("marker[30].z"), vr("marker[31].x")], &mut v),
+        fmi2OK
+    );
+    assert!(v[0] != 0.0 && v[1] == 0.0, "{v:?}");
 }

@@ -226,7 +226,7 @@ fn only_the_fits_grid_markers_are_outputs() {
     assert_eq!(generic_guid, table().guid());
     assert_eq!(
         generic.keys().filter(|k| k.starts_with("marker[")).count(),
-        3 * 256
+        3 * 60
     );
 }
 
@@ -437,6 +437,7 @@ fn a_subject_on_another_grid_has_that_grids_markers() {
             ("grid.cols".into(), Value::Integer(cols)),
             ("subject.age".into(), Value::Real(52.5)),
         ],
+        markers: None,
     };
     let t = Table::personalised(&p(4, 3)).unwrap();
     let markers: Vec<&str> = t
@@ -474,6 +475,7 @@ fn a_subject_on_another_grid_has_that_grids_markers() {
     ] {
         let e = Table::personalised(&Personalisation {
             starts: vec![(name.into(), v)],
+            markers: None,
         })
         .err()
         .unwrap()
@@ -876,4 +878,261 @@ fn without_out_the_fmu_is_named_after_the_fit() {
     assert!(zip.by_name(&format!("resources/{PARAMETERS}")).is_ok());
     assert!(cwd.join("fmu").join("result.ssv").is_file());
     assert!(!cwd.join("fmu").join("BreathingTorso.fmu").exists());
+}
+
+/// One short fit of the bundled laboratory recording of the 30-marker chest set (named
+/// markers, level of detail 0), made into a personalised FMU: (fit result, unpacked FMU).
+fn named_built() -> &'static (PathBuf, PathBuf) {
+    static BUILT: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
+    BUILT.get_or_init(|| {
+        // Beside dir(), which built() empties.
+        let dir = std::env::temp_dir().join(format!("fmi_personal_named_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let fit = dir.join("fit.json");
+        let recording = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/recordings/chest30_lab.c3d"
+        );
+        let (ok, msg) = torso(&[
+            "fit",
+            "--slp",
+            recording,
+            "--lod",
+            "0",
+            "--max-evals",
+            "12",
+            "--threads",
+            "1",
+            "--out",
+            fit.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        let fmu = dir.join("named.fmu");
+        let (ok, msg) = torso(&[
+            "fmu",
+            "build",
+            "--subject",
+            fit.to_str().unwrap(),
+            "--out",
+            fmu.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        let unpacked = dir.join("unpacked");
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+        zip.extract(&unpacked).unwrap();
+        (fit, unpacked)
+    })
+}
+
+/// A personalised FMU of a fit of named markers has exactly the set's bound markers as
+/// outputs, named by their labels, in the set's order at the grid's value references; the
+/// bindings travel in its resources, and its GUID follows them.
+#[test]
+fn a_named_marker_sets_fmu_has_its_labels_as_outputs() {
+    use breathing_torso::fmi::personal::MARKERS;
+    use breathing_torso::fmi::variables::{Personalisation, Table, marker_vr};
+    let (fit, unpacked) = named_built();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fit).unwrap()).unwrap();
+    let labels: Vec<String> = json["marker_set"]["labels_bound"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap().to_string())
+        .collect();
+    assert!(
+        labels.len() >= 20,
+        "most of chest30's 30 markers bind: {labels:?}"
+    );
+    let md = std::fs::read_to_string(unpacked.join("modelDescription.xml")).unwrap();
+    let (guid, vars) = variables(&md);
+    let mut markers: Vec<(u32, String)> = vars
+        .iter()
+        .filter(|(n, _)| n.starts_with("marker"))
+        .map(|(n, (_, a))| (a["valueReference"].parse().unwrap(), n.clone()))
+        .collect();
+    markers.sort();
+    let expected: Vec<(u32, String)> = labels
+        .iter()
+        .enumerate()
+        .flat_map(|(i, l)| {
+            ["x", "y", "z"]
+                .iter()
+                .enumerate()
+                .map(move |(a, x)| (marker_vr(i as u16, a as u8), format!("marker.{l}.{x}")))
+        })
+        .collect();
+    assert_eq!(markers, expected);
+    // The set travels in resources/ and rebuilds the same table (and GUID).
+    assert!(unpacked.join("resources").join(MARKERS).is_file());
+    let t = table_in(Some(&unpacked.join("resources"))).unwrap();
+    assert_eq!(t.guid(), guid);
+    assert_eq!(t.marker_set().unwrap().labels, labels);
+    // Another binding of one marker is another interface.
+    let p = t.personalisation().unwrap();
+    let mut moved = (**p.markers.as_ref().unwrap()).clone();
+    moved.bindings[0].barycentric = [1.0, 0.0, 0.0];
+    let other = Table::personalised(&Personalisation {
+        starts: p.starts.clone(),
+        markers: Some(moved.into()),
+    })
+    .unwrap();
+    assert_ne!(other.guid(), t.guid());
+    assert_ne!(t.guid(), table().guid());
+}
+
+/// Through the exported functions: the FMU's marker outputs are the native model's positions
+/// of the set's markers (the same subject, drive and bindings, built without the FMU layer),
+/// and each is the point at its barycentric binding on the deformed skin.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn a_named_marker_sets_fmu_reads_the_markers_off_the_skin() {
+    use breathing_torso::anatomy::skin::MarkerSet;
+    use breathing_torso::fmi::personal::from_fit_json;
+    use breathing_torso::fmi::variables::{Role, start_config};
+    use exported::{instantiate, uri};
+    use std::sync::Arc;
+    let (fit, unpacked) = named_built();
+    let t = table_in(Some(&unpacked.join("resources"))).unwrap();
+    let set = t.marker_set().unwrap().clone();
+    let vrs: Vec<u32> = set
+        .labels
+        .iter()
+        .flat_map(|l| ["x", "y", "z"].map(|a| t.by_name(&format!("marker.{l}.{a}")).unwrap().vr))
+        .collect();
+    let mut fmu = instantiate(t.guid(), &uri(&unpacked.join("resources"))).unwrap();
+    fmu.start();
+    let h = 0.25;
+    let got = fmu.steps(0, 8, h, &vrs);
+
+    // The native model: the fit's parameters on the generic start configuration, the set's
+    // bindings read back from the fit result.
+    let mut config = start_config();
+    for (name, value) in from_fit_json(fit).unwrap().generic {
+        let Role::Parameter(p) = table().by_name(&name).unwrap().role else {
+            panic!("{name}")
+        };
+        p.set(&mut config, value).unwrap();
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fit).unwrap()).unwrap();
+    let native_set =
+        MarkerSet::from_bindings_json("recording", &json["marker_set"]["bindings"], "fit").unwrap();
+    assert_eq!(native_set.labels, set.labels);
+    let mut native = breathing_torso::Torso::new(config).unwrap();
+    native.set_marker_set(Some(Arc::new(native_set.clone())));
+    let mut skin = Vec::new();
+    let mut moved = 0.0f64;
+    let (mut worst_native, mut worst_skin) = (0.0f64, 0.0f64);
+    for (k, row) in got.iter().enumerate() {
+        native.advance_to((k + 1) as f64 * h).unwrap();
+        let positions = native.markers().unwrap().to_vec();
+        native.skin_vertices(&mut skin).unwrap();
+        let triangles = native.marker_model().unwrap().skin().triangles.clone();
+        let on_skin = native_set.positions(&skin, &triangles);
+        for (i, p) in positions.iter().enumerate() {
+            for a in 0..3 {
+                let fmu_value = row[3 * i + a];
+                worst_native = worst_native.max((fmu_value - p[a]).abs());
+                worst_skin = worst_skin.max((fmu_value - on_skin[i][a]).abs());
+                assert!(
+                    (fmu_value - p[a]).abs() <= 1e-12 * p[a].abs().max(1e-3),
+                    "{} axis {a} at step {k}: FMU {fmu_value}, native {}",
+                    set.labels[i],
+                    p[a]
+                );
+                // 1 um: the bound point blended alone against the whole skin's blend.
+                assert!(
+                    (fmu_value - on_skin[i][a]).abs() <= 1e-6,
+                    "{} axis {a}: FMU {fmu_value}, on the skin {}",
+                    set.labels[i],
+                    on_skin[i][a]
+                );
+            }
+            moved = moved.max((row[3 * i] - got[0][3 * i]).abs());
+        }
+    }
+    eprintln!(
+        "{} markers: largest difference FMU - native {worst_native:e} m, FMU - skin at the binding {worst_skin:e} m, largest x excursion {moved:e} m",
+        set.len()
+    );
+    assert!(moved > 1e-4, "the markers move with breathing ({moved} m)");
+}
+
+/// A named set's fit result without its bindings, or with a bad one, is refused naming the
+/// file and the entry; a personalised FMU whose `markers.json` was damaged is refused at
+/// `fmi2Instantiate` naming the file, and one whose binding was edited no longer matches its
+/// GUID.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn a_named_sets_bindings_are_checked_in_the_fit_and_in_the_fmu() {
+    use breathing_torso::fmi::personal::MARKERS;
+    use exported::{instantiate, uri};
+    let (fit, unpacked) = named_built();
+    let dir = std::env::temp_dir().join(format!("fmi_personal_named_bad_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fit).unwrap()).unwrap();
+    let mut no_bindings = json.clone();
+    no_bindings["marker_set"]
+        .as_object_mut()
+        .unwrap()
+        .remove("bindings");
+    let mut bad_bary = json.clone();
+    bad_bary["marker_set"]["bindings"][2]["barycentric"] = serde_json::json!([0.5, 0.6, -0.1]);
+    for (name, value, expect) in [
+        (
+            "no_bindings.json",
+            &no_bindings,
+            "missing key `bindings` in `marker_set`",
+        ),
+        (
+            "bad_bary.json",
+            &bad_bary,
+            "barycentric coordinates >= 0 summing to 1",
+        ),
+    ] {
+        let file = dir.join(name);
+        std::fs::write(&file, value.to_string()).unwrap();
+        let (ok, msg) = torso(&[
+            "fmu",
+            "build",
+            "--subject",
+            file.to_str().unwrap(),
+            "--out",
+            dir.join("x.fmu").to_str().unwrap(),
+        ]);
+        assert!(!ok, "{msg}");
+        assert!(
+            msg.contains(expect) && msg.contains(&file.display().to_string()),
+            "{msg}"
+        );
+    }
+    let good_guid = table_in(Some(&unpacked.join("resources")))
+        .unwrap()
+        .guid()
+        .to_string();
+    let copy = dir.join("copy");
+    copy_dir(unpacked, &copy);
+    let markers = copy.join("resources").join(MARKERS);
+    let text = std::fs::read_to_string(&markers).unwrap();
+    std::fs::write(&markers, &text[..text.len() / 2]).unwrap();
+    let messages = instantiate(&good_guid, &uri(&copy.join("resources")))
+        .err()
+        .unwrap()
+        .join("\n");
+    assert!(
+        messages.contains(&markers.display().to_string()),
+        "{messages}"
+    );
+    let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edited["bindings"][0]["triangle"] = serde_json::json!(0);
+    std::fs::write(&markers, edited.to_string()).unwrap();
+    let messages = instantiate(&good_guid, &uri(&copy.join("resources")))
+        .err()
+        .unwrap()
+        .join("\n");
+    assert!(messages.contains("GUID"), "{messages}");
 }

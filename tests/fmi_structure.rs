@@ -69,7 +69,7 @@ fn every_output_declares_its_input_dependencies() {
     let outputs = outputs();
     assert_eq!(
         outputs.len(),
-        8 + 3 + 8 + 3 + 3 * 256 + 3,
+        8 + 3 + 8 + 3 + 3 * 60 + 3,
         "volumes and pressures, pressures and flow, sides, sternum, markers, solver"
     );
     for v in &outputs {

@@ -122,7 +122,9 @@ def test_model_description_contract():
               "volume.abdomen_displaced"]:
         assert names[n].unit == "L" and names[n].causality == "output"
     assert names["pressure.abdomen"].unit == "Pa"
-    assert names["marker[256].z"].unit == "m"
+    assert names["marker[60].z"].unit == "m"
+    # The default 10 x 6 grid's 60 markers are the generic FMU's marker outputs (issue 22).
+    assert sum(n.startswith("marker[") for n in names) == 3 * 60
     assert names["solver.steps"].type == "Integer"
     assert names["slp.reference"].type == "String"
     assert names["drive.ribs.phase"].variability == "tunable"
@@ -252,7 +254,15 @@ def test_do_step_checks_time_and_step_size(host):
 
 def test_markers_beyond_the_grid_read_zero(host):
     f = host.initialize({"grid.rows": 4, "grid.cols": 5})
-    assert f.getReal([host.vr["marker[21].x"], host.vr["marker[256].z"]]) == [0.0, 0.0]
+    assert f.getReal([host.vr["marker[21].x"], host.vr["marker[60].z"]]) == [0.0, 0.0]
+    assert f.getReal([host.vr["marker[20].z"]]) != [0.0]
+
+
+def test_a_grid_beyond_the_marker_outputs_is_refused(host):
+    with pytest.raises(FMICallException):
+        host.initialize({"grid.rows": 16, "grid.cols": 16})
+    message = host.last_error()
+    assert "grid.rows x grid.cols" in message and "at most 60" in message and "--subject" in message, message
 
 
 def test_serialized_garbage_is_rejected(host):
@@ -280,7 +290,7 @@ def test_fmu_state_round_trip_of_parameters_and_inputs(host):
 
 
 def test_reset_restores_start_values(host):
-    f = host.initialize({"subject.age": 60.0, "grid.rows": 12})
+    f = host.initialize({"subject.age": 60.0, "grid.rows": 8})
     f.setReal([host.vr["activation.diaphragm"]], [0.7])
     f.reset()
     f.setupExperiment(startTime=0.0)

@@ -185,3 +185,84 @@ def test_packaged_with_the_distributable_binaries_it_is_at_most_4_mb(built, tmp_
     torso("fmu", "build", "--subject", built["fit"], "--out", out, *args)
     assert out.stat().st_size <= MAX_BYTES, f"{out.stat().st_size} bytes"
     assert validate_fmu(str(out)) == []
+
+
+CHEST30 = ROOT / "data" / "recordings" / "chest30_lab.c3d"
+
+
+@pytest.fixture(scope="module")
+def named(tmp_path_factory):
+    """A short fit of the laboratory recording of the 30-marker chest set (named markers, level
+    of detail 0) made into a personalised FMU."""
+    d = tmp_path_factory.mktemp("named")
+    fit = d / "fit.json"
+    torso("fit", "--slp", CHEST30, "--lod", "0", "--max-evals", "12", "--threads", "1", "--out", fit)
+    fmu = d / "named.fmu"
+    torso("fmu", "build", "--subject", fit, "--out", fmu)
+    return {"fit": fit, "fmu": fmu, "ssv": fmu.with_suffix(".ssv"), "json": json.loads(fit.read_text())}
+
+
+def test_a_named_marker_sets_fmu_validates_and_names_its_markers_by_label(named):
+    assert validate_fmu(str(named["fmu"])) == []
+    md = read_model_description(str(named["fmu"]))
+    labels = named["json"]["marker_set"]["labels_bound"]
+    assert len(labels) >= 20
+    markers = sorted((v.valueReference, v.name) for v in md.modelVariables if v.name.startswith("marker"))
+    assert [n for _, n in markers] == [f"marker.{l}.{a}" for l in labels for a in "xyz"]
+    assert [vr for vr, _ in markers] == list(range(2000, 2000 + 3 * len(labels)))
+    with zipfile.ZipFile(named["fmu"]) as z:
+        assert "resources/subject/markers.json" in z.namelist()
+
+
+def test_a_named_marker_sets_outputs_are_the_native_skin_at_the_bindings(named):
+    """The FMU's marker outputs, simulated by fmpy, against the native C library run with the
+    same parameters: its deformed skin (bt_read_skin) at each marker's barycentric binding from
+    the fit result."""
+    import ctypes
+    import sys
+    sys.path.insert(0, str(ROOT / "python"))
+    from bench_scipy import Config, load_library
+
+    labels = named["json"]["marker_set"]["labels_bound"]
+    bindings = named["json"]["marker_set"]["bindings"]
+    assert [b["label"] for b in bindings] == labels
+    h, steps = 0.25, 8
+    outputs = [f"marker.{l}.{a}" for l in labels for a in "xyz"]
+    r = simulate_fmu(str(named["fmu"]), stop_time=h * steps, output_interval=h, output=outputs)
+    fmu = np.array([[row[n] for n in outputs] for row in r]).reshape(len(r), len(labels), 3)
+
+    lib = load_library()
+    lib.bt_skin_sizes.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_size_t)]
+    lib.bt_read_skin.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p, ctypes.c_size_t]
+    c = Config()
+    assert lib.bt_config_default(ctypes.byref(c)) == 0
+    for name, (ty, value) in ssv_values(named["ssv"]).items():
+        if ty == "String":
+            assert value == "", name  # no skin reference, no subject mesh for a named set
+            continue
+        assert lib.bt_config_set(ctypes.byref(c), name.encode(), float(value)) == 0, lib.bt_creation_error()
+    handle = lib.bt_create(ctypes.byref(c))
+    assert handle, lib.bt_creation_error()
+    try:
+        nv, nt = ctypes.c_size_t(), ctypes.c_size_t()
+        assert lib.bt_skin_sizes(handle, ctypes.byref(nv), ctypes.byref(nt)) == 0
+        vertices = np.zeros((nv.value, 3))
+        triangles = np.zeros((nt.value, 3), dtype=np.uint32)
+        tri = np.array([b["triangle"] for b in bindings])
+        bary = np.array([b["barycentric"] for b in bindings])
+        worst, native = 0.0, []
+        for k in range(len(r)):
+            if r["time"][k] > 0:
+                assert lib.bt_advance_to(handle, float(r["time"][k]), None) == 0, lib.bt_last_error(handle)
+            assert lib.bt_read_skin(handle, vertices.ctypes.data, vertices.size,
+                                    triangles.ctypes.data, triangles.size) == 0
+            points = np.einsum("mk,mkd->md", bary, vertices[triangles[tri]])
+            native.append(points)
+            worst = max(worst, float(np.max(np.abs(points - fmu[k]))))
+    finally:
+        lib.bt_destroy(handle)
+    native = np.array(native)
+    print(f"{len(labels)} markers: largest |FMU - native skin at the binding| {worst:.3g} m, "
+          f"largest excursion {np.max(np.abs(native - native[0])):.3g} m")
+    assert np.max(np.abs(native - native[0])) > 1e-4, "the markers move with breathing"
+    assert worst <= 1e-9

@@ -688,8 +688,47 @@ fn read_variable(b: &mut BtTorso, var: &crate::fmi::variables::Variable) -> Resu
     }
 }
 
+/// A grid marker beyond the generic FMU's [`MARKER_SLOTS`](crate::fmi::variables::MARKER_SLOTS)
+/// outputs, which the C library reads as well (its grid may have up to 16 x 16 markers):
+/// `BT_VR_MARKER(i, axis)` or `marker[i].<axis>` for i up to 256, as (0-based index, axis).
+fn extra_grid_marker(vr: Option<u32>, name: Option<&str>) -> Option<(u16, u8)> {
+    use crate::fmi::variables::{MARKER_SLOTS, MAX_MARKER_OUTPUTS, VR_MARKER};
+    let (index, axis) = match (vr, name) {
+        (Some(vr), _) => {
+            let k = vr.checked_sub(VR_MARKER)?;
+            (u16::try_from(k / 3).ok()?, (k % 3) as u8)
+        }
+        (None, Some(name)) => {
+            let rest = name.strip_prefix("marker[")?;
+            let (i, a) = rest.split_once("].")?;
+            let i: u16 = i.parse().ok().filter(|&i| i >= 1)?;
+            let axis = ["x", "y", "z"].iter().position(|x| *x == a)? as u8;
+            (i - 1, axis)
+        }
+        (None, None) => return None,
+    };
+    (MARKER_SLOTS..MAX_MARKER_OUTPUTS)
+        .contains(&index)
+        .then_some((index, axis))
+}
+
+/// Reads a grid marker that is not one of the table's outputs ([`extra_grid_marker`]).
+fn read_extra_marker(b: &mut BtTorso, (index, axis): (u16, u8)) -> Result<f64> {
+    let name = format!(
+        "marker[{}].{}",
+        index + 1,
+        ["x", "y", "z"][usize::from(axis)]
+    );
+    read_output(
+        &mut b.torso,
+        &name,
+        crate::model::Quantity::Marker { index, axis },
+    )
+}
+
 /// Reads any numeric FMI variable by value reference (`BT_VR_*` constants): outputs, inputs,
-/// parameters, time. Markers beyond the grid read 0.
+/// parameters, time. `BT_VR_MARKER(i, axis)` takes any i up to 256 (the largest grid, 16 x
+/// 16), beyond the FMU's `BT_MARKER_SLOTS`; markers beyond the grid read 0.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `value` NULL or writable.
@@ -697,16 +736,22 @@ fn read_variable(b: &mut BtTorso, var: &crate::fmi::variables::Variable) -> Resu
 pub unsafe extern "C" fn bt_read(h: *mut BtTorso, vr: u32, value: *mut f64) -> c_int {
     unsafe {
         with_handle(h, |b| {
-            let var = table()
-                .by_vr(vr)
-                .ok_or_else(|| Failure(BT_ERR_INVALID, format!("unknown value reference {vr}")))?;
-            let v = read_variable(b, var)?;
+            let v = match table().by_vr(vr) {
+                Some(var) => read_variable(b, var)?,
+                None => {
+                    let marker = extra_grid_marker(Some(vr), None).ok_or_else(|| {
+                        Failure(BT_ERR_INVALID, format!("unknown value reference {vr}"))
+                    })?;
+                    read_extra_marker(b, marker)?
+                }
+            };
             put(value, v, "value")
         })
     }
 }
 
-/// Reads any numeric FMI variable by name (`"volume.lung"`, `"marker[3].y"`, ...).
+/// Reads any numeric FMI variable by name (`"volume.lung"`, `"marker[3].y"`, ...; grid
+/// markers up to `marker[256]`, as [`bt_read`]).
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `name` NULL or NUL-terminated; `value` NULL or writable.
@@ -719,10 +764,15 @@ pub unsafe extern "C" fn bt_read_by_name(
     unsafe {
         with_handle(h, |b| {
             let name = text(name, "name")?;
-            let var = table()
-                .by_name(name)
-                .ok_or_else(|| Failure(BT_ERR_INVALID, format!("unknown variable `{name}`")))?;
-            let v = read_variable(b, var)?;
+            let v = match table().by_name(name) {
+                Some(var) => read_variable(b, var)?,
+                None => {
+                    let marker = extra_grid_marker(None, Some(name)).ok_or_else(|| {
+                        Failure(BT_ERR_INVALID, format!("unknown variable `{name}`"))
+                    })?;
+                    read_extra_marker(b, marker)?
+                }
+            };
             put(value, v, "value")
         })
     }
@@ -1068,7 +1118,8 @@ pub fn header_value_references() -> String {
     }
     let _ = writeln!(
         s,
-        "/* marker[i].x|y|z for i = 1..BT_MARKER_SLOTS, axis 0 = x, 1 = y, 2 = z */\n\
+        "/* marker[i].x|y|z, axis 0 = x, 1 = y, 2 = z: i = 1..BT_MARKER_SLOTS are the FMU's outputs (the\n   \
+         default 10 x 6 grid); bt_read takes i up to 256 (a grid of up to 16 x 16) */\n\
          #define BT_VR_MARKER(i, axis) ({VR_MARKER}u + 3u * ((unsigned)(i) - 1u) + (unsigned)(axis))"
     );
     s

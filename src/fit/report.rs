@@ -371,8 +371,10 @@ pub fn summary(fit: &Fit) -> String {
 }
 
 /// The `marker_set` entry of a fit of a marker set other than the grid: the registration of
-/// its first frame to the skin (similarity transform recording -> model, residuals) and the
-/// markers left out; `recorded` is the number of markers in the file.
+/// its first frame to the skin (similarity transform recording -> model, residuals), the
+/// bound markers' bindings on the rest skin (`bindings`, which `torso fmu build --subject`
+/// carries into a personalised FMU) and the markers left out; `recorded` is the number of
+/// markers in the file.
 pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value {
     let r = &bound.registration;
     let t = &r.to_model;
@@ -385,6 +387,7 @@ pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value 
         "markers_recorded": recorded,
         "markers_bound": bound.set.len(),
         "labels_bound": bound.set.labels,
+        "bindings": bound.set.bindings_json(),
         "transform": {
             "description": "recording frame -> model frame: p_model = scale R p_recording + t",
             "rotation_matrix": rows,

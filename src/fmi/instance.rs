@@ -714,6 +714,33 @@ impl Instance {
         Ok(out)
     }
 
+    /// A model of `config` (paths resolved) whose markers are this FMU's marker outputs: a
+    /// personalised FMU's named marker set, else the grid. A grid with more markers than the
+    /// FMU has marker outputs is refused, naming the grid and how to get an FMU with them.
+    fn new_torso(&self, config: Config) -> Result<Torso> {
+        let set = self.table.marker_set().cloned();
+        if set.is_none() {
+            let (rows, cols) = (config.scene.grid_rows, config.scene.grid_cols);
+            let outputs = self.table.marker_outputs();
+            if rows * cols > outputs {
+                return Err(Error::invalid(
+                    "grid.rows x grid.cols",
+                    format!("{rows} x {cols} = {} markers", rows * cols),
+                    format!(
+                        "at most {outputs} markers, this FMU's marker outputs (a personalised FMU, \
+                         `torso fmu build --subject FIT.json` of a fit made with `--grid {rows}x{cols}`, \
+                         has that grid's markers as outputs)"
+                    ),
+                ));
+            }
+        }
+        let mut torso = Torso::new(config)?;
+        if set.is_some() {
+            torso.set_marker_set(set);
+        }
+        Ok(torso)
+    }
+
     /// Builds the model from the configuration if it is not built yet; a model kept by
     /// `fmi2Reset` whose fixed configuration (everything but the drive) is the current one is
     /// restored to its fresh state instead, which gives the same state as a rebuild.
@@ -729,7 +756,7 @@ impl Instance {
             let (mut torso, fresh) = match reused {
                 Some(pair) => pair,
                 None => {
-                    let torso = Torso::new(config)?;
+                    let torso = self.new_torso(config)?;
                     let fresh = torso.snapshot();
                     (torso, fresh)
                 }
@@ -1227,7 +1254,7 @@ impl Instance {
                     (true, Some(t)) => t,
                     (_, current) => {
                         self.torso = current;
-                        match Torso::new(resolved) {
+                        match self.new_torso(resolved) {
                             Ok(t) => {
                                 rebuilt_fresh = Some(t.snapshot());
                                 t

@@ -4,8 +4,9 @@
 //! grid, lung ratio, skin reference, subject mesh), the files the subject needs at run time
 //! (copied under `resources/subject/`) and the fit's report (under `documentation/`); and,
 //! at `fmi2Instantiate`, finds the parameter set a personalised FMU carries in its
-//! resources ([`PARAMETERS`]), from which its variable table and GUID follow
-//! ([`crate::fmi::variables::Table::personalised`]).
+//! resources ([`PARAMETERS`]) and, for a fit of a named marker set, the set's bindings on the
+//! skin ([`MARKERS`]), from which its variable table (the set's markers as outputs, named by
+//! their labels) and GUID follow ([`crate::fmi::variables::Table::personalised`]).
 //!
 //! The same parameters are written beside the FMU as an SSP parameter set ([`super::ssv`])
 //! for the generic FMU; there the skin reference and mesh folder are absolute paths of the
@@ -15,15 +16,21 @@ use super::ssv;
 use super::variables::{
     Causality, Personalisation, ScalarType, Table, Value, personalised_table, table,
 };
+use crate::anatomy::skin::MarkerSet;
 use crate::anatomy::{Posture, Sex};
 use crate::{Error, Result};
 use serde_json::Value as Json;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Where a personalised FMU keeps its parameter set, relative to its `resources/`.
 pub const PARAMETERS: &str = "subject/parameters.ssv";
 /// Folder of the subject's files, relative to the FMU's `resources/`.
 pub const SUBJECT_DIR: &str = "subject";
+/// Where a personalised FMU of a named marker set keeps the set (labels and bindings on the
+/// rest skin), relative to its `resources/`: `{"name": .., "bindings": [..]}` with the
+/// bindings of [`crate::anatomy::skin::MarkerSet::bindings_json`].
+pub const MARKERS: &str = "subject/markers.json";
 
 /// The variable table of the FMU whose resources are `resources`: the personalised table of
 /// the parameter set at [`PARAMETERS`], when there is one, otherwise the generic table. An
@@ -39,7 +46,43 @@ pub fn table_in(resources: Option<&Path>) -> Result<&'static Table> {
     let name = path.display().to_string();
     let starts = ssv::parse(&text, &name)?;
     ssv::check(table(), &starts, &name)?;
-    personalised_table(&Personalisation { starts })
+    let markers = match resources.map(|r| r.join(MARKERS)).filter(|p| p.is_file()) {
+        None => None,
+        Some(path) => Some(Arc::new(read_markers(&path)?)),
+    };
+    personalised_table(&Personalisation { starts, markers })
+}
+
+/// The marker set a personalised FMU carries at [`MARKERS`]; an error names the file and
+/// what is wrong in it.
+pub fn read_markers(path: &Path) -> Result<MarkerSet> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let source = path.display().to_string();
+    let json: Json = serde_json::from_slice(&bytes).map_err(|e| Error::Parse {
+        path: source.clone(),
+        line: e.line(),
+        column: e.column(),
+        message: format!("not JSON: {e}"),
+    })?;
+    let name = json
+        .get("name")
+        .and_then(Json::as_str)
+        .ok_or_else(|| Error::invalid(format!("{source}: name"), "missing", "a string"))?;
+    let bindings = json
+        .get("bindings")
+        .ok_or_else(|| Error::invalid(format!("{source}: bindings"), "missing", "an array"))?;
+    MarkerSet::from_bindings_json(name, bindings, &source)
+}
+
+/// The content of [`MARKERS`] for `set`.
+pub fn markers_file(set: &MarkerSet) -> Vec<u8> {
+    let json = serde_json::json!({
+        "name": set.name,
+        "bindings": set.bindings_json(),
+    });
+    let mut text = serde_json::to_string_pretty(&json).unwrap_or_default();
+    text.push('\n');
+    text.into_bytes()
 }
 
 /// The drive parameters a fit result names at its top level (`drive_fmi`).
@@ -259,7 +302,26 @@ pub fn from_fit_json(fit: &Path) -> Result<PersonalFmu> {
         generic.push((name.clone(), Value::String(source.display().to_string())));
         *given = inside;
     }
-    let personalisation = Personalisation { starts };
+    // A fit of a named marker set: its bound markers (labels and bindings on the rest skin)
+    // become the FMU's marker outputs.
+    let markers = match top.get("marker_set") {
+        None | Some(Json::Null) => None,
+        Some(m) => {
+            let bindings = m.get("bindings").ok_or_else(|| {
+                not_a_fit(
+                    fit,
+                    "missing key `bindings` in `marker_set` (fit results written before the \
+                     bindings were recorded lack it: fit again)"
+                        .into(),
+                )
+            })?;
+            let source = format!("{} (`marker_set`)", fit.display());
+            let set = MarkerSet::from_bindings_json("recording", bindings, &source)?;
+            entries.push((format!("resources/{MARKERS}"), markers_file(&set)));
+            Some(Arc::new(set))
+        }
+    };
+    let personalisation = Personalisation { starts, markers };
     // Checks every value against the table (type and range) before anything is written.
     Table::personalised(&personalisation)
         .map_err(|e| Error::State(format!("{}: {e}", fit.display())))?;

@@ -9,12 +9,14 @@
 //!
 //! Value references are unique across types and grouped: 0 time, 1-8 activation inputs, 9 the
 //! airway-opening pressure input, 100-199 Real parameters, 200-299 Integer parameters, 300 the String parameter, 1000-1099
-//! Real outputs, 2000-2767 markers (`2000 + 3 (i - 1) + axis`), 3000-3002 Integer outputs.
+//! Real outputs, 2000-2767 markers (`2000 + 3 (i - 1) + axis`; the generic FMU's 60 use
+//! 2000-2179), 3000-3002 Integer outputs.
 //!
 //! Ranges: the table's min/max are what the FMI layer checks first (and what masters see);
 //! [`crate::Config::validate`] stays the final check. A test checks that both agree at every
 //! bound.
 
+use crate::anatomy::skin::MarkerSet;
 use crate::anatomy::{MuscleGroup, SUBJECT_RANGES, Side};
 use crate::model::{Config, Quantity, Torso, Wave};
 use crate::solver::Method;
@@ -22,12 +24,19 @@ use crate::{Error, Result};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::PathBuf;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The FMU's model identifier (name of the shared library and of the `.fmu`).
 pub const MODEL_IDENTIFIER: &str = "BreathingTorso";
-/// Number of marker slots exposed as outputs (`marker[1]` .. `marker[256]`: a 16 x 16 grid).
-pub const MARKER_SLOTS: u16 = 256;
+/// Number of marker outputs of the generic FMU (`marker[1]` .. `marker[60]`): the markers of
+/// the default SLP grid, 10 rows x 6 columns (the model's default `grid_rows` x `grid_cols`,
+/// the grid of the thesis's SLP recordings). A grid with more markers is refused by the generic
+/// FMU; a personalised FMU ([`Table::personalised`]) has its own grid's or marker set's
+/// markers, up to [`MAX_MARKER_OUTPUTS`].
+pub const MARKER_SLOTS: u16 = 60;
+/// Most marker outputs an FMU can have (the largest grid, 16 x 16, and any marker set):
+/// value references 2000-2767.
+pub const MAX_MARKER_OUTPUTS: u16 = crate::observe::markers::MAX_MARKERS as u16;
 /// Value reference of `time`.
 pub const VR_TIME: u32 = 0;
 /// First value reference of the activation inputs (in [`MuscleGroup::ALL`] order).
@@ -620,16 +629,37 @@ impl Table {
 
     /// The table of a personalised FMU: the generic table with `p`'s start values (each
     /// checked against its variable's type and range), `grid.rows` and `grid.cols` fixed at
-    /// their start values (min = max), and only the markers of that grid as outputs. Its GUID
-    /// differs from the generic one. An error names the variable that cannot take its value.
-    ///
-    /// The marker outputs follow the subject's marker set, which is today always a grid: its
-    /// `rows x cols` markers, numbered as in the generic FMU. A named marker set (labels
-    /// instead of grid positions) would be a second kind of set here, giving the outputs
-    /// `marker[<label>].x|y|z` in the set's order; the model has no such set yet, so a
-    /// personalisation names only the grid.
+    /// their start values (min = max), and as outputs the markers of the subject's marker set:
+    /// with no named set, that grid's `rows x cols` markers `marker[i].x|y|z`, numbered as in
+    /// the generic FMU; with a named set ([`Personalisation::markers`]), its markers in its
+    /// order, named by their labels (`marker.<label>.x|y|z`, see [`marker_label_name`]), at
+    /// the same value references as the grid's. Its GUID differs from the generic one and
+    /// follows the set's labels and bindings. An error names the variable that cannot take
+    /// its value, or the set that cannot be an FMU's.
     pub fn personalised(p: &Personalisation) -> Result<Table> {
-        let mut variables = build();
+        let markers = match &p.markers {
+            None => None,
+            Some(set) => {
+                if set.len() > usize::from(MAX_MARKER_OUTPUTS) {
+                    return Err(Error::invalid(
+                        format!("marker set `{}`", set.name),
+                        format!("{} markers", set.len()),
+                        format!(
+                            "at most {MAX_MARKER_OUTPUTS} markers (the FMU's marker value references)"
+                        ),
+                    ));
+                }
+                if set.is_empty() {
+                    return Err(Error::invalid(
+                        format!("marker set `{}`", set.name),
+                        "no marker",
+                        "at least one marker",
+                    ));
+                }
+                Some(set)
+            }
+        };
+        let mut variables = build(&MarkerOutputs::Grid(0));
         for (name, value) in &p.starts {
             let var = variables
                 .iter_mut()
@@ -681,13 +711,47 @@ impl Table {
         };
         let rows = grid("grid.rows", &mut variables);
         let cols = grid("grid.cols", &mut variables);
-        let markers = rows * cols;
-        variables.retain(|v| match v.role {
-            Role::Output(Quantity::Marker { index, .. }) => usize::from(index) < markers,
-            _ => true,
-        });
-        let extra = format!("personalised|{rows}x{cols}\n");
+        let (outputs, extra) = match markers {
+            // The grid's range (1-16 each) keeps rows x cols within MAX_MARKER_OUTPUTS.
+            None => (
+                MarkerOutputs::Grid((rows * cols).min(usize::from(MAX_MARKER_OUTPUTS)) as u16),
+                format!("personalised|{rows}x{cols}\n"),
+            ),
+            Some(set) => {
+                let mut extra = format!("personalised|{rows}x{cols}|set|{}\n", set.name);
+                for (label, b) in set.labels.iter().zip(&set.bindings) {
+                    use std::fmt::Write;
+                    let _ = writeln!(
+                        extra,
+                        "{label}|{}|{:?}|{:?}|{:?}",
+                        b.triangle, b.barycentric[0], b.barycentric[1], b.barycentric[2]
+                    );
+                }
+                (MarkerOutputs::Named(set), extra)
+            }
+        };
+        let mut markers = marker_rows(&outputs);
+        let at = variables
+            .iter()
+            .position(|v| v.name == "solver.steps")
+            .unwrap_or(variables.len());
+        variables.splice(at..at, markers.drain(..));
         Ok(Table::indexed(variables, &extra, Some(p.clone())))
+    }
+
+    /// The named marker set whose markers are this table's marker outputs (`None`: the grid's).
+    pub fn marker_set(&self) -> Option<&Arc<MarkerSet>> {
+        self.personalisation
+            .as_ref()
+            .and_then(|p| p.markers.as_ref())
+    }
+
+    /// Number of marker outputs (`marker[i]` or `marker.<label>`, three scalars each).
+    pub fn marker_outputs(&self) -> usize {
+        self.variables
+            .iter()
+            .filter(|v| matches!(v.role, Role::Output(Quantity::Marker { axis: 0, .. })))
+            .count()
     }
 
     /// The personalisation this table was made with (`None`: the generic table).
@@ -726,17 +790,21 @@ impl Table {
 }
 
 /// A subject baked into an FMU ([`Table::personalised`]): parameters with the start values
-/// that replace the generic ones, in the order given.
-#[derive(Clone, Debug, PartialEq)]
+/// that replace the generic ones, in the order given, and the subject's marker set when it
+/// is not the grid.
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Personalisation {
     /// (FMI parameter name, start value).
     pub starts: Vec<(String, Value)>,
+    /// A named marker set (labels and bindings on the rest skin) whose markers are the FMU's
+    /// marker outputs instead of the grid's; `None`: the grid.
+    pub markers: Option<Arc<MarkerSet>>,
 }
 
 /// The table (built once; immutable and shared by every instance and thread).
 pub fn table() -> &'static Table {
     static TABLE: OnceLock<Table> = OnceLock::new();
-    TABLE.get_or_init(|| Table::indexed(build(), "", None))
+    TABLE.get_or_init(|| Table::indexed(build(&MarkerOutputs::Grid(MARKER_SLOTS)), "", None))
 }
 
 /// The table of a personalisation, built once per distinct personalisation and kept for
@@ -772,6 +840,82 @@ pub fn start_config() -> Config {
         drive: crate::model::Drive::quiet(),
         ..Config::default()
     }
+}
+
+/// Which markers a table has as outputs.
+#[derive(Clone, Copy, Debug)]
+enum MarkerOutputs<'a> {
+    /// The first `n` markers of the grid, `marker[1]` .. `marker[n]`, row-major.
+    Grid(u16),
+    /// A named marker set's markers in its order, `marker.<label>`.
+    Named(&'a MarkerSet),
+}
+
+/// The structured FMI name of a marker set's label: the label itself when it is an FMI
+/// identifier (a letter or `_`, then letters, digits and `_`), otherwise quoted (`'...'`, with
+/// `\` and `'` escaped), as the structured naming convention's q-names are (FMI 2.0
+/// standard, section 2.2.9).
+pub fn marker_label_name(label: &str) -> String {
+    let plain = label
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && label.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if plain {
+        label.to_string()
+    } else {
+        let escaped = label.replace('\\', "\\\\").replace('\'', "\\'");
+        format!("'{escaped}'")
+    }
+}
+
+/// The marker outputs' rows: `marker[<i>].<axis>` of the grid, `marker.<label>.<axis>` of a
+/// named set, value references `2000 + 3 i + axis` (i 0-based) in both cases.
+fn marker_rows(markers: &MarkerOutputs) -> Vec<Variable> {
+    let count = match *markers {
+        MarkerOutputs::Grid(n) => n,
+        MarkerOutputs::Named(set) => set.len() as u16,
+    };
+    // (name stem, description) of marker `index`.
+    let name = |index: u16| match *markers {
+        MarkerOutputs::Grid(_) => (
+            format!("marker[{}]", index + 1),
+            format!(
+                "Marker {} of the grid (row-major from the top row, column 1 on the subject's right; reads 0 when {} > grid.rows x grid.cols)",
+                index + 1,
+                index + 1
+            ),
+        ),
+        MarkerOutputs::Named(set) => {
+            let label = &set.labels[usize::from(index)];
+            (
+                format!("marker.{}", marker_label_name(label)),
+                format!(
+                    "Marker `{label}` of the subject's marker set `{}` (bound to the skin at barycentric coordinates of a skin triangle)",
+                    set.name
+                ),
+            )
+        }
+    };
+    let mut rows = Vec::with_capacity(3 * usize::from(count));
+    for index in 0..count {
+        let (stem, what) = name(index);
+        for (axis, a) in AXES.iter().enumerate() {
+            let axis = axis as u8;
+            let row = Row::new(
+                format!("{stem}.{a}"),
+                marker_vr(index, axis),
+                ScalarType::Real,
+                Role::Output(Quantity::Marker { index, axis }),
+                format!("{what}, {a} coordinate"),
+            )
+            .output(Variability::Continuous)
+            .unit("m")
+            .display("mm");
+            rows.push(row.0);
+        }
+    }
+    rows
 }
 
 /// A compact builder for table rows.
@@ -857,7 +1001,7 @@ impl Row {
     }
 }
 
-fn build() -> Vec<Variable> {
+fn build(markers: &MarkerOutputs) -> Vec<Variable> {
     use Parameter as P;
     use ScalarType::{Boolean, Integer, Real, String as Str};
     let d = start_config();
@@ -1221,26 +1365,7 @@ fn build() -> Vec<Variable> {
             .0,
         );
     }
-    for index in 0..MARKER_SLOTS {
-        for (axis, a) in AXES.iter().enumerate() {
-            let axis = axis as u8;
-            rows.push(
-                out(
-                    &format!("marker[{}].{a}", index + 1),
-                    marker_vr(index, axis),
-                    Q::Marker { index, axis },
-                    "m",
-                    &format!(
-                        "Marker {} (row-major from the top row, column 1 on the subject's right), {a} coordinate; reads 0 when {} > grid.rows x grid.cols",
-                        index + 1,
-                        index + 1
-                    ),
-                )
-                .display("mm")
-                .0,
-            );
-        }
-    }
+    rows.extend(marker_rows(markers));
     let int_out = |name: &str, vr: u32, q: Quantity, desc: &str| {
         Row::new(name, vr, Integer, Role::Output(q), desc)
             .output(Variability::Discrete)
@@ -1328,15 +1453,14 @@ fn format_guid(h: u128) -> String {
 }
 
 /// Reads an output quantity off `torso`, the way the FMU and the C ABI both report it:
-/// markers beyond `grid.rows x grid.cols` read 0, solver statistics come from the integrator's
+/// markers beyond the marker count (the grid's `rows x cols`, or a marker set's size) read 0, solver statistics come from the integrator's
 /// counters, everything else from [`Torso::read`]. What the model cannot provide, and any
 /// non-finite value, is an error naming `name`.
 pub fn read_output(torso: &mut Torso, name: &str, q: Quantity) -> Result<f64> {
-    if let Quantity::Marker { index, .. } = q {
-        let scene = &torso.config().scene;
-        if usize::from(index) >= scene.grid_rows * scene.grid_cols {
-            return Ok(0.0);
-        }
+    if let Quantity::Marker { index, .. } = q
+        && usize::from(index) >= torso.marker_count()
+    {
+        return Ok(0.0);
     }
     let stats = torso.solver_stats();
     let value = match q {

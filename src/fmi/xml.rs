@@ -327,9 +327,10 @@ pub fn documentation_html_for(t: &Table) -> String {
          (breathing-torso {}). GUID <code>{}</code>.</p>\n\
          <p>Muscle activations are inputs; the built-in sinusoidal drive (thesis eq. 2.4) is set by the \
          <code>drive.*</code> parameters, which may change between steps. Each communication step is \
-         integrated inside the FMU by an adaptive embedded Runge-Kutta method. Markers are numbered \
+         integrated inside the FMU by an adaptive embedded Runge-Kutta method. Grid markers are numbered \
          row-major from the top row, column 1 on the subject's right; markers beyond \
-         <code>grid.rows</code> x <code>grid.cols</code> read 0.</p>\n<table>\n\
+         <code>grid.rows</code> x <code>grid.cols</code> read 0, and a grid with more markers than \
+         the FMU's marker outputs is refused.</p>\n<table>\n\
          <tr><th>name</th><th>vr</th><th>type</th><th>causality</th><th>variability</th><th>unit</th>\
          <th>min</th><th>max</th><th>start</th><th>description</th></tr>\n",
         env!("CARGO_PKG_VERSION"),
@@ -339,9 +340,15 @@ pub fn documentation_html_for(t: &Table) -> String {
         s.push_str(
             "<p>This FMU is personalised: the start values of the subject's and the fitted drive's \
              parameters are those of the fit in <a href=\"fit.json\">fit.json</a>, and the files the \
-             subject needs are in <code>resources/subject/</code>. Only the markers of the subject's \
-             grid are outputs.</p>\n",
+             subject needs are in <code>resources/subject/</code>.</p>\n",
         );
+        s.push_str(match t.marker_set() {
+            None => "<p>Only the markers of the subject's grid are outputs.</p>\n",
+            Some(_) => {
+                "<p>The marker outputs are the subject's named marker set, <code>marker.&lt;label&gt;</code>, \
+                 each read off the deformed skin at its binding (<code>resources/subject/markers.json</code>).</p>\n"
+            }
+        });
     }
     for v in t.variables() {
         let start = match &v.start {

@@ -48,8 +48,9 @@ pub enum Quantity {
     SternumDisplacement(u8),
     /// Marker `index` (0-based, row-major from the top row, column 0 on the subject's right),
     /// coordinate `axis` (0 = x, 1 = y, 2 = z) [m], in the recording's frame when the grid is
-    /// registered (`scene.slp_reference`). Indices from rows x columns up to 255 (the FMI
-    /// layer's 256 outputs) read 0.0.
+    /// registered (`scene.slp_reference`); of a marker set ([`crate::Torso::set_marker_set`])
+    /// in the set's order. Indices from the marker count up to 255 (the most markers a grid
+    /// or an FMU has) read 0.0.
     Marker {
         /// 0-based marker index.
         index: u16,

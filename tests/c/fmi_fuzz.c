@@ -252,7 +252,7 @@ static fmi2ValueReference random_vr(void) {
     case 2: return 200 + below(6);         /* integer parameters */
     case 3: return 300;                    /* string parameter */
     case 4: return 1000 + below(11);       /* outputs */
-    case 5: return 2000 + below(768);      /* marker coordinates (most beyond the grid) */
+    case 5: return 2000 + below(768);      /* marker coordinates (180 outputs, then unknown) */
     case 6: return 3000 + below(3);        /* solver counters */
     case 7: return (fmi2ValueReference)next_u64();
     case 8: return UINT_MAX - below(3);

@@ -55,6 +55,102 @@ impl MarkerSet {
         }
     }
 
+    /// The set's bindings as JSON, one object per marker in the set's order:
+    /// `{"label": .., "triangle": .., "barycentric": [b0, b1, b2]}` (numbers written so that
+    /// they read back bit for bit). [`MarkerSet::from_bindings_json`] reads it.
+    pub fn bindings_json(&self) -> serde_json::Value {
+        serde_json::Value::Array(
+            self.labels
+                .iter()
+                .zip(&self.bindings)
+                .map(|(label, b)| {
+                    serde_json::json!({
+                        "label": label,
+                        "triangle": b.triangle,
+                        "barycentric": b.barycentric,
+                    })
+                })
+                .collect(),
+        )
+    }
+
+    /// A set called `name` from the JSON of [`MarkerSet::bindings_json`]; `source` names where
+    /// the JSON comes from in errors, which give the entry (0-based) and the key that is
+    /// missing or wrong. Labels must be distinct and the barycentric coordinates finite, at
+    /// least 0 and summing to 1 (the triangle is checked against a skin by
+    /// [`MarkerSet::check`]).
+    pub fn from_bindings_json(
+        name: &str,
+        json: &serde_json::Value,
+        source: &str,
+    ) -> Result<MarkerSet> {
+        let entries = json.as_array().ok_or_else(|| {
+            Error::invalid(
+                format!("{source}: bindings"),
+                json.to_string(),
+                "an array of {label, triangle, barycentric} objects",
+            )
+        })?;
+        let mut set = MarkerSet {
+            name: name.to_string(),
+            labels: Vec::with_capacity(entries.len()),
+            bindings: Vec::with_capacity(entries.len()),
+        };
+        for (k, e) in entries.iter().enumerate() {
+            let bad = |key: &str, want: &str| {
+                Error::invalid(
+                    format!("{source}: bindings[{k}].{key}"),
+                    e.get(key).map_or("missing".to_string(), |v| v.to_string()),
+                    want,
+                )
+            };
+            let label = e
+                .get("label")
+                .and_then(|v| v.as_str())
+                .filter(|l| !l.is_empty())
+                .ok_or_else(|| bad("label", "a non-empty string"))?;
+            let triangle = e
+                .get("triangle")
+                .and_then(|v| v.as_u64())
+                .and_then(|t| u32::try_from(t).ok())
+                .ok_or_else(|| bad("triangle", "a triangle index (an unsigned 32-bit integer)"))?;
+            let bary: Vec<f64> = e
+                .get("barycentric")
+                .and_then(|v| v.as_array())
+                .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
+                .filter(|a: &Vec<f64>| {
+                    a.len() == 3
+                        && a.iter().all(|v| v.is_finite() && *v >= -1e-9)
+                        && (a.iter().sum::<f64>() - 1.0).abs() < 1e-9
+                })
+                .ok_or_else(|| {
+                    bad(
+                        "barycentric",
+                        "three barycentric coordinates >= 0 summing to 1",
+                    )
+                })?;
+            if set.labels.iter().any(|l| l == label) {
+                return Err(bad(
+                    "label",
+                    "a label not given before (labels are distinct)",
+                ));
+            }
+            set.labels.push(label.to_string());
+            set.bindings.push(SurfaceBinding {
+                triangle,
+                barycentric: [bary[0], bary[1], bary[2]],
+            });
+        }
+        if set.is_empty() {
+            return Err(Error::invalid(
+                format!("{source}: bindings"),
+                "[]",
+                "at least one marker",
+            ));
+        }
+        Ok(set)
+    }
+
     /// Number of markers.
     pub fn len(&self) -> usize {
         self.bindings.len()

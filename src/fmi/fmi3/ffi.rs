@@ -2,7 +2,7 @@
 //! as the FMI 2.0 ones. Each is a thin layer over the same [`Instance`] and the same guard as
 //! [`crate::fmi::ffi`] (panics caught, pointers checked, the call checked against the state
 //! machine's mask, `logCalls` tracing): value references are translated through the FMI 3.0
-//! view of the table ([`super::view`]: the marker array expands to its 768 elements,
+//! view of the table ([`super::view`]: the marker array expands to its 180 elements,
 //! Enumerations are read and set as `Int64`), and the FMI 2.0 status becomes the FMI 3.0 one.
 //!
 //! Not provided, each returning `fmi3Error` with a log line saying so: event mode, the
@@ -588,7 +588,7 @@ fn same<T>(_: u32, v: T) -> Result<T, String> {
     Ok(v)
 }
 
-/// `fmi3GetFloat64`: Float64 variables and the marker array (768 values, row-major).
+/// `fmi3GetFloat64`: Float64 variables and the marker array (180 values, row-major).
 ///
 /// # Safety
 /// FMI 3.0 calling conventions.

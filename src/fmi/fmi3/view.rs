@@ -1,14 +1,15 @@
 //! The FMI 3.0 view of the one variable table ([`crate::fmi::variables`]): which FMI 3.0 type
 //! each variable has, the enumerations (sex, posture, solver method) and the marker array.
 //!
-//! The table's 768 scalar marker outputs `marker[i].<axis>` (value references
-//! `2000 + 3 (i - 1) + axis`) become one `Float64` array output `marker` of dimensions
-//! (256 x 3), value reference 2000, whose row-major elements are those scalars in table
-//! order. The dimensions are fixed start values, not a structural parameter: the marker
-//! count is `grid.rows x grid.cols`, a product, while an FMI 3.0 `<Dimension>` names a single
-//! structural parameter; and a fixed size keeps the array element for element equal to the
-//! FMI 2.0 scalars (markers beyond the grid read 0 in both). Every other variable keeps its
-//! name and value reference.
+//! The table's 180 scalar marker outputs `marker[i].<axis>` (value references
+//! `2000 + 3 (i - 1) + axis`, the default 10 x 6 grid's 60 markers) become one `Float64`
+//! array output `marker` of dimensions (60 x 3), value reference 2000, whose row-major
+//! elements are those scalars in table order. The dimensions are fixed start values, not a
+//! structural parameter: the marker count is `grid.rows x grid.cols`, a product, while an FMI
+//! 3.0 `<Dimension>` names a single structural parameter; and a fixed size keeps the array
+//! element for element equal to the FMI 2.0 scalars (a smaller grid's markers beyond
+//! `rows x cols` read 0 in both, a larger grid is refused by both). Every other variable
+//! keeps its name and value reference.
 
 use crate::anatomy::{Posture, Sex};
 use crate::fmi::variables::{
@@ -166,7 +167,7 @@ pub fn variables() -> Vec<Variable3> {
 }
 
 /// The table value references behind FMI 3.0 value references of type `ty`, flattened (the
-/// marker array gives its 768 elements, row-major), or a message naming the first that is
+/// marker array gives its 180 elements, row-major), or a message naming the first that is
 /// unknown or of another type.
 pub fn expand(vrs: &[u32], ty: Type3) -> Result<Vec<u32>, String> {
     let mut out = Vec::with_capacity(vrs.len());

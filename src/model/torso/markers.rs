@@ -94,8 +94,9 @@ impl Torso {
         &self.data.pos
     }
 
-    /// `marker[index + 1]` coordinate `axis` (0 x, 1 y, 2 z) [m]. Indices from rows x columns
-    /// up to 255 (the FMI layer's 256 outputs) read 0.0 without building the skin.
+    /// Marker `index` (0-based: the grid's `marker[index + 1]`, or the set's `index`-th)
+    /// coordinate `axis` (0 x, 1 y, 2 z) [m]. Indices from the marker count up to 255 (the
+    /// most markers a grid or an FMU has) read 0.0 without building the skin.
     pub(super) fn read_marker(&mut self, index: u16, axis: u8) -> Result<f64> {
         let (index, axis) = (index as usize, axis as usize);
         if axis > 2 {
