@@ -186,22 +186,64 @@ fn volume_and_faces(
     sum
 }
 
-/// Rate of change dV/dt of the volume enclosed by `tris` whose face vectors are `face`:
-/// sum over the moving triangles of face . (v_a + v_b + v_c) / 6 (the volume's gradient at a
-/// corner of a closed surface is the sum of face / 6 over its triangles).
-pub fn volume_rate(
+/// The volume sum of [`volume_and_faces`] and the rate sum of dV/dt in one pass over `tris`:
+/// each moving triangle's corners are gathered once for its volume term, its face vector and
+/// face . (v_a + v_b + v_c) (the volume's gradient at a corner of a closed surface is the sum of
+/// face / 6 over its triangles, so dV/dt is the rate sum / 6). A triangle fixed to the ground
+/// (`moving` false) keeps the term and face vector [`rest_terms`] stored in `Data::new`: its
+/// corners never leave their rest positions, so recomputing them would give the same bits, and
+/// it adds nothing to the rate. Both sums run in triangle order, started at `sums`, as the
+/// separate volume and rate passes did, so that the results are bit-identical to theirs.
+/// Returns `(volume sum, rate sum)`.
+fn volume_faces_and_rate(
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
     tris: &[[u32; 3]],
     moving: &[bool],
-    face: &[Vector3<f64>],
-    vel: &[Vector3<f64>],
-) -> f64 {
-    let mut rate = 0.0;
-    for ((t, face), &moving) in tris.iter().zip(face).zip(moving) {
-        if moving {
-            rate += face.dot(&(vel[t[0] as usize] + vel[t[1] as usize] + vel[t[2] as usize]));
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    sums: (f64, f64),
+) -> (f64, f64) {
+    let (mut sum, mut rate) = sums;
+    let n = tris.len();
+    let (moving, face, term) = (&moving[..n], &mut face[..n], &mut term[..n]);
+    for (((t, f), v), &moving) in tris
+        .iter()
+        .zip(face.iter_mut())
+        .zip(term.iter_mut())
+        .zip(moving)
+    {
+        if !moving {
+            sum += *v;
+            continue;
         }
+        let [i, j, k] = t.map(|i| i as usize);
+        let (a, b, c) = (&pos[i].coords, &pos[j].coords, &pos[k].coords);
+        *v = a.dot(&b.cross(c));
+        sum += *v;
+        *f = (b - a).cross(&(c - a));
+        rate += f.dot(&(vel[i] + vel[j] + vel[k]));
     }
-    rate / 6.0
+    (sum, rate)
+}
+
+/// Fills `face` and `term` (laid out as `Data::face` and `Data::term`: abdominal triangles,
+/// then thoracic ones) with every triangle's doubled area vector and volume term at `model`'s
+/// rest positions: the entries of the triangles fixed to the ground, which the pressure pass
+/// reads and never rewrites.
+pub(super) fn rest_terms(model: &Model, face: &mut [Vector3<f64>], term: &mut [f64]) {
+    let na = model.abdomen_triangles.len();
+    let (abdomen_face, thorax_face) = face.split_at_mut(na);
+    let (abdomen_term, thorax_term) = term.split_at_mut(na);
+    let rest = &model.rest;
+    volume_and_faces(
+        rest,
+        &model.abdomen_triangles,
+        abdomen_face,
+        abdomen_term,
+        0.0,
+    );
+    volume_and_faces(rest, &model.thorax_triangles, thorax_face, thorax_term, 0.0);
 }
 
 /// Each triangle's doubled area vector (b - a) x (c - a) into `face`.
@@ -249,8 +291,9 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
         ..
     } = data;
     let (face, term) = (&mut face[..n], &mut term[..n]);
-    let v = volume_and_faces(pos, tris, face, term, -0.0) / 6.0;
-    let rate = volume_rate(tris, &model.abdomen_moving, face, vel);
+    let moving = &model.abdomen_moving;
+    let (sum, rate) = volume_faces_and_rate(pos, vel, tris, moving, face, term, (-0.0, 0.0));
+    let (v, rate) = (sum / 6.0, rate / 6.0);
     let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0)
         - model.abdomen_viscosity * rate;
     apply_pressure(tris, &model.abdomen_moving, face, p, force);
@@ -280,21 +323,47 @@ fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
     let (abdomen_term, thorax_term) = term.split_at_mut(na);
     let (thorax_face, thorax_term) = (&mut thorax_face[..nt], &mut thorax_term[..nt]);
     let source = &model.thorax_dome_source;
-    let sum = if source.is_empty() {
-        volume_and_faces(pos, tris, thorax_face, thorax_term, -0.0)
+    let moving = &model.thorax_moving[..nt];
+    let (sum, rate) = if source.is_empty() {
+        volume_faces_and_rate(
+            pos,
+            vel,
+            tris,
+            moving,
+            thorax_face,
+            thorax_term,
+            (-0.0, 0.0),
+        )
     } else {
         let lining = model.lining_count;
         let (lining_face, dome_face) = thorax_face.split_at_mut(lining);
-        let mut sum = volume_and_faces(pos, &tris[..lining], lining_face, thorax_term, -0.0);
-        for (&i, f) in source.iter().zip(dome_face.iter_mut()) {
+        let (lining_tris, dome_tris) = tris.split_at(lining);
+        let (lining_moving, dome_moving) = moving.split_at(lining);
+        let (mut sum, mut rate) = volume_faces_and_rate(
+            pos,
+            vel,
+            lining_tris,
+            lining_moving,
+            lining_face,
+            thorax_term,
+            (-0.0, 0.0),
+        );
+        for ((&i, f), (t, &moving)) in source
+            .iter()
+            .zip(dome_face.iter_mut())
+            .zip(dome_tris.iter().zip(dome_moving))
+        {
             let i = i as usize;
             sum += -abdomen_term[i];
             *f = -abdomen_face[i];
+            if moving {
+                let [a, b, c] = t.map(|i| i as usize);
+                rate += f.dot(&(vel[a] + vel[b] + vel[c]));
+            }
         }
-        sum
+        (sum, rate)
     };
-    let v = sum / 6.0;
-    let rate = volume_rate(tris, &model.thorax_moving, thorax_face, vel);
+    let (v, rate) = (sum / 6.0, rate / 6.0);
     let p = airway_opening - model.pleural.recoil(v) - model.airway_resistance * rate;
     apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
