@@ -78,47 +78,33 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
         unsafe { elements_avx2(model, data, act) };
         return;
     }
-    elements_in_batches(model, data, act);
+    elements_in_batches::<false>(model, data, act);
 }
 
 /// [`elements_in_batches`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn elements_avx2(model: &Model, data: &mut Data, act: &Activations) {
-    elements_in_batches(model, data, act);
+    elements_in_batches::<true>(model, data, act);
 }
 
 /// Elements computed per batch of [`LANES`] two-point elements (4 doubles fill an AVX2
 /// register).
 const LANES: usize = 4;
 
-/// The element loop behind [`elements`], inlined into each instruction-set variant.
+/// The element loop behind [`elements`], inlined into each instruction-set variant; `AVX2`
+/// says that the caller runs with AVX2 enabled, so that the batches use its intrinsics.
 #[inline(always)]
-fn elements_in_batches(model: &Model, data: &mut Data, act: &Activations) {
-    let el = &model.elements;
+fn elements_in_batches<const AVX2: bool>(model: &Model, data: &mut Data, act: &Activations) {
     let level = act.table();
-    let n = el.len();
+    let n = model.elements.len();
     let m = data.pos.len();
-    let pass = Pass {
-        start: &el.start[..n + 1],
-        path: &el.path[..],
-        ends: &el.ends[..n],
-        rest_length: &el.rest_length[..n],
-        stiffness: &el.stiffness[..n],
-        damping: &el.damping[..n],
-        slot: &el.slot[..n],
-        gain: &el.gain[..n],
-        level: &level,
-        toe: model.params.tension_toe,
-        transverse: model.params.transverse_fraction,
-        pos: &data.pos[..m],
-        vel: &data.vel[..m],
-    };
+    let pass = Pass::new(model, &data.pos[..m], &data.vel[..m], &level);
     let force = &mut data.force[..m];
     let mut e = 0;
     while e < n {
         if e + LANES <= n && pass.ends[e..e + LANES].iter().all(|p| p[0] != VIA) {
-            pass.batch(e, force);
+            pass.batch::<AVX2>(e, force);
             e += LANES;
         } else {
             pass.single(e, force);
@@ -145,7 +131,34 @@ struct Pass<'a> {
     vel: &'a [Vector3<f64>],
 }
 
-impl Pass<'_> {
+impl<'a> Pass<'a> {
+    /// The pass over `model`'s elements at anchor positions `pos` and velocities `vel` (of
+    /// one length) under the activation table `level` ([`Activations::table`]).
+    fn new(
+        model: &'a Model,
+        pos: &'a [Point3<f64>],
+        vel: &'a [Vector3<f64>],
+        level: &'a [f64; 256],
+    ) -> Pass<'a> {
+        let el = &model.elements;
+        let n = el.len();
+        Pass {
+            start: &el.start[..n + 1],
+            path: &el.path[..],
+            ends: &el.ends[..n],
+            rest_length: &el.rest_length[..n],
+            stiffness: &el.stiffness[..n],
+            damping: &el.damping[..n],
+            slot: &el.slot[..n],
+            gain: &el.gain[..n],
+            level,
+            toe: model.params.tension_toe,
+            transverse: model.params.transverse_fraction,
+            pos,
+            vel: &vel[..pos.len()],
+        }
+    }
+
     /// The rest length of element `e` under its activation: l0 (1 - a g); a membrane
     /// element's slot reads 0 and its gain is 0, so its rest length is l0 exactly.
     #[inline(always)]
@@ -153,14 +166,16 @@ impl Pass<'_> {
         self.rest_length[e] * (1.0 - self.level[self.slot[e] as usize] * self.gain[e])
     }
 
-    /// The two-point elements `e .. e + LANES`, lane by lane in arrays of coordinates; the
-    /// forces are added to the anchors in the elements' order.
+    /// The two-point elements `e .. e + LANES`, lane by lane in arrays of coordinates (the
+    /// arithmetic on whole arrays, [`add`], [`sub`], [`mul`], [`div`], so that it compiles to
+    /// vector instructions); the forces are added to the anchors in the elements' order.
     #[inline(always)]
-    fn batch(&self, e: usize, force: &mut [Vector3<f64>]) {
+    fn batch<const AVX2: bool>(&self, e: usize, force: &mut [Vector3<f64>]) {
         let (pos, vel) = (self.pos, self.vel);
         let mut d = [[0.0; LANES]; 3];
         let mut dv = [[0.0; LANES]; 3];
         let mut ends = [[0usize; 2]; LANES];
+        let mut rest = [0.0; LANES];
         for l in 0..LANES {
             let [a, b] = self.ends[e + l];
             let (a, b) = (a as usize, b as usize);
@@ -170,32 +185,27 @@ impl Pass<'_> {
                 d[k][l] = x[k];
                 dv[k][l] = v[k];
             }
+            rest[l] = self.rest(e + l);
         }
-        let (mut len, mut rate, mut f, mut cross) =
-            ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
-        let mut n = [[0.0; LANES]; 3];
-        for l in 0..LANES {
-            // |d| as nalgebra's norm: (x x + y y) + z z
-            len[l] = (d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l]).sqrt();
-            for k in 0..3 {
-                n[k][l] = d[k][l] / len[l];
-            }
-            rate[l] = dv[0][l] * n[0][l] + dv[1][l] * n[1][l] + dv[2][l] * n[2][l];
-            let i = e + l;
-            f[l] = self.stiffness[i] * (len[l] - self.rest(i)) + self.damping[i] * rate[l];
-            cross[l] = self.transverse * self.damping[i];
-        }
+        let (stiffness, damping) = (lanes(self.stiffness, e), lanes(self.damping, e));
+        let cross = mul([self.transverse; LANES], damping);
+        #[cfg(target_arch = "x86_64")]
+        let (len, n, rate, mut f) = if AVX2 {
+            // SAFETY: `AVX2` is true only in `elements_avx2`, reached after the CPU was found
+            // to have AVX2.
+            unsafe { spring_damper_avx2(&d, &dv, &stiffness, &damping, &rest) }
+        } else {
+            spring_damper(&d, &dv, &stiffness, &damping, &rest)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let (len, n, rate, mut f) = spring_damper(&d, &dv, &stiffness, &damping, &rest);
         for (l, f) in f.iter_mut().enumerate() {
             if self.slot[e + l] != PASSIVE {
                 *f = tension(*f, self.toe);
             }
         }
-        let mut fv = [[0.0; LANES]; 3];
-        for l in 0..LANES {
-            for k in 0..3 {
-                fv[k][l] = n[k][l] * f[l] + (dv[k][l] - n[k][l] * rate[l]) * cross[l];
-            }
-        }
+        let fv: [[f64; LANES]; 3] =
+            std::array::from_fn(|k| add(mul(n[k], f), mul(sub(dv[k], mul(n[k], rate)), cross)));
         for l in 0..LANES {
             if len[l] < 1e-12 {
                 continue;
@@ -260,6 +270,119 @@ impl Pass<'_> {
             force[b] -= fv;
         }
     }
+}
+
+/// Length |d|, direction n = d / |d|, rate dv . n and spring-damper force
+/// c (|d| - l) + gamma rate of [`LANES`] two-point elements whose end-to-end vectors are `d`
+/// and relative velocities `dv` (coordinate, lane), with nalgebra's orders of operations:
+/// |d| = sqrt((x x + y y) + z z), dot products (x + y) + z.
+#[allow(clippy::type_complexity)]
+#[inline(always)]
+fn spring_damper(
+    d: &[[f64; LANES]; 3],
+    dv: &[[f64; LANES]; 3],
+    stiffness: &[f64; LANES],
+    damping: &[f64; LANES],
+    rest: &[f64; LANES],
+) -> ([f64; LANES], [[f64; LANES]; 3], [f64; LANES], [f64; LANES]) {
+    let len = add(add(mul(d[0], d[0]), mul(d[1], d[1])), mul(d[2], d[2])).map(f64::sqrt);
+    let n = d.map(|x| div(x, len));
+    let rate = add(add(mul(dv[0], n[0]), mul(dv[1], n[1])), mul(dv[2], n[2]));
+    let f = add(mul(*stiffness, sub(len, *rest)), mul(*damping, rate));
+    (len, n, rate, f)
+}
+
+/// [`spring_damper`] with AVX2 intrinsics: four lanes per instruction, each lane's
+/// operations those of the scalar path (IEEE square root and division, no fused
+/// multiply-add), so bit for bit its result.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::type_complexity)]
+#[target_feature(enable = "avx2")]
+fn spring_damper_avx2(
+    d: &[[f64; LANES]; 3],
+    dv: &[[f64; LANES]; 3],
+    stiffness: &[f64; LANES],
+    damping: &[f64; LANES],
+    rest: &[f64; LANES],
+) -> ([f64; LANES], [[f64; LANES]; 3], [f64; LANES], [f64; LANES]) {
+    use std::arch::x86_64::{
+        __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_sqrt_pd,
+        _mm256_storeu_pd, _mm256_sub_pd,
+    };
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn load(x: &[f64; LANES]) -> __m256d {
+        // SAFETY: 4 doubles read from a `[f64; 4]`.
+        unsafe { _mm256_loadu_pd(x.as_ptr()) }
+    }
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn store(x: __m256d) -> [f64; LANES] {
+        let mut out = [0.0; LANES];
+        // SAFETY: 4 doubles written to a `[f64; 4]`.
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), x) };
+        out
+    }
+    let (dx, dy, dz) = (load(&d[0]), load(&d[1]), load(&d[2]));
+    let len2 = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
+        _mm256_mul_pd(dz, dz),
+    );
+    let len = _mm256_sqrt_pd(len2);
+    let (nx, ny, nz) = (
+        _mm256_div_pd(dx, len),
+        _mm256_div_pd(dy, len),
+        _mm256_div_pd(dz, len),
+    );
+    let rate = _mm256_add_pd(
+        _mm256_add_pd(
+            _mm256_mul_pd(load(&dv[0]), nx),
+            _mm256_mul_pd(load(&dv[1]), ny),
+        ),
+        _mm256_mul_pd(load(&dv[2]), nz),
+    );
+    let f = _mm256_add_pd(
+        _mm256_mul_pd(load(stiffness), _mm256_sub_pd(len, load(rest))),
+        _mm256_mul_pd(load(damping), rate),
+    );
+    (
+        store(len),
+        [store(nx), store(ny), store(nz)],
+        store(rate),
+        store(f),
+    )
+}
+
+/// `LANES` consecutive values of `values` from `e`.
+#[inline(always)]
+fn lanes(values: &[f64], e: usize) -> [f64; LANES] {
+    let mut out = [0.0; LANES];
+    out.copy_from_slice(&values[e..e + LANES]);
+    out
+}
+
+/// Lane-wise a + b.
+#[inline(always)]
+fn add(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] + b[l])
+}
+
+/// Lane-wise a - b.
+#[inline(always)]
+fn sub(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] - b[l])
+}
+
+/// Lane-wise a b.
+#[inline(always)]
+fn mul(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] * b[l])
+}
+
+/// Lane-wise a / b.
+#[inline(always)]
+fn div(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] / b[l])
 }
 
 /// Tension of a muscle element whose linear spring-damper force is `f`: the softplus
@@ -337,25 +460,98 @@ fn volume_faces_and_rate(
     term: &mut [f64],
     sums: (f64, f64),
 ) -> (f64, f64) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { volume_faces_and_rate_avx2(pos, vel, tris, moving, face, term, sums) };
+    }
+    volume_faces_and_rate_in_batches(pos, vel, tris, moving, face, term, sums)
+}
+
+/// [`volume_faces_and_rate_in_batches`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn volume_faces_and_rate_avx2(
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    sums: (f64, f64),
+) -> (f64, f64) {
+    volume_faces_and_rate_in_batches(pos, vel, tris, moving, face, term, sums)
+}
+
+/// The pass behind [`volume_faces_and_rate`], inlined into each instruction-set variant: runs
+/// of [`LANES`] moving triangles are computed together in arrays of coordinates (the
+/// products of a . (b x c), (b - a) x (c - a) and its dot product with the corners' velocity
+/// sum as nalgebra's `cross` and `dot` order them, no fused multiply-add), then added to the
+/// two sums triangle by triangle in order: bit for bit the per-triangle loop.
+#[inline(always)]
+fn volume_faces_and_rate_in_batches(
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    sums: (f64, f64),
+) -> (f64, f64) {
     let (mut sum, mut rate) = sums;
     let n = tris.len();
     let (moving, face, term) = (&moving[..n], &mut face[..n], &mut term[..n]);
-    for (((t, f), v), &moving) in tris
-        .iter()
-        .zip(face.iter_mut())
-        .zip(term.iter_mut())
-        .zip(moving)
-    {
-        if !moving {
-            sum += *v;
+    let mut i = 0;
+    while i < n {
+        if i + LANES <= n && moving[i..i + LANES].iter().all(|&m| m) {
+            // corner, coordinate, lane
+            let mut p = [[[0.0; LANES]; 3]; 3];
+            let mut w = [[0.0; LANES]; 3];
+            for l in 0..LANES {
+                let [a, b, c] = tris[i + l].map(|i| i as usize);
+                let s = vel[a] + vel[b] + vel[c];
+                for k in 0..3 {
+                    p[0][k][l] = pos[a][k];
+                    p[1][k][l] = pos[b][k];
+                    p[2][k][l] = pos[c][k];
+                    w[k][l] = s[k];
+                }
+            }
+            let [a, b, c] = p;
+            let (mut v, mut r) = ([0.0; LANES], [0.0; LANES]);
+            let mut f = [[0.0; LANES]; 3];
+            for l in 0..LANES {
+                let bc = [
+                    b[1][l] * c[2][l] - b[2][l] * c[1][l],
+                    b[2][l] * c[0][l] - b[0][l] * c[2][l],
+                    b[0][l] * c[1][l] - b[1][l] * c[0][l],
+                ];
+                v[l] = a[0][l] * bc[0] + a[1][l] * bc[1] + a[2][l] * bc[2];
+                let u = [b[0][l] - a[0][l], b[1][l] - a[1][l], b[2][l] - a[2][l]];
+                let q = [c[0][l] - a[0][l], c[1][l] - a[1][l], c[2][l] - a[2][l]];
+                f[0][l] = u[1] * q[2] - u[2] * q[1];
+                f[1][l] = u[2] * q[0] - u[0] * q[2];
+                f[2][l] = u[0] * q[1] - u[1] * q[0];
+                r[l] = f[0][l] * w[0][l] + f[1][l] * w[1][l] + f[2][l] * w[2][l];
+            }
+            for l in 0..LANES {
+                term[i + l] = v[l];
+                sum += v[l];
+                face[i + l] = Vector3::new(f[0][l], f[1][l], f[2][l]);
+                rate += r[l];
+            }
+            i += LANES;
             continue;
         }
-        let [i, j, k] = t.map(|i| i as usize);
-        let (a, b, c) = (&pos[i].coords, &pos[j].coords, &pos[k].coords);
-        *v = a.dot(&b.cross(c));
-        sum += *v;
-        *f = (b - a).cross(&(c - a));
-        rate += f.dot(&(vel[i] + vel[j] + vel[k]));
+        if moving[i] {
+            let [ia, ib, ic] = tris[i].map(|i| i as usize);
+            let (a, b, c) = (&pos[ia].coords, &pos[ib].coords, &pos[ic].coords);
+            term[i] = a.dot(&b.cross(c));
+            face[i] = (b - a).cross(&(c - a));
+            rate += face[i].dot(&(vel[ia] + vel[ib] + vel[ic]));
+        }
+        sum += term[i];
+        i += 1;
     }
     (sum, rate)
 }
@@ -506,7 +702,9 @@ fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
 #[cfg(test)]
 mod tests {
     use super::super::{Activations, Data, Layout, Model, Params, rest_state, rhs, volume};
-    use super::local_forces;
+    #[cfg(target_arch = "x86_64")]
+    use super::elements_avx2;
+    use super::{Pass, elements_in_batches, local_forces};
     use crate::anatomy::{Anatomy, Subject};
     use nalgebra::Vector3;
 
@@ -526,6 +724,52 @@ mod tests {
             y[l.vertex_v + i] = 0.02 * ((i as f64) * 0.11).cos();
         }
         y
+    }
+
+    /// The element loop in batches of four two-point elements (the baseline arrays, and the
+    /// AVX2 intrinsics when the CPU has them) gives bit for bit the forces of the elements
+    /// computed one at a time, muscles near slack (softplus toe) and via paths included.
+    #[test]
+    fn batched_elements_match_one_element_at_a_time() {
+        for lod in [0, 1] {
+            let anatomy = Anatomy::build(&Subject::default(), lod).unwrap();
+            let model = Model::compile(&anatomy, Params::for_posture(anatomy.subject.posture));
+            let y = deformed(&model);
+            let mut dy = vec![0.0; y.len()];
+            let mut data = Data::new(&model);
+            let act = Activations::new(&[0.3; 8], 1.0, 0.8);
+            rhs(&model, &mut data, &act, &y, &mut dy);
+            let level = act.table();
+            let zero = vec![Vector3::zeros(); data.pos.len()];
+            let mut reference = zero.clone();
+            let pass = Pass::new(&model, &data.pos, &data.vel, &level);
+            for e in 0..model.elements.len() {
+                pass.single(e, &mut reference);
+            }
+            let mut batched = vec![data.clone()];
+            batched[0].force.clone_from(&zero);
+            elements_in_batches::<false>(&model, &mut batched[0], &act);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let mut fast = data.clone();
+                fast.force.clone_from(&zero);
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { elements_avx2(&model, &mut fast, &act) };
+                batched.push(fast);
+            }
+            for (variant, b) in batched.iter().enumerate() {
+                for (i, (f, r)) in b.force.iter().zip(&reference).enumerate() {
+                    for k in 0..3 {
+                        assert_eq!(
+                            f[k].to_bits(),
+                            r[k].to_bits(),
+                            "lod {lod}, variant {variant}, anchor {i}, axis {k}: {f:?} vs {r:?}"
+                        );
+                    }
+                }
+            }
+            assert!(reference.iter().any(|f| f.norm() > 0.0));
+        }
     }
 
     /// The pressure pass (fused volume and face vectors, thoracic dome reused from the
