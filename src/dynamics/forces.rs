@@ -63,47 +63,190 @@ fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
 /// L' = sum (v_{k+1} - v_k) . n_k with n_k = d_k / s_k; its tension f acts on each via point
 /// along n_k - n_{k-1}, on the origin along n_0 and on the insertion along -n_{m-1}
 /// (f = -dE/dx of the element's energy).
+///
+/// Runs of [`LANES`] consecutive two-point elements are computed together, one array per
+/// coordinate (structure of arrays), so that the lengths, square roots, divisions and
+/// spring-damper laws compile to vector instructions; on x86-64 CPUs with AVX2 (detected at
+/// run time) the loop is compiled for 4-wide vectors, elsewhere for the baseline (SSE2 on
+/// x86-64, NEON on aarch64). Each lane does the operations of [`Pass::single`] in the same
+/// order, with no fused multiply-add, and the forces are added to the anchors element by
+/// element in the elements' order: the result is bit for bit the same on every path.
 fn elements(model: &Model, data: &mut Data, act: &Activations) {
-    let el = &model.elements;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        unsafe { elements_avx2(model, data, act) };
+        return;
+    }
+    elements_in_batches::<false>(model, data, act);
+}
+
+/// [`elements_in_batches`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn elements_avx2(model: &Model, data: &mut Data, act: &Activations) {
+    elements_in_batches::<true>(model, data, act);
+}
+
+/// Elements computed per batch of [`LANES`] two-point elements (4 doubles fill an AVX2
+/// register).
+const LANES: usize = 4;
+
+/// The element loop behind [`elements`], inlined into each instruction-set variant; `AVX2`
+/// says that the caller runs with AVX2 enabled, so that the batches use its intrinsics.
+#[inline(always)]
+fn elements_in_batches<const AVX2: bool>(model: &Model, data: &mut Data, act: &Activations) {
     let level = act.table();
-    let n = el.len();
-    let (start, path, ends) = (&el.start[..n + 1], &el.path[..], &el.ends[..n]);
-    let (rest_length, stiffness, damping) =
-        (&el.rest_length[..n], &el.stiffness[..n], &el.damping[..n]);
-    let (slot, gain) = (&el.slot[..n], &el.gain[..n]);
-    let toe = model.params.tension_toe;
-    let transverse = model.params.transverse_fraction;
-    // one length for the three arrays, so that one index check covers them
+    let n = model.elements.len();
     let m = data.pos.len();
-    let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
-    for e in 0..n {
-        let s = slot[e];
-        // a membrane element's slot reads 0 and its gain is 0: its rest length is l0 exactly
-        let rest = rest_length[e] * (1.0 - level[s as usize] * gain[e]);
-        let muscle = s != PASSIVE;
-        let [a, b] = ends[e];
+    let pass = Pass::new(model, &data.pos[..m], &data.vel[..m], &level);
+    let force = &mut data.force[..m];
+    let mut e = 0;
+    while e < n {
+        if e + LANES <= n && pass.ends[e..e + LANES].iter().all(|p| p[0] != VIA) {
+            pass.batch::<AVX2>(e, force);
+            e += LANES;
+        } else {
+            pass.single(e, force);
+            e += 1;
+        }
+    }
+}
+
+/// What the element loop reads: the elements' arrays, the activation table and the anchors'
+/// positions and velocities.
+struct Pass<'a> {
+    start: &'a [u32],
+    path: &'a [u32],
+    ends: &'a [[u32; 2]],
+    rest_length: &'a [f64],
+    stiffness: &'a [f64],
+    damping: &'a [f64],
+    slot: &'a [u8],
+    gain: &'a [f64],
+    level: &'a [f64; 256],
+    toe: f64,
+    transverse: f64,
+    pos: &'a [Point3<f64>],
+    vel: &'a [Vector3<f64>],
+}
+
+impl<'a> Pass<'a> {
+    /// The pass over `model`'s elements at anchor positions `pos` and velocities `vel` (of
+    /// one length) under the activation table `level` ([`Activations::table`]).
+    fn new(
+        model: &'a Model,
+        pos: &'a [Point3<f64>],
+        vel: &'a [Vector3<f64>],
+        level: &'a [f64; 256],
+    ) -> Pass<'a> {
+        let el = &model.elements;
+        let n = el.len();
+        Pass {
+            start: &el.start[..n + 1],
+            path: &el.path[..],
+            ends: &el.ends[..n],
+            rest_length: &el.rest_length[..n],
+            stiffness: &el.stiffness[..n],
+            damping: &el.damping[..n],
+            slot: &el.slot[..n],
+            gain: &el.gain[..n],
+            level,
+            toe: model.params.tension_toe,
+            transverse: model.params.transverse_fraction,
+            pos,
+            vel: &vel[..pos.len()],
+        }
+    }
+
+    /// The rest length of element `e` under its activation: l0 (1 - a g); a membrane
+    /// element's slot reads 0 and its gain is 0, so its rest length is l0 exactly.
+    #[inline(always)]
+    fn rest(&self, e: usize) -> f64 {
+        self.rest_length[e] * (1.0 - self.level[self.slot[e] as usize] * self.gain[e])
+    }
+
+    /// The two-point elements `e .. e + LANES`, lane by lane in arrays of coordinates (the
+    /// arithmetic on whole arrays, [`add`], [`sub`], [`mul`], [`div`], so that it compiles to
+    /// vector instructions); the forces are added to the anchors in the elements' order.
+    #[inline(always)]
+    fn batch<const AVX2: bool>(&self, e: usize, force: &mut [Vector3<f64>]) {
+        let (pos, vel) = (self.pos, self.vel);
+        let mut d = [[0.0; LANES]; 3];
+        let mut dv = [[0.0; LANES]; 3];
+        let mut ends = [[0usize; 2]; LANES];
+        let mut rest = [0.0; LANES];
+        for l in 0..LANES {
+            let [a, b] = self.ends[e + l];
+            let (a, b) = (a as usize, b as usize);
+            ends[l] = [a, b];
+            let (x, v) = (pos[b] - pos[a], vel[b] - vel[a]);
+            for k in 0..3 {
+                d[k][l] = x[k];
+                dv[k][l] = v[k];
+            }
+            rest[l] = self.rest(e + l);
+        }
+        let (stiffness, damping) = (lanes(self.stiffness, e), lanes(self.damping, e));
+        let cross = mul([self.transverse; LANES], damping);
+        #[cfg(target_arch = "x86_64")]
+        let (len, n, rate, mut f) = if AVX2 {
+            // SAFETY: `AVX2` is true only in `elements_avx2`, reached after the CPU was found
+            // to have AVX2.
+            unsafe { spring_damper_avx2(&d, &dv, &stiffness, &damping, &rest) }
+        } else {
+            spring_damper(&d, &dv, &stiffness, &damping, &rest)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let (len, n, rate, mut f) = spring_damper(&d, &dv, &stiffness, &damping, &rest);
+        for (l, f) in f.iter_mut().enumerate() {
+            if self.slot[e + l] != PASSIVE {
+                *f = tension(*f, self.toe);
+            }
+        }
+        let fv: [[f64; LANES]; 3] =
+            std::array::from_fn(|k| add(mul(n[k], f), mul(sub(dv[k], mul(n[k], rate)), cross)));
+        for l in 0..LANES {
+            if len[l] < 1e-12 {
+                continue;
+            }
+            let [a, b] = ends[l];
+            let v = Vector3::new(fv[0][l], fv[1][l], fv[2][l]);
+            force[a] += v;
+            force[b] -= v;
+        }
+    }
+
+    /// Element `e` alone (a two-point element, or one along a path with via points).
+    #[inline(always)]
+    fn single(&self, e: usize, force: &mut [Vector3<f64>]) {
+        let (pos, vel) = (self.pos, self.vel);
+        let rest = self.rest(e);
+        let muscle = self.slot[e] != PASSIVE;
+        let (stiffness, damping) = (self.stiffness[e], self.damping[e]);
+        let [a, b] = self.ends[e];
         if a != VIA {
             let (a, b) = (a as usize, b as usize);
             let d = pos[b] - pos[a];
             let len = d.norm();
             if len < 1e-12 {
-                continue;
+                return;
             }
             let n = d / len;
             let rate = (vel[b] - vel[a]).dot(&n);
-            let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
+            let mut f = stiffness * (len - rest) + damping * rate;
             if muscle {
-                f = tension(f, toe);
+                f = tension(f, self.toe);
             }
             // the transverse damper (`Params::transverse_fraction`): the ends' relative
             // velocity across the element
             let dv = vel[b] - vel[a];
-            let fv = n * f + (dv - n * rate) * (transverse * damping[e]);
+            let fv = n * f + (dv - n * rate) * (self.transverse * damping);
             force[a] += fv;
             force[b] -= fv;
-            continue;
+            return;
         }
-        let path = &path[start[e] as usize..start[e + 1] as usize];
+        let path = &self.path[self.start[e] as usize..self.start[e + 1] as usize];
         let (mut len, mut rate) = (0.0, 0.0);
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
@@ -112,12 +255,12 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             len += l;
             rate += (vel[b] - vel[a]).dot(&d) / l;
         }
-        let mut f = stiffness[e] * (len - rest) + damping[e] * rate;
+        let mut f = stiffness * (len - rest) + damping * rate;
         if muscle {
-            f = tension(f, toe);
+            f = tension(f, self.toe);
         }
         if f == 0.0 {
-            continue;
+            return;
         }
         for w in path.windows(2) {
             let (a, b) = (w[0] as usize, w[1] as usize);
@@ -127,6 +270,119 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
             force[b] -= fv;
         }
     }
+}
+
+/// Length |d|, direction n = d / |d|, rate dv . n and spring-damper force
+/// c (|d| - l) + gamma rate of [`LANES`] two-point elements whose end-to-end vectors are `d`
+/// and relative velocities `dv` (coordinate, lane), with nalgebra's orders of operations:
+/// |d| = sqrt((x x + y y) + z z), dot products (x + y) + z.
+#[allow(clippy::type_complexity)]
+#[inline(always)]
+fn spring_damper(
+    d: &[[f64; LANES]; 3],
+    dv: &[[f64; LANES]; 3],
+    stiffness: &[f64; LANES],
+    damping: &[f64; LANES],
+    rest: &[f64; LANES],
+) -> ([f64; LANES], [[f64; LANES]; 3], [f64; LANES], [f64; LANES]) {
+    let len = add(add(mul(d[0], d[0]), mul(d[1], d[1])), mul(d[2], d[2])).map(f64::sqrt);
+    let n = d.map(|x| div(x, len));
+    let rate = add(add(mul(dv[0], n[0]), mul(dv[1], n[1])), mul(dv[2], n[2]));
+    let f = add(mul(*stiffness, sub(len, *rest)), mul(*damping, rate));
+    (len, n, rate, f)
+}
+
+/// [`spring_damper`] with AVX2 intrinsics: four lanes per instruction, each lane's
+/// operations those of the scalar path (IEEE square root and division, no fused
+/// multiply-add), so bit for bit its result.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::type_complexity)]
+#[target_feature(enable = "avx2")]
+fn spring_damper_avx2(
+    d: &[[f64; LANES]; 3],
+    dv: &[[f64; LANES]; 3],
+    stiffness: &[f64; LANES],
+    damping: &[f64; LANES],
+    rest: &[f64; LANES],
+) -> ([f64; LANES], [[f64; LANES]; 3], [f64; LANES], [f64; LANES]) {
+    use std::arch::x86_64::{
+        __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_sqrt_pd,
+        _mm256_storeu_pd, _mm256_sub_pd,
+    };
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn load(x: &[f64; LANES]) -> __m256d {
+        // SAFETY: 4 doubles read from a `[f64; 4]`.
+        unsafe { _mm256_loadu_pd(x.as_ptr()) }
+    }
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn store(x: __m256d) -> [f64; LANES] {
+        let mut out = [0.0; LANES];
+        // SAFETY: 4 doubles written to a `[f64; 4]`.
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), x) };
+        out
+    }
+    let (dx, dy, dz) = (load(&d[0]), load(&d[1]), load(&d[2]));
+    let len2 = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
+        _mm256_mul_pd(dz, dz),
+    );
+    let len = _mm256_sqrt_pd(len2);
+    let (nx, ny, nz) = (
+        _mm256_div_pd(dx, len),
+        _mm256_div_pd(dy, len),
+        _mm256_div_pd(dz, len),
+    );
+    let rate = _mm256_add_pd(
+        _mm256_add_pd(
+            _mm256_mul_pd(load(&dv[0]), nx),
+            _mm256_mul_pd(load(&dv[1]), ny),
+        ),
+        _mm256_mul_pd(load(&dv[2]), nz),
+    );
+    let f = _mm256_add_pd(
+        _mm256_mul_pd(load(stiffness), _mm256_sub_pd(len, load(rest))),
+        _mm256_mul_pd(load(damping), rate),
+    );
+    (
+        store(len),
+        [store(nx), store(ny), store(nz)],
+        store(rate),
+        store(f),
+    )
+}
+
+/// `LANES` consecutive values of `values` from `e`.
+#[inline(always)]
+fn lanes(values: &[f64], e: usize) -> [f64; LANES] {
+    let mut out = [0.0; LANES];
+    out.copy_from_slice(&values[e..e + LANES]);
+    out
+}
+
+/// Lane-wise a + b.
+#[inline(always)]
+fn add(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] + b[l])
+}
+
+/// Lane-wise a - b.
+#[inline(always)]
+fn sub(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] - b[l])
+}
+
+/// Lane-wise a b.
+#[inline(always)]
+fn mul(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] * b[l])
+}
+
+/// Lane-wise a / b.
+#[inline(always)]
+fn div(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+    std::array::from_fn(|l| a[l] / b[l])
 }
 
 /// Tension of a muscle element whose linear spring-damper force is `f`: the softplus
@@ -186,22 +442,137 @@ fn volume_and_faces(
     sum
 }
 
-/// Rate of change dV/dt of the volume enclosed by `tris` whose face vectors are `face`:
-/// sum over the moving triangles of face . (v_a + v_b + v_c) / 6 (the volume's gradient at a
-/// corner of a closed surface is the sum of face / 6 over its triangles).
-pub fn volume_rate(
+/// The volume sum of [`volume_and_faces`] and the rate sum of dV/dt in one pass over `tris`:
+/// each moving triangle's corners are gathered once for its volume term, its face vector and
+/// face . (v_a + v_b + v_c) (the volume's gradient at a corner of a closed surface is the sum of
+/// face / 6 over its triangles, so dV/dt is the rate sum / 6). A triangle fixed to the ground
+/// (`moving` false) keeps the term and face vector [`rest_terms`] stored in `Data::new`: its
+/// corners never leave their rest positions, so recomputing them would give the same bits, and
+/// it adds nothing to the rate. Both sums run in triangle order, started at `sums`, as the
+/// separate volume and rate passes did, so that the results are bit-identical to theirs.
+/// Returns `(volume sum, rate sum)`.
+fn volume_faces_and_rate(
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
     tris: &[[u32; 3]],
     moving: &[bool],
-    face: &[Vector3<f64>],
-    vel: &[Vector3<f64>],
-) -> f64 {
-    let mut rate = 0.0;
-    for ((t, face), &moving) in tris.iter().zip(face).zip(moving) {
-        if moving {
-            rate += face.dot(&(vel[t[0] as usize] + vel[t[1] as usize] + vel[t[2] as usize]));
-        }
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    sums: (f64, f64),
+) -> (f64, f64) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { volume_faces_and_rate_avx2(pos, vel, tris, moving, face, term, sums) };
     }
-    rate / 6.0
+    volume_faces_and_rate_in_batches(pos, vel, tris, moving, face, term, sums)
+}
+
+/// [`volume_faces_and_rate_in_batches`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn volume_faces_and_rate_avx2(
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    sums: (f64, f64),
+) -> (f64, f64) {
+    volume_faces_and_rate_in_batches(pos, vel, tris, moving, face, term, sums)
+}
+
+/// The pass behind [`volume_faces_and_rate`], inlined into each instruction-set variant: runs
+/// of [`LANES`] moving triangles are computed together in arrays of coordinates (the
+/// products of a . (b x c), (b - a) x (c - a) and its dot product with the corners' velocity
+/// sum as nalgebra's `cross` and `dot` order them, no fused multiply-add), then added to the
+/// two sums triangle by triangle in order: bit for bit the per-triangle loop.
+#[inline(always)]
+fn volume_faces_and_rate_in_batches(
+    pos: &[Point3<f64>],
+    vel: &[Vector3<f64>],
+    tris: &[[u32; 3]],
+    moving: &[bool],
+    face: &mut [Vector3<f64>],
+    term: &mut [f64],
+    sums: (f64, f64),
+) -> (f64, f64) {
+    let (mut sum, mut rate) = sums;
+    let n = tris.len();
+    let (moving, face, term) = (&moving[..n], &mut face[..n], &mut term[..n]);
+    let mut i = 0;
+    while i < n {
+        if i + LANES <= n && moving[i..i + LANES].iter().all(|&m| m) {
+            // corner, coordinate, lane
+            let mut p = [[[0.0; LANES]; 3]; 3];
+            let mut w = [[0.0; LANES]; 3];
+            for l in 0..LANES {
+                let [a, b, c] = tris[i + l].map(|i| i as usize);
+                let s = vel[a] + vel[b] + vel[c];
+                for k in 0..3 {
+                    p[0][k][l] = pos[a][k];
+                    p[1][k][l] = pos[b][k];
+                    p[2][k][l] = pos[c][k];
+                    w[k][l] = s[k];
+                }
+            }
+            let [a, b, c] = p;
+            let (mut v, mut r) = ([0.0; LANES], [0.0; LANES]);
+            let mut f = [[0.0; LANES]; 3];
+            for l in 0..LANES {
+                let bc = [
+                    b[1][l] * c[2][l] - b[2][l] * c[1][l],
+                    b[2][l] * c[0][l] - b[0][l] * c[2][l],
+                    b[0][l] * c[1][l] - b[1][l] * c[0][l],
+                ];
+                v[l] = a[0][l] * bc[0] + a[1][l] * bc[1] + a[2][l] * bc[2];
+                let u = [b[0][l] - a[0][l], b[1][l] - a[1][l], b[2][l] - a[2][l]];
+                let q = [c[0][l] - a[0][l], c[1][l] - a[1][l], c[2][l] - a[2][l]];
+                f[0][l] = u[1] * q[2] - u[2] * q[1];
+                f[1][l] = u[2] * q[0] - u[0] * q[2];
+                f[2][l] = u[0] * q[1] - u[1] * q[0];
+                r[l] = f[0][l] * w[0][l] + f[1][l] * w[1][l] + f[2][l] * w[2][l];
+            }
+            for l in 0..LANES {
+                term[i + l] = v[l];
+                sum += v[l];
+                face[i + l] = Vector3::new(f[0][l], f[1][l], f[2][l]);
+                rate += r[l];
+            }
+            i += LANES;
+            continue;
+        }
+        if moving[i] {
+            let [ia, ib, ic] = tris[i].map(|i| i as usize);
+            let (a, b, c) = (&pos[ia].coords, &pos[ib].coords, &pos[ic].coords);
+            term[i] = a.dot(&b.cross(c));
+            face[i] = (b - a).cross(&(c - a));
+            rate += face[i].dot(&(vel[ia] + vel[ib] + vel[ic]));
+        }
+        sum += term[i];
+        i += 1;
+    }
+    (sum, rate)
+}
+
+/// Fills `face` and `term` (laid out as `Data::face` and `Data::term`: abdominal triangles,
+/// then thoracic ones) with every triangle's doubled area vector and volume term at `model`'s
+/// rest positions: the entries of the triangles fixed to the ground, which the pressure pass
+/// reads and never rewrites.
+pub(super) fn rest_terms(model: &Model, face: &mut [Vector3<f64>], term: &mut [f64]) {
+    let na = model.abdomen_triangles.len();
+    let (abdomen_face, thorax_face) = face.split_at_mut(na);
+    let (abdomen_term, thorax_term) = term.split_at_mut(na);
+    let rest = &model.rest;
+    volume_and_faces(
+        rest,
+        &model.abdomen_triangles,
+        abdomen_face,
+        abdomen_term,
+        0.0,
+    );
+    volume_and_faces(rest, &model.thorax_triangles, thorax_face, thorax_term, 0.0);
 }
 
 /// Each triangle's doubled area vector (b - a) x (c - a) into `face`.
@@ -249,8 +620,9 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
         ..
     } = data;
     let (face, term) = (&mut face[..n], &mut term[..n]);
-    let v = volume_and_faces(pos, tris, face, term, -0.0) / 6.0;
-    let rate = volume_rate(tris, &model.abdomen_moving, face, vel);
+    let moving = &model.abdomen_moving;
+    let (sum, rate) = volume_faces_and_rate(pos, vel, tris, moving, face, term, (-0.0, 0.0));
+    let (v, rate) = (sum / 6.0, rate / 6.0);
     let p = model.params.bulk_modulus * (model.abdomen_rest_volume / v - 1.0)
         - model.abdomen_viscosity * rate;
     apply_pressure(tris, &model.abdomen_moving, face, p, force);
@@ -280,21 +652,47 @@ fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
     let (abdomen_term, thorax_term) = term.split_at_mut(na);
     let (thorax_face, thorax_term) = (&mut thorax_face[..nt], &mut thorax_term[..nt]);
     let source = &model.thorax_dome_source;
-    let sum = if source.is_empty() {
-        volume_and_faces(pos, tris, thorax_face, thorax_term, -0.0)
+    let moving = &model.thorax_moving[..nt];
+    let (sum, rate) = if source.is_empty() {
+        volume_faces_and_rate(
+            pos,
+            vel,
+            tris,
+            moving,
+            thorax_face,
+            thorax_term,
+            (-0.0, 0.0),
+        )
     } else {
         let lining = model.lining_count;
         let (lining_face, dome_face) = thorax_face.split_at_mut(lining);
-        let mut sum = volume_and_faces(pos, &tris[..lining], lining_face, thorax_term, -0.0);
-        for (&i, f) in source.iter().zip(dome_face.iter_mut()) {
+        let (lining_tris, dome_tris) = tris.split_at(lining);
+        let (lining_moving, dome_moving) = moving.split_at(lining);
+        let (mut sum, mut rate) = volume_faces_and_rate(
+            pos,
+            vel,
+            lining_tris,
+            lining_moving,
+            lining_face,
+            thorax_term,
+            (-0.0, 0.0),
+        );
+        for ((&i, f), (t, &moving)) in source
+            .iter()
+            .zip(dome_face.iter_mut())
+            .zip(dome_tris.iter().zip(dome_moving))
+        {
             let i = i as usize;
             sum += -abdomen_term[i];
             *f = -abdomen_face[i];
+            if moving {
+                let [a, b, c] = t.map(|i| i as usize);
+                rate += f.dot(&(vel[a] + vel[b] + vel[c]));
+            }
         }
-        sum
+        (sum, rate)
     };
-    let v = sum / 6.0;
-    let rate = volume_rate(tris, &model.thorax_moving, thorax_face, vel);
+    let (v, rate) = (sum / 6.0, rate / 6.0);
     let p = airway_opening - model.pleural.recoil(v) - model.airway_resistance * rate;
     apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
@@ -304,7 +702,9 @@ fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
 #[cfg(test)]
 mod tests {
     use super::super::{Activations, Data, Layout, Model, Params, rest_state, rhs, volume};
-    use super::local_forces;
+    #[cfg(target_arch = "x86_64")]
+    use super::elements_avx2;
+    use super::{Pass, elements_in_batches, local_forces};
     use crate::anatomy::{Anatomy, Subject};
     use nalgebra::Vector3;
 
@@ -324,6 +724,52 @@ mod tests {
             y[l.vertex_v + i] = 0.02 * ((i as f64) * 0.11).cos();
         }
         y
+    }
+
+    /// The element loop in batches of four two-point elements (the baseline arrays, and the
+    /// AVX2 intrinsics when the CPU has them) gives bit for bit the forces of the elements
+    /// computed one at a time, muscles near slack (softplus toe) and via paths included.
+    #[test]
+    fn batched_elements_match_one_element_at_a_time() {
+        for lod in [0, 1] {
+            let anatomy = Anatomy::build(&Subject::default(), lod).unwrap();
+            let model = Model::compile(&anatomy, Params::for_posture(anatomy.subject.posture));
+            let y = deformed(&model);
+            let mut dy = vec![0.0; y.len()];
+            let mut data = Data::new(&model);
+            let act = Activations::new(&[0.3; 8], 1.0, 0.8);
+            rhs(&model, &mut data, &act, &y, &mut dy);
+            let level = act.table();
+            let zero = vec![Vector3::zeros(); data.pos.len()];
+            let mut reference = zero.clone();
+            let pass = Pass::new(&model, &data.pos, &data.vel, &level);
+            for e in 0..model.elements.len() {
+                pass.single(e, &mut reference);
+            }
+            let mut batched = vec![data.clone()];
+            batched[0].force.clone_from(&zero);
+            elements_in_batches::<false>(&model, &mut batched[0], &act);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let mut fast = data.clone();
+                fast.force.clone_from(&zero);
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { elements_avx2(&model, &mut fast, &act) };
+                batched.push(fast);
+            }
+            for (variant, b) in batched.iter().enumerate() {
+                for (i, (f, r)) in b.force.iter().zip(&reference).enumerate() {
+                    for k in 0..3 {
+                        assert_eq!(
+                            f[k].to_bits(),
+                            r[k].to_bits(),
+                            "lod {lod}, variant {variant}, anchor {i}, axis {k}: {f:?} vs {r:?}"
+                        );
+                    }
+                }
+            }
+            assert!(reference.iter().any(|f| f.norm() > 0.0));
+        }
     }
 
     /// The pressure pass (fused volume and face vectors, thoracic dome reused from the

@@ -118,10 +118,12 @@ pub struct Data {
     /// Forces on anchors.
     pub force: Vec<Vector3<f64>>,
     /// Doubled area vector (b - a) x (c - a) of each abdominal triangle, then of each
-    /// thoracic triangle (scratch of the pressure forces).
+    /// thoracic triangle (scratch of the pressure forces). The entries of the triangles fixed
+    /// to the ground are filled once, at the rest positions, and never rewritten.
     pub face: Vec<Vector3<f64>>,
     /// Volume term a . (b x c) of each abdominal triangle, then of each thoracic one
-    /// (scratch: the thoracic dome reuses the abdominal ones).
+    /// (scratch: the thoracic dome reuses the abdominal ones; the fixed triangles' terms are
+    /// the constants filled by [`Data::new`], which the volume sums read).
     pub term: Vec<f64>,
     /// Generalised torque per rib.
     pub rib_torque: Vec<f64>,
@@ -143,7 +145,7 @@ impl Data {
     /// Scratch memory for `model`.
     pub fn new(model: &Model) -> Data {
         let n = model.rest.len();
-        Data {
+        let mut data = Data {
             rib_rotation: vec![Matrix3::identity(); RIBS],
             sternum_rotation: UnitQuaternion::identity(),
             sternum_x: model.sternum_com,
@@ -163,7 +165,9 @@ impl Data {
             abdomen_pressure: 0.0,
             thorax_volume: model.thorax_rest_volume,
             pleural_pressure: 0.0,
-        }
+        };
+        forces::rest_terms(model, &mut data.face, &mut data.term);
+        data
     }
 }
 

@@ -481,7 +481,9 @@ impl Integrator {
                             return Err(chain.fail_non_finite(&mut self.h_next, *t));
                         }
                         let a = &mut self.ahead;
-                        a.dense.copy_from_slice(&self.work.dense);
+                        // the work buffer is rewritten whole by the next `prepare_dense`:
+                        // trade the two buffers rather than copy the vectors
+                        std::mem::swap(&mut a.dense, &mut self.work.dense);
                         a.y0.copy_from_slice(y);
                         a.t0 = *t;
                         a.h = h;
@@ -873,19 +875,8 @@ impl Integrator {
 
     /// Evaluates the continuous extension at θ ∈ [0, 1] into `work.yout`.
     fn eval_dense(&mut self, y: &[f64], theta: f64) {
-        let n = self.dim;
-        let m = self.work.dense.len() / n;
-        let th1 = 1.0 - theta;
         let Work { dense: r, yout, .. } = &mut self.work;
-        for i in 0..n {
-            // innermost term first; factors alternate θ (odd r index) and 1-θ
-            let mut acc = 0.0;
-            for j in (0..m).rev() {
-                let f = if j % 2 == 0 { theta } else { th1 };
-                acc = (r[j * n + i] + acc) * f;
-            }
-            yout[i] = y[i] + acc;
-        }
+        interpolate(r, y, theta, yout);
     }
 
     /// Hairer's automatic initial step (`hinit` of `dopri5`), with RMS norms: a first
@@ -934,17 +925,23 @@ impl Integrator {
 
 /// The continuous extension of a step with dense-output vectors `r` (see
 /// `Integrator::prepare_dense`) from `y0`, at theta in [0, 1], into `out`.
+/// The innermost term comes first and the factors alternate θ (odd r index) and 1-θ; the
+/// sum is accumulated in `out` one vector r_j at a time (contiguous, so that it vectorises),
+/// with per component the same operations in the same order as a per-component Horner loop.
 fn interpolate(r: &[f64], y0: &[f64], theta: f64, out: &mut [f64]) {
     let n = y0.len();
     let m = r.len() / n;
     let th1 = 1.0 - theta;
-    for i in 0..n {
-        let mut acc = 0.0;
-        for j in (0..m).rev() {
-            let f = if j % 2 == 0 { theta } else { th1 };
-            acc = (r[j * n + i] + acc) * f;
+    let out = &mut out[..n];
+    out.fill(0.0);
+    for j in (0..m).rev() {
+        let f = if j % 2 == 0 { theta } else { th1 };
+        for (acc, &rj) in out.iter_mut().zip(&r[j * n..(j + 1) * n]) {
+            *acc = (rj + *acc) * f;
         }
-        out[i] = y0[i] + acc;
+    }
+    for (acc, &y) in out.iter_mut().zip(y0) {
+        *acc += y;
     }
 }
 
