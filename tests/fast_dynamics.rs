@@ -3,7 +3,7 @@
 //! points, the selective mass scaling's mass matrix, and a first breath that is not a
 //! transient.
 
-use breathing_torso::anatomy::{Anatomy, MuscleGroup, Subject};
+use breathing_torso::anatomy::{Anatomy, MuscleGroup, Posture, Subject};
 use breathing_torso::dynamics::{Model, Params};
 use breathing_torso::model::{Drive, Scene, SolverConfig};
 use breathing_torso::solver::{Integrator, Method, Ode, Options};
@@ -192,19 +192,50 @@ fn the_mass_matrix_solve_inverts_it() {
     }
 }
 
-/// The breath starts where it will continue: the first breath's tidal volume is within 1 %
-/// of the third's (level of detail 1, the default).
-#[test]
-fn the_first_breath_is_not_a_transient() {
-    let mut torso = Torso::new(config(1, 1e-6, true)).expect("builds");
+/// Tidal volumes [L] of the first three breaths of `drive` from the start state, each
+/// the range of the lung volume read at 56 Hz over one period.
+fn first_breaths(lod: u32, posture: Posture, drive: Drive) -> [f64; 3] {
+    let mut config = config(lod, 1e-6, true);
+    config.drive = drive;
+    config.subject.posture = posture;
+    let mut torso = Torso::new(config).expect("builds");
+    let frames = (56.0 / drive.frequency).round() as usize;
     let mut breaths = [(f64::INFINITY, f64::NEG_INFINITY); 3];
-    for i in 1..=3 * 224 {
+    for i in 1..=3 * frames {
         torso.advance_to(i as f64 / 56.0).expect("integrates");
         let v = torso.read(Quantity::LungVolume).expect("reads");
-        let b = &mut breaths[(i - 1) / 224];
+        let b = &mut breaths[(i - 1) / frames];
         *b = (b.0.min(v), b.1.max(v));
     }
-    let tidal: Vec<f64> = breaths.iter().map(|(lo, hi)| hi - lo).collect();
+    breaths.map(|(lo, hi)| hi - lo)
+}
+
+/// The breath starts where it will continue: started at the static equilibrium of the
+/// drive's start, the first breath's tidal volume is within 1 % of the third's (the
+/// issue's target), quiet and forced, upright and supine, at levels of detail 0 and 1.
+#[test]
+fn the_first_breath_is_not_a_transient() {
+    for (lod, posture, drive) in [
+        (0, Posture::Standing, Drive::quiet()),
+        (0, Posture::Supine, Drive::forced()),
+        (1, Posture::Standing, Drive::quiet()),
+        (1, Posture::Supine, Drive::quiet()),
+    ] {
+        let tidal = first_breaths(lod, posture, drive);
+        assert!(
+            (tidal[0] / tidal[2] - 1.0).abs() < 0.01,
+            "lod {lod}, {posture:?}: tidal volumes {tidal:?} L"
+        );
+    }
+}
+
+/// The same at level of detail 2 (quiet, upright). It misses: the first breath is 1.8 %
+/// below the third (0.4788 against 0.4876 L), and the breaths are not yet periodic by the
+/// third (the second 0.4898 L); from the rest pose the first was 6 % above.
+#[test]
+#[ignore = "misses the 1 % target at level of detail 2 (-1.8 %)"]
+fn the_first_breath_is_not_a_transient_at_lod_2() {
+    let tidal = first_breaths(2, Posture::Standing, Drive::quiet());
     assert!(
         (tidal[0] / tidal[2] - 1.0).abs() < 0.01,
         "tidal volumes {tidal:?} L"

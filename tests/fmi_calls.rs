@@ -347,3 +347,46 @@ fn fmu_state_of_other_fixed_parameters_is_refused_once_initialised() {
         (Phase::StepComplete, 0.1, 1.75)
     );
 }
+
+/// The state at fmi2ExitInitializationMode is the static equilibrium of the inputs set during
+/// initialisation: with the drive's amplitudes 0 and the diaphragm input held at 0.3, the
+/// lung volume is already the inspired one and stays there over 4 s (within 1 % of the
+/// volume the activation inspired from rest); fmi2Reset and a new initialisation with the
+/// same input start at the same state.
+#[test]
+fn initialisation_starts_at_the_inputs_equilibrium() {
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let start = |inst: &mut Instance, diaphragm: f64| {
+        for family in ["ribs", "diaphragm", "abdominals"] {
+            let name = format!("drive.{family}.amplitude");
+            assert_eq!(inst.set_real(&[vr(&name)], &[0.0]), fmi2OK);
+        }
+        assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
+        assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+        assert_eq!(
+            inst.set_real(&[vr("activation.diaphragm")], &[diaphragm]),
+            fmi2OK
+        );
+        assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+        let mut v = [0.0];
+        assert_eq!(inst.get_real(&[vr("volume.lung")], &mut v), fmi2OK);
+        v[0]
+    };
+    let (mut inst, _log) = recording_instance();
+    let rest = start(&mut inst, 0.0);
+    assert_eq!(inst.reset(), fmi2OK);
+    let held = start(&mut inst, 0.3);
+    let inspired = held - rest;
+    assert!(inspired > 0.1, "the diaphragm inspired {inspired} L");
+    assert_eq!(inst.do_step(0.0, 4.0), fmi2OK);
+    let mut v = [0.0];
+    assert_eq!(inst.get_real(&[vr("volume.lung")], &mut v), fmi2OK);
+    assert!(
+        (v[0] - held).abs() < 0.01 * inspired,
+        "lung volume {held} L at the start, {} L 4 s later",
+        v[0]
+    );
+    assert_eq!(inst.reset(), fmi2OK);
+    assert_eq!(start(&mut inst, 0.3), held);
+}

@@ -112,6 +112,7 @@ fn facade_markers_equal_a_direct_skin_deformation() {
 #[test]
 fn rest_pose_reproduces_the_generated_skin_exactly() {
     let mut torso = quiet_torso();
+    torso.start_at_rest();
     let model = torso.marker_model().unwrap();
     let anatomy = &torso.compiled().anatomy;
     let skin = Skin::for_anatomy(anatomy, &SkinOptions::default()).unwrap();
@@ -200,6 +201,7 @@ fn write_recording(path: &PathBuf, rows: usize, cols: usize, frames: &[Vec<Optio
 fn a_recording_with_a_known_rigid_transform_is_registered_back() {
     // Ground truth: the unregistered model's rest markers seen from a camera frame.
     let mut plain = quiet_torso();
+    plain.start_at_rest();
     let rest = plain.markers().unwrap().to_vec();
     let axis = nalgebra::Unit::new_normalize(Vector3::new(0.3, -1.0, 0.5));
     let truth = Isometry3::from_parts(
@@ -229,6 +231,8 @@ fn a_recording_with_a_known_rigid_transform_is_registered_back() {
     };
     config.scene.slp_reference = Some(path.clone());
     let mut torso = Torso::new(config.clone()).unwrap();
+    // the recording's frame is the rest pose's markers
+    torso.start_at_rest();
     let model = torso.marker_model().unwrap();
     let reg = model.registration().expect("registered");
     let to_rec = &reg.to_recording;

@@ -50,7 +50,10 @@ fn quiet_breathing_pressures_follow_the_lungs_laws() {
         ..Config::default()
     })
     .unwrap();
+    // the lung volume of the rest pose (FRC), then the run from the drive's start
+    torso.start_at_rest();
     let rest = torso.read(Quantity::LungVolume).unwrap();
+    torso.start_at_equilibrium();
     let period = 1.0 / drive.frequency;
     let n = 400;
     let dt = period / n as f64;

@@ -272,6 +272,8 @@ fn schedules_switch_drives_at_their_times() {
     let mut a = Trajectory::default();
     m.run(&schedule, &times, true, &mut a).unwrap();
     let mut t = Torso::new(config()).unwrap();
+    // from the rest pose, as the fit's runs
+    t.start_at_rest();
     t.set_drive(schedule[0].1).unwrap();
     let mut next = 1;
     let mut worst: f64 = 0.0;

@@ -135,6 +135,23 @@ fn run_ok(inst: &mut Instance, log: &Log, seconds: f64, h: f64) -> (f64, f64) {
     (lo, hi)
 }
 
+/// The lung volume of `subject`'s rest pose (FRC) at level of detail 0 [L]: an instance
+/// without drive or inputs starts there (the equilibrium of zero activation).
+fn rest_lung_volume(subject: &Subject) -> f64 {
+    let (mut inst, _log) = instance();
+    set_subject(&mut inst, subject);
+    for (name, value) in [
+        ("scene.level_of_detail", 0.0),
+        ("drive.ribs.amplitude", 0.0),
+        ("drive.diaphragm.amplitude", 0.0),
+        ("drive.abdominals.amplitude", 0.0),
+    ] {
+        set(&mut inst, name, value);
+    }
+    initialise(&mut inst);
+    get(&mut inst, "volume.lung")
+}
+
 /// The residual volume of `subject` scaled to the model's own rest (FRC) lung volume `rest`,
 /// where the pleural law's lower asymptote stands [L].
 fn residual_volume(subject: &Subject, rest: f64) -> f64 {
@@ -146,7 +163,7 @@ fn soak_scene_35_no_longer_collapses_and_every_step_is_ok() {
     let (mut inst, log) = instance();
     scene_35(&mut inst);
     initialise(&mut inst);
-    let rest = get(&mut inst, "volume.lung");
+    let rest = rest_lung_volume(&subject_35());
     let rv = residual_volume(&subject_35(), rest);
     let (lo, hi) = run_ok(&mut inst, &log, 60.0, 1.0 / 56.0);
     println!(

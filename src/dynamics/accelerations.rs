@@ -33,8 +33,11 @@ pub fn compute_local(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: 
     model.mass.solve_local(&mut dy[l.theta_dot..]);
 }
 
-/// The position rates into `dy`, and the generalised forces where the accelerations go.
-fn forces_and_rates(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+/// The position rates into `dy`, and the generalised forces where the accelerations go
+/// (rib torques, sternum force and torque, vertex forces, in the order of the rates; the
+/// anchor forces of `data` must be those of `y`): the unbalanced loads that
+/// [`super::equilibrium`] drives to zero.
+pub fn forces_and_rates(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
     // Position derivatives are the velocities.
     dy[l.theta..l.theta + RIBS].copy_from_slice(&y[l.theta_dot..l.theta_dot + RIBS]);
     dy[l.sternum_x..l.sternum_x + 3].copy_from_slice(&y[l.sternum_v..l.sternum_v + 3]);

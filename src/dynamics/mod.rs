@@ -16,6 +16,7 @@
 
 pub mod accelerations;
 pub mod energy;
+pub mod equilibrium;
 pub mod forces;
 pub mod inertia;
 pub mod jacobian;

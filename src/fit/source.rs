@@ -108,8 +108,11 @@ impl TorsoMarkers {
         TorsoMarkers::from_torso(Torso::new(config)?)
     }
 
-    /// Wraps an already built torso; its current state becomes the rest state.
-    pub fn from_torso(torso: Torso) -> Result<TorsoMarkers> {
+    /// Wraps an already built torso, put at its rest pose ([`Torso::start_at_rest`]): the
+    /// state every run starts from (a run's first breath is the transient the periodic
+    /// runs discard).
+    pub fn from_torso(mut torso: Torso) -> Result<TorsoMarkers> {
+        torso.start_at_rest();
         // A marker set other than the grid is one column of its markers.
         let grid = match torso.marker_set() {
             Some(set) => (set.len(), 1),

@@ -620,8 +620,13 @@ impl Instance {
     /// bad configuration is an error naming the variable, and the instance stays in
     /// initialization mode so that the master may correct it.
     pub fn exit_initialization_mode(&mut self) -> fmi2Status {
-        if let Err(e) = self.ensure_torso() {
-            return self.error(&format!("fmi2ExitInitializationMode: {e}"));
+        match self.ensure_torso() {
+            Err(e) => return self.error(&format!("fmi2ExitInitializationMode: {e}")),
+            // the start state: the static equilibrium of the inputs set during initialisation
+            // and the drive's start (cached per compiled model and activations)
+            Ok(torso) => {
+                torso.start_at_equilibrium();
+            }
         }
         self.phase = Phase::StepComplete;
         self.last_successful_time = self.time;

@@ -2,6 +2,7 @@
 
 use super::{Checkpoint, Config, Drive, Quantity, Snapshot};
 use crate::anatomy::{Anatomy, MuscleGroup};
+use crate::dynamics::equilibrium::Equilibrium;
 use crate::dynamics::jacobian::TorsoJacobian;
 use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
 use crate::observe::markers::{MarkerCache, MarkerOutputs};
@@ -10,7 +11,7 @@ use crate::solver::{
     ErrorWeights, Integrator, Jacobian, JacobianStructure, Method, Ode, Options, Stats, StiffOde,
 };
 use crate::{Error, Result};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 mod markers;
 mod sampled;
@@ -58,7 +59,14 @@ pub struct Compiled {
     pub error_weights: (Vec<u32>, Vec<f64>),
     /// Skin and marker grids, built when markers are first read.
     pub markers: MarkerCache,
+    /// The static equilibria solved so far, per applied activations (airway-opening pressure
+    /// included), most recent last; at most [`EQUILIBRIUM_CACHE`] are kept.
+    pub equilibria: Mutex<Vec<(Activations, Arc<Equilibrium>)>>,
 }
+
+/// How many static equilibria a compiled model keeps (a fit varying the drive solves a new
+/// one per drive; a simulation or an FMU instance needs one).
+pub const EQUILIBRIUM_CACHE: usize = 16;
 
 impl Compiled {
     /// Builds the anatomy and compiles the dynamics for `config` (subject, posture, level of
@@ -89,7 +97,48 @@ impl Compiled {
             anatomy,
             model,
             markers: MarkerCache::default(),
+            equilibria: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The static equilibrium under `act` ([`dynamics::equilibrium::solve`] from the rest
+    /// state, relative imbalance at most `tolerance`), solved once and cached for later calls
+    /// with the same activations; a relaxation that did not converge is returned but not
+    /// cached.
+    pub fn equilibrium(
+        &self,
+        act: &Activations,
+        tolerance: f64,
+        options: Options,
+    ) -> Arc<Equilibrium> {
+        // a panic elsewhere while the cache was held leaves it valid: entries are whole
+        let lock = || {
+            self.equilibria
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+        };
+        if let Some((_, e)) = lock()
+            .iter()
+            .find(|(a, e)| a == act && e.relative_residual() <= tolerance)
+        {
+            return e.clone();
+        }
+        let start = dynamics::rest_state(&self.model);
+        let solved = Arc::new(dynamics::equilibrium::solve(
+            &self.model,
+            act,
+            &start,
+            tolerance,
+            options,
+        ));
+        if solved.converged {
+            let mut cache = lock();
+            if cache.len() >= EQUILIBRIUM_CACHE {
+                cache.remove(0);
+            }
+            cache.push((*act, solved.clone()));
+        }
+        solved
     }
 }
 
@@ -179,6 +228,9 @@ pub struct Torso {
     marker_set: Option<Arc<crate::anatomy::skin::MarkerSet>>,
     /// Jacobian pattern and scratch of the stiff method (built when it is used).
     jacobian: Option<Box<TorsoJacobian>>,
+    /// Whether the state is still the start state (built or reset, started at equilibrium,
+    /// not advanced since): a new drive then moves the start to its equilibrium.
+    at_start: bool,
 }
 
 fn solver_options(config: &Config) -> Options {
@@ -212,7 +264,7 @@ impl Torso {
         let y = dynamics::rest_state(model);
         let integrator = Integrator::new(config.solver.method, solver_options(&config), y.len())
             .map_err(|e| Error::invalid("solver", e.to_string(), "valid solver options"))?;
-        Ok(Torso {
+        let mut torso = Torso {
             data: Data::new(model),
             y,
             time: 0.0,
@@ -227,7 +279,68 @@ impl Torso {
                 .then(|| Box::new(TorsoJacobian::new(model))),
             config,
             compiled,
-        })
+            at_start: true,
+        };
+        torso.start_at_equilibrium();
+        Ok(torso)
+    }
+
+    /// The activations applied at time `t` with the current inputs, drive and airway-opening
+    /// pressure.
+    fn applied(&self, t: f64) -> Activations {
+        let (right, left) = side_gains(&self.config);
+        let mut groups = [0.0; 8];
+        for g in MuscleGroup::ALL {
+            groups[g.index()] =
+                (self.inputs[g.index()] + self.config.drive.activation(g, t)).clamp(0.0, 1.0);
+        }
+        Activations::per_group(&groups, &right, &left).with_airway_opening(self.airway_opening)
+    }
+
+    /// Puts the model at the static equilibrium of the activations applied now (inputs plus
+    /// the drive's value at the current time) and the current airway-opening pressure, at rest
+    /// (every velocity zero), so that a run started here has no start-up transient
+    /// ([`dynamics::equilibrium`]; docs/dynamics.md, "The start state"). The equilibrium is
+    /// solved once per compiled model and activations and then cached
+    /// ([`Compiled::equilibrium`]); its relative imbalance is at most the solver's relative
+    /// tolerance. Called when the model is built and reset; call it after setting the
+    /// inputs a run starts with (the FMU does at the end of its initialisation). Returns the
+    /// equilibrium (its `converged` flag false if the relaxation did not settle in
+    /// [`dynamics::equilibrium::MAX_RELAXATION`]; the state is then where it got to).
+    pub fn start_at_equilibrium(&mut self) -> Arc<Equilibrium> {
+        self.settle()
+    }
+
+    /// Puts the model at its rest pose at rest (every muscle relaxed, the airway open to the
+    /// surface: the equilibrium of zero activation, [`dynamics::rest_state`]), whatever the
+    /// drive's start; a later drive change does not move it. The fits start here and
+    /// discard the start-up breath themselves.
+    pub fn start_at_rest(&mut self) {
+        self.y = dynamics::rest_state(&self.compiled.model);
+        self.integrator.invalidate();
+        self.observation = None;
+        self.sides = None;
+        self.markers.invalidate();
+        self.at_start = false;
+    }
+
+    /// [`Torso::start_at_equilibrium`]'s work.
+    fn settle(&mut self) -> Arc<Equilibrium> {
+        let act = self.applied(self.time);
+        let tolerance = self.config.solver.rtol;
+        let options = Options {
+            rtol: self.config.solver.rtol,
+            atol: self.config.solver.atol,
+            ..Options::default()
+        };
+        let solved = self.compiled.equilibrium(&act, tolerance, options);
+        self.y.copy_from_slice(&solved.state);
+        self.integrator.invalidate();
+        self.observation = None;
+        self.sides = None;
+        self.markers.invalidate();
+        self.at_start = true;
+        solved
     }
 
     /// The compiled model (shareable).
@@ -292,6 +405,9 @@ impl Torso {
         if drive != self.config.drive {
             self.config.drive = drive;
             self.integrator.invalidate();
+            if self.at_start {
+                self.start_at_equilibrium();
+            }
         }
         Ok(())
     }
@@ -346,6 +462,7 @@ impl Torso {
             self.observation = None;
             self.sides = None;
             self.markers.invalidate();
+            self.at_start = false;
             result.map_err(|e| Error::Numerical {
                 time: self.time,
                 reason: e.to_string(),
@@ -499,6 +616,7 @@ impl Torso {
         }
         self.time = t;
         self.y.copy_from_slice(y);
+        self.at_start = false;
         self.integrator.invalidate();
         self.observation = None;
         self.sides = None;
@@ -587,6 +705,7 @@ impl Torso {
             self.jacobian = Some(Box::new(TorsoJacobian::new(&self.compiled.model)));
         }
         self.integrator = integrator;
+        self.at_start = false;
         self.time = snapshot.time;
         self.y.copy_from_slice(&snapshot.state);
         self.inputs = snapshot.inputs;
@@ -634,6 +753,7 @@ impl Torso {
             self.jacobian = Some(Box::new(TorsoJacobian::new(&self.compiled.model)));
         }
         self.integrator.copy_memory_from(solver);
+        self.at_start = false;
         self.time = checkpoint.time;
         self.y.copy_from_slice(&checkpoint.state);
         self.inputs = checkpoint.inputs;
@@ -645,16 +765,13 @@ impl Torso {
         Ok(())
     }
 
-    /// Back to the freshly built state (time 0, rest state, zero inputs and airway pressure,
-    /// solver memory cleared).
+    /// Back to the freshly built state (time 0, zero inputs and airway pressure, the static
+    /// equilibrium of the drive's start, solver memory cleared).
     pub fn reset(&mut self) {
         self.time = 0.0;
         self.inputs = [0.0; 8];
         self.airway_opening = 0.0;
-        self.y = dynamics::rest_state(&self.compiled.model);
         self.integrator.reset();
-        self.observation = None;
-        self.sides = None;
-        self.markers.invalidate();
+        self.start_at_equilibrium();
     }
 }
