@@ -74,7 +74,10 @@ pub fn registration_residual(
     start: Option<RigidTransform>,
 ) -> Result<(f64, Option<RigidTransform>)> {
     if grid {
-        let mut source = TorsoMarkers::new(config.clone())?;
+        // The rest markers: no drive, so that the build does not solve a start equilibrium.
+        let mut c = config.clone();
+        c.drive.enabled = false;
+        let mut source = TorsoMarkers::new(c)?;
         let rest = source.rest_markers()?;
         let (t, _) = register_rigid(&rest, first, false)?;
         let (sum, n) = rest
