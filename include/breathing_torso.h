@@ -455,7 +455,9 @@ int bt_snapshot(struct BtTorso *h, uint8_t *buffer, size_t capacity, size_t *siz
 int bt_restore(struct BtTorso *h, const uint8_t *buffer, size_t size);
 
 /**
- * Back to the freshly built state: time 0, rest state, zero inputs, solver memory cleared.
+ * Back to the freshly built state: time 0, zero inputs, solver memory cleared, at the static
+ * equilibrium of the drive's start (the rest pose when the drive is off or starts at zero
+ * activation; docs/dynamics.md, "The start state").
  *
  * # Safety
  * `h` must be NULL or a live handle.

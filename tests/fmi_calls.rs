@@ -390,3 +390,28 @@ fn initialisation_starts_at_the_inputs_equilibrium() {
     assert_eq!(inst.reset(), fmi2OK);
     assert_eq!(start(&mut inst, 0.3), held);
 }
+
+#[test]
+fn a_drive_parameter_changed_after_initialisation_acts_as_a_step() {
+    // After fmi2ExitInitializationMode the start is fixed: a tunable drive parameter set
+    // before the first step changes the drive from there on and leaves the state where it
+    // is, as an input would (docs/dynamics.md, "The start state").
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let (mut inst, _log) = recording_instance();
+    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
+    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+    let mut before = [0.0];
+    assert_eq!(inst.get_real(&[vr("volume.lung")], &mut before), fmi2OK);
+    assert_eq!(
+        inst.set_real(&[vr("drive.diaphragm.amplitude")], &[0.6]),
+        fmi2OK
+    );
+    let mut after = [0.0];
+    assert_eq!(inst.get_real(&[vr("volume.lung")], &mut after), fmi2OK);
+    assert_eq!(
+        after[0], before[0],
+        "the state moved when the drive changed"
+    );
+}

@@ -976,7 +976,9 @@ pub unsafe extern "C" fn bt_restore(h: *mut BtTorso, buffer: *const u8, size: us
     }
 }
 
-/// Back to the freshly built state: time 0, rest state, zero inputs, solver memory cleared.
+/// Back to the freshly built state: time 0, zero inputs, solver memory cleared, at the static
+/// equilibrium of the drive's start (the rest pose when the drive is off or starts at zero
+/// activation; docs/dynamics.md, "The start state").
 ///
 /// # Safety
 /// `h` must be NULL or a live handle.

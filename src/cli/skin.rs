@@ -365,7 +365,8 @@ pub fn render_skin(args: &RenderSkinArgs) -> Result<()> {
         .subject
         .config(&args.solver.with_alias(&args.method), drive)?;
     prepare_output_file(&args.out)?;
-    let mut torso = Torso::new(config)?;
+    // the rest image is the rest pose (muscles relaxed), not the drive's start
+    let mut torso = Torso::new_at_rest(config)?;
     let model = torso.marker_model()?;
     let b = breath_extremes(&mut torso, 56.0)?;
     let g = model.grid();

@@ -109,7 +109,7 @@ pub fn fit_any_markers(
     options: &FitOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<MarkerSetFit> {
-    let mut torso = Torso::new(config)?;
+    let mut torso = Torso::new_at_rest(config)?;
     let bound = bind_recording(&torso, markers, surface)?;
     torso.set_marker_set(Some(Arc::new(bound.set.clone())));
     let mut source = TorsoMarkers::from_torso(torso)?;

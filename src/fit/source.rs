@@ -105,7 +105,7 @@ pub const PERIODIC_VOLUME_TOLERANCE_L: f64 = 1e-5;
 impl TorsoMarkers {
     /// Builds the torso for `config` and keeps its rest state.
     pub fn new(config: Config) -> Result<TorsoMarkers> {
-        TorsoMarkers::from_torso(Torso::new(config)?)
+        TorsoMarkers::from_torso(Torso::new_at_rest(config)?)
     }
 
     /// Wraps an already built torso, put at its rest pose ([`Torso::start_at_rest`]): the
@@ -324,8 +324,10 @@ impl MarkerSource for TorsoMarkers {
     /// Another torso on the same compiled model (the skin and marker model are shared), at
     /// the same rest state, with the same settings.
     fn spare(&self) -> Result<Option<Box<dyn MarkerSource + Send>>> {
-        let mut torso =
-            Torso::with_compiled(self.torso.config().clone(), self.torso.compiled().clone())?;
+        let mut torso = Torso::with_compiled_at_rest(
+            self.torso.config().clone(),
+            self.torso.compiled().clone(),
+        )?;
         torso.set_marker_set(self.torso.marker_set().cloned());
         torso.restore(&self.rest)?;
         Ok(Some(Box::new(TorsoMarkers {

@@ -620,13 +620,25 @@ impl Instance {
     /// bad configuration is an error naming the variable, and the instance stays in
     /// initialization mode so that the master may correct it.
     pub fn exit_initialization_mode(&mut self) -> fmi2Status {
-        match self.ensure_torso() {
+        let start = match self.ensure_torso() {
             Err(e) => return self.error(&format!("fmi2ExitInitializationMode: {e}")),
             // the start state: the static equilibrium of the inputs set during initialisation
             // and the drive's start (cached per compiled model and activations)
             Ok(torso) => {
-                torso.start_at_equilibrium();
+                let start = torso.start_at_equilibrium();
+                // drive parameters changed from here on act as steps, like the inputs
+                torso.fix_start();
+                (start, torso.config().solver.rtol)
             }
+        };
+        if !start.0.converged {
+            let message = format!(
+                "fmi2ExitInitializationMode: the start state's relaxation did not settle: relative imbalance {:.1e} after {:.0} s of relaxation (tolerance solver.rtol {:.0e}); the run starts there",
+                start.0.relative_residual(),
+                start.0.relaxation_time,
+                start.1
+            );
+            self.log(fmi2OK, Category::Events, &message);
         }
         self.phase = Phase::StepComplete;
         self.last_successful_time = self.time;
@@ -1161,7 +1173,8 @@ impl Instance {
             return Ok(v);
         }
         let torso = self.ensure_torso()?;
-        let mut rest = Torso::with_compiled(torso.config().clone(), torso.compiled().clone())?;
+        let mut rest =
+            Torso::with_compiled_at_rest(torso.config().clone(), torso.compiled().clone())?;
         let mut v = [0.0; 3];
         for (x, (q, _)) in v.iter_mut().zip(CHECKED_VOLUMES) {
             *x = rest.read(q)?;

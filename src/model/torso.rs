@@ -103,8 +103,8 @@ impl Compiled {
 
     /// The static equilibrium under `act` ([`dynamics::equilibrium::solve`] from the rest
     /// state, relative imbalance at most `tolerance`), solved once and cached for later calls
-    /// with the same activations; a relaxation that did not converge is returned but not
-    /// cached.
+    /// with the same activations; a relaxation that did not converge (its `converged` flag
+    /// false) is cached as it ended, since running it again gives the same state.
     pub fn equilibrium(
         &self,
         act: &Activations,
@@ -117,9 +117,11 @@ impl Compiled {
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner())
         };
+        // A relaxation that did not settle is deterministic too: the same activations give
+        // the same state, so it is reused rather than run again.
         if let Some((_, e)) = lock()
             .iter()
-            .find(|(a, e)| a == act && e.relative_residual() <= tolerance)
+            .find(|(a, e)| a == act && (e.relative_residual() <= tolerance || !e.converged))
         {
             return e.clone();
         }
@@ -131,7 +133,7 @@ impl Compiled {
             tolerance,
             options,
         ));
-        if solved.converged {
+        {
             let mut cache = lock();
             if cache.len() >= EQUILIBRIUM_CACHE {
                 cache.remove(0);
@@ -249,9 +251,24 @@ impl Torso {
         Torso::with_compiled(config, compiled)
     }
 
+    /// [`Torso::new`] left at the rest pose ([`Torso::start_at_rest`]) without solving the
+    /// drive's start equilibrium: for fits and measurements that start from rest and would
+    /// discard that solve.
+    pub fn new_at_rest(config: Config) -> Result<Torso> {
+        let compiled = Arc::new(Compiled::build(&config)?);
+        Torso::with_compiled_at_rest(config, compiled)
+    }
+
     /// An instance sharing an already compiled model (built from the same subject, posture
     /// and level of detail); used by fits and batches to compile once.
     pub fn with_compiled(config: Config, compiled: Arc<Compiled>) -> Result<Torso> {
+        let mut torso = Torso::with_compiled_at_rest(config, compiled)?;
+        torso.start_at_equilibrium();
+        Ok(torso)
+    }
+
+    /// [`Torso::with_compiled`] left at the rest pose, as [`Torso::new_at_rest`].
+    pub fn with_compiled_at_rest(config: Config, compiled: Arc<Compiled>) -> Result<Torso> {
         config.validate()?;
         let model = &compiled.model;
         if model.lung_fraction != config.lung_ratio {
@@ -264,7 +281,7 @@ impl Torso {
         let y = dynamics::rest_state(model);
         let integrator = Integrator::new(config.solver.method, solver_options(&config), y.len())
             .map_err(|e| Error::invalid("solver", e.to_string(), "valid solver options"))?;
-        let mut torso = Torso {
+        Ok(Torso {
             data: Data::new(model),
             y,
             time: 0.0,
@@ -279,10 +296,15 @@ impl Torso {
                 .then(|| Box::new(TorsoJacobian::new(model))),
             config,
             compiled,
-            at_start: true,
-        };
-        torso.start_at_equilibrium();
-        Ok(torso)
+            at_start: false,
+        })
+    }
+
+    /// Fixes the start: later drive changes act from the current state as steps, without
+    /// moving the start to their equilibrium (the FMU calls it when its initialisation ends;
+    /// docs/dynamics.md, "The start state").
+    pub fn fix_start(&mut self) {
+        self.at_start = false;
     }
 
     /// The activations applied at time `t` with the current inputs, drive and airway-opening
