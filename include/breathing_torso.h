@@ -308,7 +308,9 @@ void bt_destroy(struct BtTorso *h);
 const char *bt_last_error(const struct BtTorso *h);
 
 /**
- * Sets the activation input (0-1) of muscle group `group` (0..BT_MUSCLE_GROUPS-1).
+ * Sets the activation input (0-1) of muscle group `group` (0..BT_MUSCLE_GROUPS-1). The
+ * state stays where it is: the input acts from it as a step (`bt_start_at_equilibrium`
+ * starts a run at the inputs' equilibrium instead).
  *
  * # Safety
  * `h` must be NULL or a live handle.
@@ -334,6 +336,24 @@ int bt_set_activation_by_name(struct BtTorso *h, const char *name, double value)
  * `h` must be NULL or a live handle.
  */
 int bt_set_airway_opening(struct BtTorso *h, double pascal);
+
+/**
+ * Puts the model at the static equilibrium of the activations applied now (the activation
+ * inputs plus the drive's value at the current time) and the airway-opening pressure, every
+ * velocity zero (docs/dynamics.md, "The start state"): call it after setting the inputs a
+ * run starts with. `bt_create` and `bt_reset` start at the equilibrium of the drive's start
+ * with zero inputs, and `bt_set_drive` before the first step moves the start with it; the
+ * activation and airway-pressure setters never move the state, so without this call they
+ * act as steps. Solved once per model and activations (cached), by damped relaxation of at
+ * most 40 s of model time. `relative_imbalance` (may be NULL) receives the largest
+ * unbalanced load over the largest anchor force at the result: at most the solver's rtol
+ * when the relaxation settled; larger when it stopped at 40 s, the model then at the state
+ * it reached (slowly settling modes; held activations can leave 1e-4).
+ *
+ * # Safety
+ * `h` must be NULL or a live handle; `relative_imbalance` NULL or writable.
+ */
+int bt_start_at_equilibrium(struct BtTorso *h, double *relative_imbalance);
 
 /**
  * Replaces the drive (validated; on error nothing changes).

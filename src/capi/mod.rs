@@ -553,7 +553,9 @@ pub unsafe extern "C" fn bt_last_error(h: *const BtTorso) -> *const c_char {
     unsafe { (*h).last_error.as_ptr() }
 }
 
-/// Sets the activation input (0-1) of muscle group `group` (0..BT_MUSCLE_GROUPS-1).
+/// Sets the activation input (0-1) of muscle group `group` (0..BT_MUSCLE_GROUPS-1). The
+/// state stays where it is: the input acts from it as a step (`bt_start_at_equilibrium`
+/// starts a run at the inputs' equilibrium instead).
 ///
 /// # Safety
 /// `h` must be NULL or a live handle.
@@ -606,6 +608,36 @@ pub unsafe extern "C" fn bt_set_activation_by_name(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn bt_set_airway_opening(h: *mut BtTorso, pascal: f64) -> c_int {
     unsafe { with_handle(h, |b| Ok(b.torso.set_airway_opening(pascal)?)) }
+}
+
+/// Puts the model at the static equilibrium of the activations applied now (the activation
+/// inputs plus the drive's value at the current time) and the airway-opening pressure, every
+/// velocity zero (docs/dynamics.md, "The start state"): call it after setting the inputs a
+/// run starts with. `bt_create` and `bt_reset` start at the equilibrium of the drive's start
+/// with zero inputs, and `bt_set_drive` before the first step moves the start with it; the
+/// activation and airway-pressure setters never move the state, so without this call they
+/// act as steps. Solved once per model and activations (cached), by damped relaxation of at
+/// most 40 s of model time. `relative_imbalance` (may be NULL) receives the largest
+/// unbalanced load over the largest anchor force at the result: at most the solver's rtol
+/// when the relaxation settled; larger when it stopped at 40 s, the model then at the state
+/// it reached (slowly settling modes; held activations can leave 1e-4).
+///
+/// # Safety
+/// `h` must be NULL or a live handle; `relative_imbalance` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn bt_start_at_equilibrium(
+    h: *mut BtTorso,
+    relative_imbalance: *mut f64,
+) -> c_int {
+    unsafe {
+        with_handle(h, |b| {
+            let start = b.torso.start_at_equilibrium();
+            if !relative_imbalance.is_null() {
+                *relative_imbalance = start.relative_residual();
+            }
+            Ok(())
+        })
+    }
 }
 
 /// Replaces the drive (validated; on error nothing changes).
