@@ -285,7 +285,8 @@ fn markers_are_read_on_the_subject_skin() {
     let mesh = SubjectMesh::load(dir).unwrap();
     let bvh = breathing_torso::mesh::Bvh::new(&mesh.skin);
     let farthest = |mesh_dir: Option<&Path>| {
-        let mut torso = Torso::new(config(mesh_dir, Drive::quiet())).unwrap();
+        // at the rest pose, not the equilibrium of the drive's start
+        let mut torso = Torso::new_at_rest(config(mesh_dir, Drive::quiet())).unwrap();
         torso
             .markers()
             .unwrap()
