@@ -74,18 +74,11 @@ pub fn registration_residual(
     start: Option<RigidTransform>,
 ) -> Result<(f64, Option<RigidTransform>)> {
     if grid {
-        // The rest markers: no drive, so that the build does not solve a start equilibrium.
-        let mut c = config.clone();
-        c.drive.enabled = false;
-        let mut source = TorsoMarkers::new(c)?;
+        // built at the rest pose ([`TorsoMarkers::new`]): no start equilibrium is solved
+        let mut source = TorsoMarkers::new(config.clone())?;
         let rest = source.rest_markers()?;
-        let (t, _) = register_rigid(&rest, first, false)?;
-        let (sum, n) = rest
-            .iter()
-            .zip(first)
-            .filter_map(|(m, r)| r.map(|r| (t.apply(&r) - m).norm_squared()))
-            .fold((0.0, 0usize), |(s, n), d| (s + d, n + 1));
-        Ok(((sum / n.max(1) as f64).sqrt(), None))
+        let (_, rms) = register_rigid(&rest, first, false)?;
+        Ok((rms, None))
     } else {
         // The skin needs the anatomy only, not the compiled dynamics.
         config.validate()?;
