@@ -25,7 +25,9 @@ The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface
    the recording window at the recording's frame times, one fmi2GetReal per frame.
 
 The drive's inspiratory fraction (`drive.inspiratory_fraction`, Ti/Ttot of its waves) is
-held at `--ti-ttot` (default 0.5, the sine of thesis eq. 2.4, as `torso fit`).
+held at `--ti-ttot` (default 0.5, the sine of thesis eq. 2.4, as `torso fit`); `--ti-ttot auto`
+takes the median Ti/Ttot of the recording's breaths, read off its principal displacement as
+`torso fit --ti-ttot auto` reads it.
 
 Progress goes to stderr: a bar on a terminal, else a line at least every 5 s and a last one
 at 100 % (evaluations done over the budget, best cost, elapsed time, time left), as
@@ -320,6 +322,84 @@ def breathing_frequency(times: np.ndarray, pts: np.ndarray):
         a = left / mags[k]
         delta = -(2 * a - 1) / (a + 1)
     return (k + float(np.clip(delta, -1, 1))) * fs / n, signal, axis.reshape(-1, 3)
+
+
+def _moving_average(v: np.ndarray, half: int) -> np.ndarray:
+    """Centred moving average over `half` samples each side, shrinking at the ends."""
+    prefix = np.concatenate([[0.0], np.cumsum(v)])
+    i = np.arange(len(v))
+    a, b = np.maximum(i - half, 0), np.minimum(i + half + 1, len(v))
+    return (prefix[b] - prefix[a]) / (b - a)
+
+
+def _extrema(v: np.ndarray, h: float) -> list:
+    """Hysteresis extrema: a peak once the signal falls `h` below the running maximum, a
+    trough once it rises `h` above the running minimum. Items (index, +1 peak / -1 trough)."""
+    out, state, hi, lo = [], 0, 0, 0
+    for i in range(1, len(v)):
+        if state >= 0 and v[i] > v[hi]:
+            hi = i
+        if state <= 0 and v[i] < v[lo]:
+            lo = i
+        if state <= 0 and v[i] >= v[lo] + h:
+            out.append((lo, -1))
+            state, hi = 1, i
+        elif state >= 0 and v[i] <= v[hi] - h:
+            out.append((hi, 1))
+            state, lo = -1, i
+    return out
+
+
+def breath_timing(times: np.ndarray, signal: np.ndarray, f: float) -> list:
+    """(Ti, Te) of each whole breath (trough, peak, trough) of `signal` (inspiration
+    positive), as `torso fit` reads the recording's breaths (src/stats/breaths.rs with
+    src/fit/breathing.rs's settings): extrema located on a centred moving average over 0.05
+    breathing periods, hysteresis 0.3 of the 5-95 % range of the detrended curve, extrema
+    closer than 0.1 periods merged (the more extreme kept), an extremum on the first sample
+    dropped."""
+    period = 1.0 / f
+    n = len(times)
+    if n < 4:
+        return []
+    dt = (times[-1] - times[0]) / (n - 1)
+    half = int(round(0.5 * 0.05 * period / dt)) if dt > 0 else 0
+    v = _moving_average(np.asarray(signal, dtype=float), half)
+    d = detrend(v[:, None])[:, 0]
+    h = 0.3 * (np.percentile(d, 95) - np.percentile(d, 5))
+    if h <= 0:
+        return []
+    ext = _extrema(v, h)
+    if ext and ext[0][0] == 0:
+        ext.pop(0)
+    i = 0
+    while i + 1 < len(ext):
+        if times[ext[i + 1][0]] - times[ext[i][0]] < 0.1 * period:
+            if i > 0 and i + 2 < len(ext):
+                a, b = ext[i - 1], ext[i + 1]
+                keep_b = v[b[0]] > v[a[0]] if a[1] > 0 else v[b[0]] < v[a[0]]
+                ext[i - 1] = b if keep_b else a
+                del ext[i:i + 2]
+                i -= 1
+            elif i == 0:
+                ext.pop(0)
+            else:
+                del ext[i + 1:]
+        else:
+            i += 1
+    return [(times[p] - times[s], times[e] - times[p])
+            for (s, ks), (p, kp), (e, ke) in zip(ext, ext[1:], ext[2:]) if (ks, kp, ke) == (-1, 1, -1)]
+
+
+def recording_ti_ttot(times: np.ndarray, signal: np.ndarray, loadings: np.ndarray, f: float) -> float:
+    """Median Ti/Ttot of the recording's breaths (`torso fit --ti-ttot auto`): the principal
+    displacement signed so that inspiration moves the markers ventrally (+x of the model's
+    frame, where the registered recording lies), clamped to the drive's 0.2-0.8; NaN without
+    a whole breath."""
+    sign = -1.0 if loadings[:, 0].sum() < 0 else 1.0
+    fractions = [ti / (ti + te) for ti, te in breath_timing(times, sign * signal, f)]
+    if not fractions:
+        return math.nan
+    return float(np.clip(np.median(fractions), 0.2, 0.8))
 
 
 def kabsch(model: np.ndarray, rec: np.ndarray):
@@ -704,11 +784,17 @@ def fit(args) -> dict:
         "grid.cols": cols,
         "solver.rtol": args.rtol,
         "solver.atol": args.rtol / 100,  # as the native fit (FIT_ATOL_PER_RTOL)
-        "drive.inspiratory_fraction": args.ti_ttot,
     }
     out = Path(args.out)
-    if not 0.2 <= args.ti_ttot <= 0.8:
-        raise RecordingError(f"--ti-ttot {args.ti_ttot}: expected a number in [0.2, 0.8]")
+    auto = args.ti_ttot == "auto"
+    if not auto:
+        try:
+            ti_ttot = float(args.ti_ttot)
+        except ValueError:
+            ti_ttot = math.nan
+        if not 0.2 <= ti_ttot <= 0.8:
+            raise RecordingError(f"--ti-ttot {args.ti_ttot}: expected `auto` or a number in [0.2, 0.8]")
+        params["drive.inspiratory_fraction"] = ti_ttot
     model = FmuModel(Path(args.fmu), params, {})
     history = []
     progress = Progress("fit_slp", args.max_evals, "evaluations")
@@ -727,6 +813,13 @@ def fit(args) -> dict:
         registration_err = float(np.linalg.norm(rec[0][first] - rest[first], axis=1).mean())
         rate = (len(times) - 1) / times[-1]
         f, signal, loadings = breathing_frequency(times, rec)
+        if auto:
+            # Ti/Ttot read off the recording's breaths; the FMU takes it at every reset.
+            ti_ttot = recording_ti_ttot(times, signal, loadings, f)
+            if not math.isfinite(ti_ttot):
+                raise RecordingError(f"{args.slp}: --ti-ttot auto needs at least one whole breath "
+                                     "(minimum, maximum, minimum) in the recording; give a number")
+            model.params["drive.inspiratory_fraction"] = ti_ttot
         # Phase of the breath's fundamental: the basis runs' phase (the shift scan covers
         # the whole period, so the principal axis's sign does not matter).
         c = np.stack([np.ones_like(times), np.sin(2 * np.pi * f * times), np.cos(2 * np.pi * f * times)], 1)
@@ -780,7 +873,7 @@ def fit(args) -> dict:
         for t, v in zip(times, vol):
             fh.write(f"{t:.6f},{v:.6f}\n")
     result = drive_dict(f, [x[0], x[1], wrap(x[2]), wrap(x[3])])
-    result["drive.inspiratory_fraction"] = args.ti_ttot
+    result["drive.inspiratory_fraction"] = ti_ttot
     result.update(
         {
             "cost_m": final_cost,
@@ -863,9 +956,9 @@ def main(argv=None) -> int:
     p.add_argument("--max-evals", type=int, default=120)
     p.add_argument("--rtol", type=float, default=1e-6,
                    help="solver.rtol of the FMU (the native fit's default: as accurate for fitting as tighter ones)")
-    p.add_argument("--ti-ttot", type=float, default=0.5,
-                   help="drive.inspiratory_fraction held by the search, 0.2-0.8 (as `torso fit --ti-ttot`; "
-                        "for `auto` pass the value torso fit's JSON reports)")
+    p.add_argument("--ti-ttot", default="0.5",
+                   help="drive.inspiratory_fraction held by the search: a number in 0.2-0.8, or `auto`, the "
+                        "median Ti/Ttot of the recording's breaths (as `torso fit --ti-ttot`)")
     p.add_argument("--units", choices=sorted(UNIT_SCALES),
                    help="length unit of a CSV of named markers that does not state it")
     p.add_argument("--rate", type=float, help="frame rate [Hz] of a CSV of named markers without a time column")
