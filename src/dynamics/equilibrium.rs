@@ -193,6 +193,16 @@ const SHORTEST_STEP: f64 = 1e-5;
 /// cheap once they converge; it stops at the tolerance if round-off holds it there.
 const NEWTON_MARGIN: f64 = 1e-2;
 
+/// Least growth of the pseudo-time step after an accepted step: the loads' ratio alone
+/// grows it by 1.2-3 per step while the wall is still moving (measured at LOD 2), which
+/// spends a factorisation per step; a rejected step quarters it.
+const MIN_GROWTH: f64 = 2.0;
+
+/// An accepted Newton step that divides the loads' 2-norm by at least this keeps its
+/// Jacobian for the next step (a chord step costs one right-hand side, a Jacobian a few
+/// hundred at LOD 2); one that does less has the Jacobian evaluated afresh.
+const REUSE_RATIO: f64 = 4.0;
+
 /// What the Newton solve did.
 struct Newton {
     iterations: u32,
@@ -228,11 +238,17 @@ fn newton(
     };
     let mut now = balance(model, data, act, y);
     let mut h = FIRST_STEP;
+    let mut reuse = false;
+    // f is f(y) and the Jacobian is at y; or the Jacobian is from an earlier iterate
+    let mut current = false;
     let mut fresh = false;
     while done.iterations < MAX_NEWTON && now.relative() > target && h >= SHORTEST_STEP {
-        if !fresh {
+        if !current {
             rhs_local(model, data, act, y, &mut f);
             done.evaluations += 1;
+            current = true;
+        }
+        if !fresh && (done.jacobians == 0 || !reuse) {
             done.evaluations += torso_jacobian.evaluate(model, data, act, y, &f, &mut jac);
             done.jacobians += 1;
             fresh = true;
@@ -265,12 +281,19 @@ fn newton(
         match next {
             Some(next) if next.total < now.total => {
                 // switched evolution relaxation (Mulder & van Leer 1985): the step grows
-                // as the loads fall
-                let ratio = (now.total / next.total.max(f64::MIN_POSITIVE)).min(1e3);
-                h = (h * ratio).min(LONGEST_STEP);
+                // as the loads fall, and at least by MIN_GROWTH
+                let ratio = now.total / next.total.max(f64::MIN_POSITIVE);
+                h = (h * ratio.clamp(MIN_GROWTH, 1e3)).min(LONGEST_STEP);
+                // a Jacobian that still divides the loads by REUSE_RATIO is kept
+                reuse = ratio >= REUSE_RATIO;
                 y.copy_from_slice(&trial);
                 now = next;
+                current = false;
                 fresh = false;
+            }
+            _ if !fresh => {
+                // an old Jacobian may be the cause: evaluate it afresh, same step
+                reuse = false;
             }
             _ => {
                 if now.relative() <= tolerance {
