@@ -4,15 +4,29 @@
 //! start on it instead of in a transient. This module owns how the equilibrium is found and
 //! how far from balance a state is; when it is used (initialisation, reset) is the facade's.
 //!
-//! The equilibrium is found by damped relaxation: the equations of motion themselves,
-//! activations held, integrated from a start state until the loads left at zero velocity are
-//! small. Every motion of the model is damped (elements, springs, vertex foundation, airway
-//! and abdominal viscosity), so the state settles on a stable equilibrium, and only on a
-//! stable one; the integration error changes the path, not where it ends, because the
-//! equilibrium is a fixed point of the right-hand side whatever the step. With zero
-//! activation and the airway open to the surface the rest pose is the equilibrium by
-//! construction (the preloads of `Model::compile` balance it), and the relaxation stops
-//! before its first step.
+//! The equilibrium is found by Newton iterations on the positions, the residual being the
+//! accelerations at zero velocity (zero where the generalised forces are). Each iteration is
+//! an implicit Euler step of pseudo-time h from rest, (I - h J) dy = h f(y), the velocities
+//! then set back to zero (pseudo-transient continuation, Kelley & Keyes 1998, SIAM J. Numer. Anal.
+//! 35:508): on the positions it is Newton's step for the loads with (1/h^2) M - (1/h) D added
+//! to the stiffness, a damping that keeps the first steps on the model's own damped motion
+//! and vanishes as h grows. J is the stiff method's sparse plus rank-2 Jacobian
+//! ([`super::jacobian::TorsoJacobian`]), solved by its block LU with the Woodbury correction
+//! ([`crate::solver::sparse::ShiftedSolver`]). h grows as the loads fall (switched evolution
+//! relaxation, Mulder & van Leer 1985, AIAA paper 85-1519); a step that does not lower the
+//! loads' 2-norm is retried with a fresh Jacobian, then a shorter h. Starting short from the
+//! rest pose, which is stable, and only ever lowering the loads, the iteration follows the
+//! damped motion into the stable equilibrium the motion itself would reach.
+//!
+//! If the iterations stall short of the tolerance, the damped relaxation continues from where
+//! they got to: the equations of motion themselves, activations held, integrated until the
+//! loads left at zero velocity are small. Every motion of the model is damped (elements,
+//! springs, vertex foundation, airway and abdominal viscosity), so the state settles on a
+//! stable equilibrium, and only on a stable one; the integration error changes the path, not
+//! where it ends, because the equilibrium is a fixed point of the right-hand side whatever
+//! the step. With zero activation and the airway open to the surface the rest pose is the
+//! equilibrium by construction (the preloads of `Model::compile` balance it), and the solve
+//! stops before its first iteration.
 //!
 //! How far from balance: each generalised force is expressed as a force [N] (a rib's torque
 //! divided by its longest lever, the distance from its hinge to its farthest anchor; the
@@ -48,8 +62,8 @@ pub struct Equilibrium {
     pub residual: f64,
     /// Largest force on any anchor at `state` [N]: the scale of `residual`.
     pub force_scale: f64,
-    /// Whether `residual <= tolerance * force_scale` was reached within
-    /// Newton iterations and [`MAX_RELAXATION`].
+    /// Whether `residual <= tolerance * force_scale` was reached, by the Newton iterations or
+    /// by the relaxation within [`MAX_RELAXATION`].
     pub converged: bool,
     /// Newton iterations taken (accepted and rejected steps; 0 when the start balanced).
     pub newton_iterations: u32,
