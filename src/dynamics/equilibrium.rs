@@ -356,6 +356,74 @@ fn relax(
     (t, integrator.stats().rhs_evaluations)
 }
 
+/// Displacement of each position coordinate (rib angle [rad], sternum and vertex position
+/// [m]) by which [`stable`] disturbs an equilibrium: a thousandth of a millimetre, far above
+/// the round-off of the positions and far below the millimetres breathing moves them.
+const DISTURBANCE: f64 = 1e-6;
+
+/// Simulated time over which [`stable`] follows the disturbed equilibrium [s]: an eighth of a
+/// 4 s quiet breath.
+const STABILITY_CHECK: f64 = 0.5;
+
+/// A disturbance that has grown this many times over in [`STABILITY_CHECK`] marks the
+/// equilibrium as unstable: a damped disturbance only redistributes among the coordinates
+/// (by a few times at most), an unstable mode growing faster than about 4.6 /s exceeds it.
+const GROWTH: f64 = 10.0;
+
+/// Whether the equilibrium `y` (velocities zero) is stable: the positions are disturbed by
+/// [`DISTURBANCE`] (signs alternating in a fixed pattern) and the equations of motion,
+/// activations held, followed for [`STABILITY_CHECK`]; it is stable if the largest
+/// deviation from `y` at the end is within [`GROWTH`] disturbances. If not, `y` is set to the
+/// state reached (velocities zero), from which the relaxation continues. Returns the verdict
+/// and the right-hand-side evaluations. A Newton solve could land on a saddle, where the
+/// loads balance too; the relaxation never does.
+fn stable(
+    model: &Model,
+    data: &mut Data,
+    act: &Activations,
+    y: &mut [f64],
+    options: Options,
+) -> (bool, u64) {
+    let l = Layout::new(model);
+    let Ok(mut integrator) = Integrator::new(Method::Dopri5, options, y.len()) else {
+        return (true, 0);
+    };
+    let disturbed: Vec<usize> = (l.theta..l.sternum_q)
+        .chain(l.vertex_x..l.theta_dot)
+        .collect();
+    let mut z = y.to_vec();
+    for (k, &i) in disturbed.iter().enumerate() {
+        // a fixed pattern of signs with no short period
+        let sign = if (k * 7919) % 13 < 6 { 1.0 } else { -1.0 };
+        z[i] += sign * DISTURBANCE;
+    }
+    let mut held = Held {
+        model,
+        data,
+        act: *act,
+        weights: error_weights(model),
+    };
+    let mut t = 0.0;
+    let failed = integrator
+        .integrate(&mut held, &mut t, &mut z, STABILITY_CHECK)
+        .is_err()
+        || z.iter().any(|v| !v.is_finite());
+    let evaluations = integrator.stats().rhs_evaluations;
+    if failed {
+        return (true, evaluations);
+    }
+    let deviation = disturbed
+        .iter()
+        .map(|&i| (z[i] - y[i]).abs())
+        .fold(0.0, f64::max);
+    if deviation <= GROWTH * DISTURBANCE {
+        return (true, evaluations);
+    }
+    z[l.theta_dot..].fill(0.0);
+    y.copy_from_slice(&z);
+    (false, evaluations)
+}
+
 /// The static equilibrium under `act`, from the positions of `start` (its velocities are
 /// ignored), to a relative imbalance of at most `tolerance` (module doc): Newton iterations
 /// first, then, if they stall short of the tolerance, the damped relaxation from where they
@@ -386,6 +454,14 @@ pub fn solve(
         evaluations = done.evaluations;
         (residual, scale) = imbalance(model, &mut data, act, &y);
     }
+    if iterations > 0 && settled(residual, scale) {
+        let (stable, evals) = stable(model, &mut data, act, &mut y, options);
+        evaluations += evals;
+        if !stable {
+            // y is now where the motion from the perturbed state got to
+            (residual, scale) = imbalance(model, &mut data, act, &y);
+        }
+    }
     if !settled(residual, scale) {
         let relaxed = relax(model, &mut data, act, &mut y, tolerance, options);
         t = relaxed.0;
@@ -411,7 +487,7 @@ pub fn solve(
 
 #[cfg(test)]
 mod tests {
-    use super::{imbalance, relax, solve};
+    use super::{imbalance, relax, solve, stable};
     use crate::anatomy::{Anatomy, MuscleGroup, Subject};
     use crate::dynamics::{Activations, Data, Layout, Model, Params, rest_state};
     use crate::solver::{Integrator, Method, Options};
@@ -509,6 +585,27 @@ mod tests {
         );
         assert!(made > 1e-3, "activation moved the wall {made}");
         assert!(off < 1e-2 * made, "apart {off} against {made}");
+    }
+
+    /// The stability check passes at the solved equilibrium, leaving it where it is, and
+    /// fails where the motion carries the state away (the rest pose under held inspiratory
+    /// activation, which the activation moves by centimetres), moving it there.
+    #[test]
+    fn the_stability_check_tells_a_resting_state_from_a_moving_one() {
+        let model = model();
+        let act = inspiration();
+        let rest = rest_state(&model);
+        let eq = solve(&model, &act, &rest, 1e-8, options());
+        let mut data = Data::new(&model);
+        let mut y = eq.state.clone();
+        let (verdict, evaluations) = stable(&model, &mut data, &act, &mut y, options());
+        assert!(verdict);
+        assert!(evaluations > 0);
+        assert_eq!(y, eq.state);
+        let mut y = rest.clone();
+        let (verdict, _) = stable(&model, &mut data, &act, &mut y, options());
+        assert!(!verdict);
+        assert_ne!(y, rest);
     }
 
     /// Under held inspiratory activation the solved state balances its loads to the
