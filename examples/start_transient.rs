@@ -34,7 +34,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let build_ms = built.elapsed().as_secs_f64() * 1e3;
     let eq = torso.start_at_equilibrium();
     println!(
-        "lod {lod} {posture:?} {scenario}: start state relaxed over {:.2} s ({} RHS evaluations), relative imbalance {:.2e} ({:.3e} of {:.3e} N), converged {}",
+        "lod {lod} {posture:?} {scenario}: start state after {} Newton iterations ({} Jacobians) and {:.2} s of relaxation ({} RHS evaluations), relative imbalance {:.2e} ({:.3e} of {:.3e} N), converged {}",
+        eq.newton_iterations,
+        eq.jacobian_evaluations,
         eq.relaxation_time,
         eq.rhs_evaluations,
         eq.relative_residual(),

@@ -616,11 +616,12 @@ pub unsafe extern "C" fn bt_set_airway_opening(h: *mut BtTorso, pascal: f64) -> 
 /// run starts with. `bt_create` and `bt_reset` start at the equilibrium of the drive's start
 /// with zero inputs, and `bt_set_drive` before the first step moves the start with it; the
 /// activation and airway-pressure setters never move the state, so without this call they
-/// act as steps. Solved once per model and activations (cached), by damped relaxation of at
-/// most 40 s of model time. `relative_imbalance` (may be NULL) receives the largest
-/// unbalanced load over the largest anchor force at the result: at most the solver's rtol
-/// when the relaxation settled; larger when it stopped at 40 s, the model then at the state
-/// it reached (slowly settling modes; held activations can leave 1e-4).
+/// act as steps. Solved once per model and activations (cached), by Newton iterations with a
+/// damped relaxation of at most 40 s of model time as their fallback. `relative_imbalance`
+/// (may be NULL) receives the largest unbalanced load over the largest anchor force at the
+/// result: at most the solver's rtol when the solve settled (Newton typically reaches 1e-9);
+/// larger when Newton stalled and the relaxation stopped at 40 s, the model then at the
+/// state it reached.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `relative_imbalance` NULL or writable.

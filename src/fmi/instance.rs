@@ -633,8 +633,9 @@ impl Instance {
         };
         if !start.0.converged {
             let message = format!(
-                "fmi2ExitInitializationMode: the start state's relaxation did not settle: relative imbalance {:.1e} after {:.0} s of relaxation (tolerance solver.rtol {:.0e}); the run starts there",
+                "fmi2ExitInitializationMode: the start state's solve did not settle: relative imbalance {:.1e} after {} Newton iterations and {:.0} s of relaxation (tolerance solver.rtol {:.0e}); the run starts there",
                 start.0.relative_residual(),
+                start.0.newton_iterations,
                 start.0.relaxation_time,
                 start.1
             );

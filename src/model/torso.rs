@@ -103,7 +103,7 @@ impl Compiled {
 
     /// The static equilibrium under `act` ([`dynamics::equilibrium::solve`] from the rest
     /// state, relative imbalance at most `tolerance`), solved once and cached for later calls
-    /// with the same activations; a relaxation that did not converge (its `converged` flag
+    /// with the same activations; a solve that did not converge (its `converged` flag
     /// false) is cached as it ended, since running it again gives the same state.
     pub fn equilibrium(
         &self,
@@ -117,7 +117,7 @@ impl Compiled {
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner())
         };
-        // A relaxation that did not settle is deterministic too: the same activations give
+        // A solve that did not settle is deterministic too: the same activations give
         // the same state, so it is reused rather than run again.
         if let Some((_, e)) = lock()
             .iter()
@@ -327,7 +327,7 @@ impl Torso {
     /// ([`Compiled::equilibrium`]); its relative imbalance is at most the solver's relative
     /// tolerance. Called when the model is built and reset; call it after setting the
     /// inputs a run starts with (the FMU does at the end of its initialisation). Returns the
-    /// equilibrium (its `converged` flag false if the relaxation did not settle in
+    /// equilibrium (its `converged` flag false if Newton stalled and the relaxation did not settle in
     /// [`dynamics::equilibrium::MAX_RELAXATION`]; the state is then where it got to).
     pub fn start_at_equilibrium(&mut self) -> Arc<Equilibrium> {
         self.settle()
