@@ -14,12 +14,20 @@ fn mesh(anatomy: &Anatomy, triangles: Vec<[u32; 3]>) -> TriMesh {
     }
 }
 
-/// Elements of a group: each path segment is one spring element of the thesis.
+/// Elements of a group. The abdominal wall's chains count by their segments (each via point
+/// on the wall stands for one of the thesis's elements along the chain); the diaphragm counts
+/// its springs, which at full detail wrap over the dome through via points.
 fn elements(a: &Anatomy, g: MuscleGroup) -> usize {
     a.muscles
         .iter()
         .filter(|m| m.group == g)
-        .map(|m| m.path.len() - 1)
+        .map(|m| {
+            if g == MuscleGroup::Diaphragm {
+                1
+            } else {
+                m.path.len() - 1
+            }
+        })
         .sum()
 }
 
@@ -201,5 +209,94 @@ fn clavicles_run_from_the_jugular_notch_to_the_acromia() {
                 assert!((p.z + q.z).abs() < 1e-12);
             }
         }
+    }
+}
+
+/// The diaphragm is the same muscle at every level of detail: every insertion (costal-margin
+/// rim) vertex carries a fibre, the force per metre of insertion arc is the same (600 N over
+/// the margin), and no fibre stops short of the central tendon: at every muscular dome
+/// vertex a fibre passes through, the force arriving from below equals the force leaving
+/// upward, and the whole force arrives at the tendon. Printed: fibres, elements and the
+/// muscular dome vertices no fibre crosses (held only by the dome's membrane).
+#[test]
+fn diaphragm_fibres_reach_the_tendon_from_every_insertion_at_every_level_of_detail() {
+    use breathing_torso::anatomy::{CENTRAL_TENDON, VertexRole};
+    use std::collections::HashMap;
+    for lod in 0..3 {
+        let a = Anatomy::build(&Subject::default(), lod).unwrap();
+        let ab = &a.abdomen;
+        let vertex_of: HashMap<u32, usize> =
+            ab.anchor.iter().enumerate().map(|(v, &n)| (n, v)).collect();
+        let height = |n: u32| ab.sphere[vertex_of[&n]].y;
+        // Net upward force through each vertex: + for elements leaving it upward.
+        let mut up = vec![0.0; ab.len()];
+        let mut down = vec![0.0; ab.len()];
+        let mut elements = 0;
+        for m in a
+            .muscles
+            .iter()
+            .filter(|m| m.group == MuscleGroup::Diaphragm)
+        {
+            // An element's tension is the same along its via points.
+            for w in m.path.windows(2) {
+                let (lo, hi) = (w[0], w[1]);
+                assert!(
+                    height(hi) > height(lo),
+                    "level {lod}: a fibre runs down or level"
+                );
+                up[vertex_of[&lo]] += m.max_force;
+                down[vertex_of[&hi]] += m.max_force;
+            }
+            elements += 1;
+        }
+        let tendon = |v: usize| ab.sphere[v].y > CENTRAL_TENDON;
+        let rim_force: Vec<f64> = ab.rim.iter().map(|&r| up[r as usize]).collect();
+        let total: f64 = rim_force.iter().sum();
+        assert!(
+            (total - 600.0).abs() < 1e-9,
+            "level {lod}: {total} N leave the rim"
+        );
+        let arrived: f64 = (0..ab.len())
+            .filter(|&v| tendon(v))
+            .map(|v| down[v] - up[v])
+            .sum();
+        assert!(
+            (arrived - 600.0).abs() < 1e-9,
+            "level {lod}: {arrived} N reach the tendon"
+        );
+        let mut uncovered = 0;
+        let mut muscular = 0;
+        for v in 0..ab.len() {
+            if ab.roles[v] != VertexRole::Dome || tendon(v) {
+                continue;
+            }
+            muscular += 1;
+            if down[v] == 0.0 {
+                uncovered += 1;
+            }
+            assert!(
+                (down[v] - up[v]).abs() < 1e-9,
+                "level {lod}: vertex {v} takes {} N from below and passes {} N up",
+                down[v],
+                up[v]
+            );
+        }
+        // Force per metre of the costal margin at each insertion.
+        let m = ab.rim.len();
+        let at = |i: usize| a.anchors[ab.anchor[ab.rim[i % m] as usize] as usize].rest;
+        let margin: f64 = (0..m).map(|i| (at(i + 1) - at(i)).norm()).sum();
+        for (i, force) in rim_force.iter().enumerate() {
+            let arc = 0.5 * ((at(i + 1) - at(i)).norm() + (at(i + m - 1) - at(i)).norm());
+            let f = force / arc;
+            assert!(
+                (f - 600.0 / margin).abs() < 1e-6 * f,
+                "level {lod}: insertion {i} carries {f} N/m"
+            );
+        }
+        println!(
+            "level {lod}: {m} fibres, {elements} elements, margin {margin:.4} m \
+             ({:.1} N/m), {uncovered} of {muscular} muscular dome vertices on no fibre",
+            600.0 / margin
+        );
     }
 }

@@ -116,7 +116,7 @@ pub fn muscles(
     let mut out = Vec::new();
     intercostals(ribs, f, anchors, &mut out);
     scalenes(ribs, spine, f, anchors, &mut out);
-    diaphragm(abdomen, f, &mut out);
+    diaphragm(abdomen, anchors, f, &mut out);
     abdominals(ribs, sternum, abdomen, f, anchors, &mut out);
     out
 }
@@ -216,9 +216,17 @@ fn scalenes(
 /// Diaphragm (thesis 2.3): radial fibres from the costal-margin insertions up the dome to the
 /// central tendon along the dome's meridians, each a series of elements between successive
 /// dome vertices, so that their shortening lowers the dome like a piston while pulling the
-/// insertions (and the lower ribs) cranially. One fibre per insertion vertex; the elements
-/// number about the thesis's 500 at full detail.
-fn diaphragm(abdomen: &Abdomen, f: f64, out: &mut Vec<MuscleElement>) {
+/// insertions (and the lower ribs) cranially.
+///
+/// The layout is the same muscle at every level of detail: every insertion (rim) vertex
+/// carries one fibre, every fibre reaches the central tendon, and a fibre's share of
+/// [`DIAPHRAGM_FORCE`] is its insertion's share of the rim's arc length (half the distance to
+/// each neighbour on the costal margin), so the force per metre of insertion is the same at
+/// every level. A fibre that starts on the midline and cannot stay on it forks into mirror
+/// branches of half its force each. Where fibres converge and run along the same dome edge,
+/// their elements are one element of their summed force (the same spring: stiffness and
+/// force are proportional to the force at a common rest length).
+fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<MuscleElement>) {
     let group = MuscleGroup::Diaphragm;
     let n = abdomen.len();
     let mut neighbours = vec![Vec::new(); n];
@@ -233,11 +241,10 @@ fn diaphragm(abdomen: &Abdomen, f: f64, out: &mut Vec<MuscleElement>) {
     }
     let dir = &abdomen.sphere;
     let tendon = |v: usize| dir[v].y > CENTRAL_TENDON;
-    // One candidate fibre per rim vertex, indexed like the rim (ordered by azimuth from the
-    // dorsal midline); `None` where no fibre could be routed.
+    let on_midline = |v: usize| dir[v].z.abs() < 1e-9;
     // Fibres of the left side are the mirror images of the right side's (z -> -z), so the
     // layout is exactly symmetric.
-    let key = |d: &nalgebra::Vector3<f64>| {
+    let key = |d: &Vector3<f64>| {
         (
             (d.x * 1e9).round() as i64,
             (d.y * 1e9).round() as i64,
@@ -248,93 +255,142 @@ fn diaphragm(abdomen: &Abdomen, f: f64, out: &mut Vec<MuscleElement>) {
         dir.iter().enumerate().map(|(v, d)| (key(d), v)).collect();
     let mirror_of = |v: usize| {
         by_dir
-            .get(&key(&nalgebra::Vector3::new(dir[v].x, dir[v].y, -dir[v].z)))
+            .get(&key(&Vector3::new(dir[v].x, dir[v].y, -dir[v].z)))
             .copied()
     };
-    let mut paths: Vec<Option<Vec<usize>>> = Vec::new();
-    for &r in &abdomen.rim {
-        let r = r as usize;
-        if dir[r].z < -1e-12 {
-            let mirrored = mirror_of(r)
-                .and_then(|m| abdomen.rim.iter().position(|&q| q as usize == m))
-                .and_then(|i| paths.get(i).cloned().flatten())
-                .and_then(|p: Vec<usize>| {
-                    p.iter()
-                        .map(|&v| mirror_of(v))
-                        .collect::<Option<Vec<usize>>>()
-                });
-            paths.push(mirrored);
-            continue;
-        }
-        let az0 = azimuth(dir[r].x, dir[r].z, 0.0);
-        let mut path = vec![r];
-        let mut cur = r;
-        while !tendon(cur) && path.len() < 64 {
-            let next = neighbours[cur]
-                .iter()
-                .copied()
-                .filter(|&v| abdomen.roles[v] == VertexRole::Dome && dir[v].y > dir[cur].y + 1e-9)
-                .min_by(|&a, &b| {
-                    let cost = |v: usize| {
-                        let d = (azimuth(dir[v].x, dir[v].z, 0.0) - az0)
-                            .rem_euclid(std::f64::consts::TAU);
-                        d.min(std::f64::consts::TAU - d) - 2.0 * (dir[v].y - dir[cur].y)
-                    };
-                    let (ca, cb) = (cost(a), cost(b));
-                    if (ca - cb).abs() > 1e-12 {
-                        ca.total_cmp(&cb)
-                    } else {
-                        // Mirror-symmetric tie-break: lean away from the midline.
-                        let side = dir[r].z.signum();
-                        (-side * dir[a].z).total_cmp(&(-side * dir[b].z))
-                    }
-                });
-            // A fibre on the midline stays on it: stepping off it would pick one side.
-            let on_midline = |v: usize| dir[v].z.abs() < 1e-9;
-            match next {
-                Some(v) if !on_midline(cur) || on_midline(v) => {
+    // The next vertex up the dome from `cur` for a fibre starting at azimuth `az0` on side
+    // `sign` (+1 right, -1 left, 0 midline): the higher dome neighbour closest to the fibre's
+    // meridian, preferring height; ties lean away from the midline (mirror-symmetric).
+    let step = |cur: usize, az0: f64, sign: f64| -> Option<usize> {
+        neighbours[cur]
+            .iter()
+            .copied()
+            .filter(|&v| abdomen.roles[v] == VertexRole::Dome && dir[v].y > dir[cur].y + 1e-9)
+            .filter(|&v| sign * dir[v].z > -1e-9)
+            .min_by(|&a, &b| {
+                let cost = |v: usize| {
+                    let d =
+                        (azimuth(dir[v].x, dir[v].z, 0.0) - az0).rem_euclid(std::f64::consts::TAU);
+                    d.min(std::f64::consts::TAU - d) - 2.0 * (dir[v].y - dir[cur].y)
+                };
+                let (ca, cb) = (cost(a), cost(b));
+                if (ca - cb).abs() > 1e-12 {
+                    ca.total_cmp(&cb)
+                } else {
+                    (-sign * dir[a].z).total_cmp(&(-sign * dir[b].z))
+                }
+            })
+    };
+    // Walks up from `start` (already in `path`) until the tendon.
+    // (A walk that finds no way up stops there; the layout's tests check that none does.)
+    let climb = |mut path: Vec<usize>, az0: f64, sign: f64| -> Option<Vec<usize>> {
+        let mut cur = *path.last()?;
+        while !tendon(cur) {
+            match step(cur, az0, sign) {
+                Some(v) => {
                     path.push(v);
                     cur = v;
                 }
-                _ => break,
+                None => break,
             }
         }
-        paths.push((path.len() >= 2).then_some(path));
-    }
-    // Keep evenly spaced fibres so that the elements number about the thesis's count.
-    let segments: usize = paths.iter().flatten().map(|p| p.len() - 1).sum();
-    let keep_every = (segments as f64 / count(group, f) as f64).round().max(1.0) as usize;
-    // Paths follow the rim ordered by azimuth from the dorsal midline; keep them by their
-    // distance from it in either direction, so that the selection is left-right symmetric.
-    let n_paths = paths.len();
-    let paths: Vec<Vec<usize>> = paths
-        .into_iter()
-        .enumerate()
-        .filter(|(i, _)| i.min(&(n_paths - i)) % keep_every == 0)
-        .filter_map(|(_, p)| p)
+        Some(path)
+    };
+    // Insertion arc length of each rim vertex (the rim is ordered by azimuth and closed).
+    let rim: Vec<usize> = abdomen.rim.iter().map(|&r| r as usize).collect();
+    let at = |v: usize| anchors[abdomen.anchor[v] as usize].rest;
+    let m = rim.len();
+    let arc: Vec<f64> = (0..m)
+        .map(|i| {
+            let (prev, next) = (rim[(i + m - 1) % m], rim[(i + 1) % m]);
+            0.5 * ((at(rim[i]) - at(prev)).norm() + (at(next) - at(rim[i])).norm())
+        })
         .collect();
-    let force = DIAPHRAGM_FORCE / paths.len().max(1) as f64;
-    for path in paths {
-        // Side from the layout's parametric direction (a fitted cavity's midline vertices
-        // are off z = 0 by the subject's asymmetry).
-        let z = dir[path[0]].z;
-        let side = if z > 1e-9 {
-            Some(Side::Right)
-        } else if z < -1e-9 {
-            Some(Side::Left)
+    let total_arc: f64 = arc.iter().sum();
+    // Fibres as (path, side, force): right and midline ones routed, left ones mirrored.
+    let mut fibres: Vec<(Option<Vec<usize>>, Option<Side>, f64)> = Vec::new();
+    for (i, &r) in rim.iter().enumerate() {
+        let force = DIAPHRAGM_FORCE * arc[i] / total_arc;
+        let az0 = azimuth(dir[r].x, dir[r].z, 0.0);
+        if dir[r].z > 1e-9 {
+            let path = climb(vec![r], az0, 1.0);
+            fibres.push((path, Some(Side::Right), force));
+        } else if dir[r].z < -1e-9 {
+            let path = mirror_of(r)
+                .and_then(|q| climb(vec![q], azimuth(dir[q].x, dir[q].z, 0.0), 1.0))
+                .and_then(|p| p.iter().map(|&v| mirror_of(v)).collect());
+            fibres.push((path, Some(Side::Left), force));
         } else {
-            None
-        };
-        // One element per segment, in series along the fibre: each shortens by the same
-        // fraction, so the whole muscular part contracts evenly and the dome descends.
-        for w in path.windows(2) {
-            out.push(MuscleElement {
-                group,
-                path: vec![abdomen.anchor[w[0]], abdomen.anchor[w[1]]],
-                gain: 1.0,
-                side,
-                max_force: force,
-            });
+            // Midline: up the midline while the best step stays on it, then two branches.
+            let mut trunk = vec![r];
+            let mut cur = r;
+            while !tendon(cur) {
+                match step(cur, az0, 0.0).filter(|&v| on_midline(v)) {
+                    Some(v) => {
+                        trunk.push(v);
+                        cur = v;
+                    }
+                    None => break,
+                }
+            }
+            if tendon(cur) {
+                fibres.push((Some(trunk), None, force));
+                continue;
+            }
+            let right = climb(vec![cur], az0, 1.0);
+            let left = right
+                .as_ref()
+                .and_then(|p| p.iter().map(|&v| mirror_of(v)).collect::<Option<Vec<_>>>());
+            fibres.push((Some(trunk), None, force));
+            fibres.push((right, Some(Side::Right), 0.5 * force));
+            fibres.push((left, Some(Side::Left), 0.5 * force));
+        }
+    }
+    let code = |side: Option<Side>| match side {
+        Some(Side::Right) => 0u8,
+        Some(Side::Left) => 1,
+        None => 2,
+    };
+    // Where the fibres' distinct dome edges outnumber the thesis's element count for this
+    // level of detail (at full detail: about 980 edges against 500 elements), each element
+    // spans `span` successive edges, wrapping over the dome through the vertices between them
+    // as via points: every fibre and every vertex it crosses is kept, only the springs merge.
+    let edges: std::collections::HashSet<(usize, usize, u8)> = fibres
+        .iter()
+        .filter_map(|(p, side, _)| p.as_ref().map(|p| (p, code(*side))))
+        .flat_map(|(p, c)| p.windows(2).map(move |w| (w[0], w[1], c)))
+        .collect();
+    let span = ((edges.len() as f64 / count(group, f) as f64).round() as usize).max(1);
+    // Elements: one per distinct run of vertices and side, carrying the summed force of the
+    // fibres along it. Runs are cut from the tendon end, so that fibres which have converged
+    // share their elements.
+    let mut index: std::collections::HashMap<(Vec<u32>, u8), usize> = Default::default();
+    for (path, side, force) in fibres {
+        let Some(path) = path else { continue };
+        let last = path.len() - 1;
+        let mut cuts: Vec<usize> = (0..=last).rev().step_by(span).collect();
+        if cuts.last() != Some(&0) {
+            cuts.push(0);
+        }
+        for w in cuts.windows(2) {
+            let run: Vec<u32> = path[w[1]..=w[0]]
+                .iter()
+                .map(|&v| abdomen.anchor[v])
+                .collect();
+            let k = (run, code(side));
+            match index.get(&k) {
+                Some(&e) => out[e].max_force += force,
+                None => {
+                    index.insert(k.clone(), out.len());
+                    out.push(MuscleElement {
+                        group,
+                        path: k.0,
+                        gain: 1.0,
+                        side,
+                        max_force: force,
+                    });
+                }
+            }
         }
     }
 }
