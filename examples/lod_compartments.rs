@@ -3,12 +3,15 @@
 //! breath of the lung volume, the rib-cage and abdominal displaced volumes (ribs alone driven,
 //! then the default quiet drive, with its rib-cage share) and the ventral (x) swing of each
 //! row of the default 10 x 6 marker grid (mean over the row's columns), each row's rest
-//! height given against the lowest point of the costal margin.
+//! height given against the lowest point of the costal margin; and how many abdominal-wall
+//! patches the skinning groups the wall's handles into.
 //!
 //! `cargo run --release --example lod_compartments`
 
 use breathing_torso::model::Drive;
 use breathing_torso::observe::costal_margin_height;
+use breathing_torso::observe::markers::MarkerModel;
+use breathing_torso::observe::skinning::{HandleKind, InfluenceSource};
 use breathing_torso::{Config, Quantity, Torso};
 
 /// Peak-to-trough swings over the second breath: lung, rib cage, abdomen [L], and each
@@ -20,7 +23,28 @@ fn swings(lod: u32, drive: Drive) -> (f64, f64, f64, Vec<f64>, Vec<f64>, usize, 
     let cols = config.scene.grid_cols;
     let n = config.scene.grid_rows * cols;
     let mut torso = Torso::new(config).unwrap();
-    let margin = costal_margin_height(&torso.compiled().model);
+    let compiled = torso.compiled().clone();
+    let margin = costal_margin_height(&compiled.model);
+    let markers = MarkerModel::with_first_frame(
+        &compiled.anatomy,
+        &compiled.model,
+        torso.config().scene.grid_rows,
+        cols,
+        None,
+    )
+    .unwrap();
+    let patches = markers
+        .skinning()
+        .influences()
+        .iter()
+        .filter(|f| matches!(f.source, InfluenceSource::TranslationGroup(_)))
+        .count();
+    let wall = markers
+        .handles()
+        .iter()
+        .filter(|h| h.kind == HandleKind::Translation)
+        .count();
+    println!("LOD {lod}: {wall} wall handles in {patches} patches");
     let marker = |t: &mut Torso, i: usize, axis: u8| {
         t.read(Quantity::Marker {
             index: i as u16,
