@@ -7,9 +7,10 @@
 //! Volumes use the divergence theorem over closed, outward-oriented triangle surfaces:
 //! V = 1/6 sum_t a . (b x c). The trunk's surface is the rib-cage lining plus the abdominal
 //! surface without the dome; splitting that sum (taken about the thorax's rest centroid) by
-//! the horizontal plane through the lowest point of the costal margin gives the displaced
-//! compartments of optoelectronic plethysmography, rib cage above and abdomen below, which
-//! add up to the trunk's volume change.
+//! the horizontal plane through the lowest point of the costal margin (triangles the plane
+//! crosses at rest cut along it, so that the split does not depend on the mesh's
+//! resolution) gives the displaced compartments of optoelectronic plethysmography, rib cage
+//! above and abdomen below, which add up to the trunk's volume change.
 //! V_thorax = V_trunk - V_abdomen and V_lung = V_thorax - V_non-lung, the heart's, great
 //! vessels' and mediastinum's volume, constant over a breath ([`Model::non_lung_volume`]: the
 //! thesis's 0.75 lung split at rest, section 4.2), so that lung volume changes are thoracic
