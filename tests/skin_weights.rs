@@ -5,7 +5,8 @@ use breathing_torso::anatomy::skin::{MarkerGrid, Skin, SkinOptions, vertex_neigh
 use breathing_torso::anatomy::{Anatomy, Subject};
 use breathing_torso::observe::markers::anatomy_handles;
 use breathing_torso::observe::skinning::{
-    BoneHeat, Handle, HandleKind, HandlePose, InfluenceSource, Skinning, SkinningOptions,
+    BoneHeat, Handle, HandleKind, HandlePose, InfluenceSource, PATCH_RADIUS, Skinning,
+    SkinningOptions,
 };
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use std::sync::OnceLock;
@@ -57,20 +58,23 @@ fn weights_are_in_unit_interval_and_sum_to_one() {
         }
         assert!((sum - 1.0).abs() < 1e-12, "vertex {i} weights sum to {sum}");
     }
-    // Translation handles were grouped into patches of about 8.
+    // Translation handles were grouped into patches of pi PATCH_RADIUS^2 of wall each.
     let patches = s
         .skinning
         .influences()
         .iter()
         .filter(|f| matches!(f.source, InfluenceSource::TranslationGroup(_)))
         .count();
-    let translations = s
+    let wall: Vec<&Handle> = s
         .handles
         .iter()
         .filter(|h| h.kind == HandleKind::Translation)
-        .count();
+        .collect();
+    let translations = wall.len();
     assert!(translations > 100, "{translations} wall handles");
-    assert_eq!(patches, translations.div_ceil(8));
+    let area: f64 = wall.iter().map(|h| h.area).sum();
+    let patch = std::f64::consts::PI * PATCH_RADIUS * PATCH_RADIUS;
+    assert_eq!(patches, (area / patch).ceil() as usize, "wall {area} m^2");
 }
 
 #[test]

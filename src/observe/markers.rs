@@ -77,6 +77,7 @@ pub fn anatomy_handles(anatomy: &Anatomy) -> (Vec<Handle>, Vec<HandleSource>) {
             kind: HandleKind::Rigid,
             name,
             points,
+            area: 0.0,
         });
         sources.push(source);
     }
@@ -85,10 +86,20 @@ pub fn anatomy_handles(anatomy: &Anatomy) -> (Vec<Handle>, Vec<HandleSource>) {
             kind: HandleKind::Rigid,
             name,
             points,
+            area: 0.0,
         });
         sources.push(HandleSource::Clavicle);
     }
     let ab = &anatomy.abdomen;
+    // Each surface vertex stands for a third of its incident triangles' areas.
+    let mut area = vec![0.0; ab.anchor.len()];
+    for t in &ab.triangles {
+        let [a, b, c] = t.map(|i| anatomy.anchors[ab.anchor[i as usize] as usize].rest);
+        let third = (b - a).cross(&(c - a)).norm() / 6.0;
+        for &i in t {
+            area[i as usize] += third;
+        }
+    }
     for v in ab.with_role(VertexRole::Wall) {
         let anchor = anatomy.anchors[ab.anchor[v as usize] as usize];
         if let Body::Vertex(j) = anchor.body {
@@ -96,6 +107,7 @@ pub fn anatomy_handles(anatomy: &Anatomy) -> (Vec<Handle>, Vec<HandleSource>) {
                 kind: HandleKind::Translation,
                 name: format!("abdominal_wall_{v}"),
                 points: vec![anchor.rest],
+                area: area[v as usize],
             });
             sources.push(HandleSource::WallVertex(j));
         }
