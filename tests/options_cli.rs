@@ -315,3 +315,32 @@ fn render_skin_writes_into_the_working_directory() {
     assert!(!dir.join("docs").exists(), "render-skin wrote into docs/");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A reader that closes the pipe early (`torso simulate ... | head -1`) ends the run quietly:
+/// on Unix by SIGPIPE, as command-line tools end, not by a panic on the failed write (exit
+/// code 101 and "failed printing to stdout" on stderr).
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_run_without_a_panic() {
+    use std::io::{BufRead, BufReader};
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["simulate", "--duration", "30", "--out", "/dev/stdout"])
+        .args(FAST)
+        .current_dir(std::env::temp_dir())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run torso");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    // The reader is dropped here: the pipe is closed after one line.
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!first.is_empty());
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(13), "{:?} {stderr}", out.status);
+}
