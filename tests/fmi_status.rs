@@ -203,13 +203,17 @@ fn statuses_and_messages_agree_with_and_without_logging() {
             }),
             fmi2OK
         );
-        set_real(&mut fmu, "drive.ribs.amplitude", 0.12);
-        set_real(&mut fmu, "drive.diaphragm.amplitude", 0.3);
+        // forced breathing (`Drive::forced`) at a loose tolerance: the step then grows to the
+        // stability limit, where Dormand-Prince's stiffness detection (Hairer & Wanner) fires
+        // (`torso simulate --scenario forced --rtol 1e-2 --duration 8` reports it; quiet
+        // breathing, whose fast modes the dynamics no longer have, does not raise it)
+        set_real(&mut fmu, "drive.frequency", 0.2);
+        set_real(&mut fmu, "drive.ribs.amplitude", 0.28);
+        set_real(&mut fmu, "drive.diaphragm.amplitude", 0.48);
+        set_real(&mut fmu, "drive.diaphragm.phase", -0.1);
+        set_real(&mut fmu, "drive.abdominals.amplitude", 0.4);
         set_real(&mut fmu, "activation.diaphragm", 0.1);
-        // a loose tolerance: the step then grows to the stability limit, where Dormand-Prince's
-        // stiffness detection (Hairer & Wanner) fires (`torso bench work-precision`: dopri5 at
-        // rtol 1e-4 raises the flag on quiet breathing)
-        set_real(&mut fmu, "solver.rtol", 1e-4);
+        set_real(&mut fmu, "solver.rtol", 1e-2);
         let s = CString::new("recording.csv").unwrap();
         let p = [s.as_ptr()];
         let r = [vr("slp.reference")];
@@ -231,8 +235,7 @@ fn statuses_and_messages_agree_with_and_without_logging() {
             }),
             fmi2OK
         );
-        // two breaths: started at the drive's equilibrium, the first has no start-up
-        // transient and the step reaches the stability limit in the second
+        // 8 s, as the command above
         let t = breathe(&mut fmu, 448);
         assert_eq!(set_real(&mut fmu, "activation.scalenes", 2.0), fmi2Error);
         assert_eq!(

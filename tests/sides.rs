@@ -6,9 +6,8 @@
 //! cranially during inspiration, sucked up by the falling pleural pressure (the sign
 //! clinicians look for on fluoroscopy and ultrasound, the sniff test: Alexander 1966, Clin
 //! Radiol 17:79; McCool & Tzelepis 2012, N Engl J Med 366:932). The model's paralysed left
-//! dome still descends slightly (-0.50 mm against the right's -10.46 mm in a quiet breath;
-//! -10.6 mm against -29.5 mm in a forced one, before the diaphragm's current fibre layout): its passive fibres keep the tension of the rest
-//! preloads, where a paralysed hemidiaphragm is flaccid, and the central tendon drags it down.
+//! dome still descends slightly (-0.50 mm against the right's -10.46 mm in a quiet breath):
+//! its passive fibres keep the tension of the rest preloads, where a paralysed hemidiaphragm is flaccid, and the central tendon drags it down.
 
 use breathing_torso::anatomy::MuscleGroup;
 use breathing_torso::model::Drive;

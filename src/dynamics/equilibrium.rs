@@ -15,8 +15,12 @@
 //! ([`crate::solver::sparse::ShiftedSolver`]). h grows as the loads fall (switched evolution
 //! relaxation, Mulder & van Leer 1985, AIAA paper 85-1519); a step that does not lower the
 //! loads' 2-norm is retried with a fresh Jacobian, then a shorter h. Starting short from the
-//! rest pose, which is stable, and only ever lowering the loads, the iteration follows the
-//! damped motion into the stable equilibrium the motion itself would reach.
+//! rest pose, which is stable, and only ever lowering the loads, the first iterations follow the
+//! damped motion; the longer steps that follow could in principle reach another equilibrium
+//! than the motion would (a saddle, or another stable state where several exist), so every
+//! Newton solution is checked: disturbed and followed in time (a saddle whose unstable mode
+//! grows slower than about 4.6 /s passes the check), and a check that cannot be run sends the
+//! solve back to the relaxation from the start.
 //!
 //! If the iterations stall short of the tolerance, the damped relaxation continues from where
 //! they got to: the equations of motion themselves, activations held, integrated until the
@@ -62,6 +66,8 @@ pub struct Equilibrium {
     pub residual: f64,
     /// Largest force on any anchor at `state` [N]: the scale of `residual`.
     pub force_scale: f64,
+    /// The relative imbalance the solve was asked for.
+    pub tolerance: f64,
     /// Whether `residual <= tolerance * force_scale` was reached, by the Newton iterations or
     /// by the relaxation within [`MAX_RELAXATION`].
     pub converged: bool,
@@ -375,7 +381,9 @@ const GROWTH: f64 = 10.0;
 /// activations held, followed for [`STABILITY_CHECK`]; it is stable if the largest
 /// deviation from `y` at the end is within [`GROWTH`] disturbances. If not, `y` is set to the
 /// state reached (velocities zero), from which the relaxation continues. Returns the verdict
-/// and the right-hand-side evaluations. A Newton solve could land on a saddle, where the
+/// (None when the check could not be run: the integrator refused its options or failed, or
+/// the motion left the finite numbers; `y` is then unchanged) and the right-hand-side
+/// evaluations. A Newton solve could land on a saddle, where the
 /// loads balance too; the relaxation never does.
 fn stable(
     model: &Model,
@@ -383,10 +391,10 @@ fn stable(
     act: &Activations,
     y: &mut [f64],
     options: Options,
-) -> (bool, u64) {
+) -> (Option<bool>, u64) {
     let l = Layout::new(model);
     let Ok(mut integrator) = Integrator::new(Method::Dopri5, options, y.len()) else {
-        return (true, 0);
+        return (None, 0);
     };
     let disturbed: Vec<usize> = (l.theta..l.sternum_q)
         .chain(l.vertex_x..l.theta_dot)
@@ -410,18 +418,18 @@ fn stable(
         || z.iter().any(|v| !v.is_finite());
     let evaluations = integrator.stats().rhs_evaluations;
     if failed {
-        return (true, evaluations);
+        return (None, evaluations);
     }
     let deviation = disturbed
         .iter()
         .map(|&i| (z[i] - y[i]).abs())
         .fold(0.0, f64::max);
     if deviation <= GROWTH * DISTURBANCE {
-        return (true, evaluations);
+        return (Some(true), evaluations);
     }
     z[l.theta_dot..].fill(0.0);
     y.copy_from_slice(&z);
-    (false, evaluations)
+    (Some(false), evaluations)
 }
 
 /// The static equilibrium under `act`, from the positions of `start` (its velocities are
@@ -455,11 +463,19 @@ pub fn solve(
         (residual, scale) = imbalance(model, &mut data, act, &y);
     }
     if iterations > 0 && settled(residual, scale) {
-        let (stable, evals) = stable(model, &mut data, act, &mut y, options);
+        let (verdict, evals) = stable(model, &mut data, act, &mut y, options);
         evaluations += evals;
-        if !stable {
+        match verdict {
+            Some(true) => {}
             // y is now where the motion from the perturbed state got to
-            (residual, scale) = imbalance(model, &mut data, act, &y);
+            Some(false) => (residual, scale) = imbalance(model, &mut data, act, &y),
+            // Unverified: the Newton solution is not trusted; the relaxation, which finds
+            // only stable equilibria, starts again from the start state.
+            None => {
+                y.copy_from_slice(start);
+                y[l.theta_dot..].fill(0.0);
+                (residual, scale) = imbalance(model, &mut data, act, &y);
+            }
         }
     }
     if !settled(residual, scale) {
@@ -477,6 +493,7 @@ pub fn solve(
         state: y,
         residual,
         force_scale: scale,
+        tolerance,
         converged: settled(residual, scale),
         newton_iterations: iterations,
         jacobian_evaluations: jacobians,
@@ -599,12 +616,12 @@ mod tests {
         let mut data = Data::new(&model);
         let mut y = eq.state.clone();
         let (verdict, evaluations) = stable(&model, &mut data, &act, &mut y, options());
-        assert!(verdict);
+        assert_eq!(verdict, Some(true));
         assert!(evaluations > 0);
         assert_eq!(y, eq.state);
         let mut y = rest.clone();
         let (verdict, _) = stable(&model, &mut data, &act, &mut y, options());
-        assert!(!verdict);
+        assert_eq!(verdict, Some(false));
         assert_ne!(y, rest);
     }
 

@@ -212,7 +212,19 @@ impl Recording {
                             }
                         }
                     }
-                    _ => provenance.push((key.trim().to_string(), value.trim().to_string())),
+                    _ => {
+                        // what `validate` refuses and the writer could not write back
+                        let (key, value) = (key.trim(), value.trim());
+                        if key.is_empty() || format!("{key}{value}").contains(['\r', '\t']) {
+                            return Err(parse_err(
+                                name,
+                                no,
+                                1,
+                                "comment `# key: value` with an empty key, a tab or a carriage return inside the line",
+                            ));
+                        }
+                        provenance.push((key.to_string(), value.to_string()))
+                    }
                 }
             }
         };

@@ -103,8 +103,10 @@ impl Compiled {
 
     /// The static equilibrium under `act` ([`dynamics::equilibrium::solve`] from the rest
     /// state, relative imbalance at most `tolerance`), solved once and cached for later calls
-    /// with the same activations; a solve that did not converge (its `converged` flag
-    /// false) is cached as it ended, since running it again gives the same state.
+    /// with the same activations and a tolerance the cached state meets; a solve that did not
+    /// converge (its `converged` flag false) is cached as it ended and reused for the same
+    /// tolerance, since running it again gives the same state. `converged` is judged against
+    /// this call's `tolerance`.
     pub fn equilibrium(
         &self,
         act: &Activations,
@@ -117,13 +119,23 @@ impl Compiled {
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner())
         };
-        // A solve that did not settle is deterministic too: the same activations give
-        // the same state, so it is reused rather than run again.
-        if let Some((_, e)) = lock()
-            .iter()
-            .find(|(a, e)| a == act && (e.relative_residual() <= tolerance || !e.converged))
-        {
-            return e.clone();
+        // A solve that did not settle is deterministic too: the same activations and
+        // tolerance give the same state, so it is reused rather than run again.
+        if let Some((_, e)) = lock().iter().find(|(a, e)| {
+            a == act
+                && (e.relative_residual() <= tolerance
+                    || (!e.converged && e.tolerance == tolerance))
+        }) {
+            // judged against this caller's tolerance, which may be looser than the solve's
+            let converged = e.relative_residual() <= tolerance;
+            if converged == e.converged {
+                return e.clone();
+            }
+            return Arc::new(Equilibrium {
+                converged,
+                tolerance,
+                ..(**e).clone()
+            });
         }
         let start = dynamics::rest_state(&self.model);
         let solved = Arc::new(dynamics::equilibrium::solve(
