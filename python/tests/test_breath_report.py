@@ -291,7 +291,8 @@ def test_fit_slp_fits_a_c3d_recording_to_the_native_optimum_with_progress(tmp_pa
     assert "(100 %)" in lines[-1] and lines[-1].endswith("done"), lines[-1]
     a = json.loads(native.read_text())
     b = json.loads(out.read_text())
-    # The same breaths read the same way; the recording's breaths are 0.42 +- the smoothing.
+    # The same breaths read the same way; against the drive's 0.42, within the SLP limit of
+    # agreement for Ti (+-0.22 s, Motamedi-Fakhr et al. 2017) over the 4 s quiet breath: 0.055.
     assert abs(b["drive.inspiratory_fraction"] - a["drive.inspiratory_fraction"]) < 1e-6, (a, b)
     assert abs(a["drive.inspiratory_fraction"] - 0.42) < 0.05, a["drive.inspiratory_fraction"]
     assert b["evaluations"] <= 120

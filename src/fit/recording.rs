@@ -76,6 +76,15 @@ pub struct Recording {
     pub provenance: Vec<(String, String)>,
 }
 
+/// Whether a provenance entry can be written as one `# key: value` line and read back: a
+/// non-empty key without `:`, tabs or line breaks, a value on one line without tabs. The
+/// reader refuses what `Recording::validate` would.
+fn provenance_entry_is_valid(key: &str, value: &str) -> bool {
+    !key.trim().is_empty()
+        && !key.contains([':', '\n', '\r', '\t'])
+        && !value.contains(['\n', '\r', '\t'])
+}
+
 fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
     Error::Parse {
         path: path.to_string(),
@@ -213,9 +222,8 @@ impl Recording {
                         }
                     }
                     _ => {
-                        // what `validate` refuses and the writer could not write back
                         let (key, value) = (key.trim(), value.trim());
-                        if key.is_empty() || format!("{key}{value}").contains(['\r', '\t']) {
+                        if !provenance_entry_is_valid(key, value) {
                             return Err(parse_err(
                                 name,
                                 no,
@@ -449,8 +457,7 @@ impl Recording {
             }
         }
         for (k, v) in &self.provenance {
-            let bad_key = k.trim().is_empty() || k.contains([':', '\n', '\r', '\t']);
-            if bad_key || v.contains(['\n', '\r', '\t']) {
+            if !provenance_entry_is_valid(k, v) {
                 return Err(Error::invalid(
                     "recording provenance",
                     format!("{k:?}: {v:?}"),
