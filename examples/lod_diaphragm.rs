@@ -1,15 +1,25 @@
 //! Where the coarse diaphragm loses its breath: for the default upright subject at levels of
-//! detail 0, 1 and 2, the diaphragm's geometry (insertion length, force-weighted fibre length,
-//! the dome's projected area and cap volume) and the static equilibrium under a constant
-//! diaphragm activation alone (the quiet drive's amplitude): the thoracic volume gained, the
-//! dome's piston descent, the fibres' mean shortening against the muscle law's target
-//! (beta a), and the volume per unit of fibre shortening. Then the same equilibria with one
-//! passive stiffness at a time removed or halved (dome membrane, central tendon, dome support,
-//! abdominal wall, abdominal membrane), to see which part of the load differs between levels.
+//! detail 0, 1 and 2, the diaphragm's geometry (insertion length, force-weighted fibre length
+//! over the chords and over the smooth dome's arcs, the dome's projected and total areas, the
+//! area its horizontal support acts on, the dome membrane's sum of squared edge lengths per
+//! area) and the static equilibrium under a constant diaphragm activation alone (the quiet
+//! drive's amplitude, or the first argument): the thoracic volume gained, split into the rib
+//! cage's displaced volume and the rest (the dome's), the dome's piston descent, the fibres'
+//! mean strain against the muscle law's target (beta a), the volume per unit of strain, the
+//! abdominal pressure, and the fibres' pull on the ribs (outward from the cavity's axis and
+//! cranial, along each insertion's first segment). Then the same equilibria with one thing
+//! changed at a time: the fibres as long as their chords (the layout before the smooth arcs),
+//! the insertions moved off the ribs onto fixed anchors (the ribs no longer feel the fibres),
+//! each fibre leaving its insertion straight up to a rib-carried point below its first dome
+//! vertex (the smooth dome's vertical tangent at the margin; its rigid horizontal leg counts
+//! in the rest length, so level 0's fibres contract somewhat more than their tissue), and one
+//! passive stiffness removed, halved or doubled at a time (dome membrane, central tendon, dome
+//! support, abdominal wall, abdominal membrane, bulk modulus). The second argument keeps only
+//! the variants whose name starts with it.
 //!
-//! `cargo run --release --example lod_diaphragm [ACTIVATION]`
+//! `cargo run --release --example lod_diaphragm [ACTIVATION [VARIANT]]`
 
-use breathing_torso::anatomy::{Anatomy, MuscleGroup, VertexRole};
+use breathing_torso::anatomy::{Anatomy, Anchor, Body, MuscleGroup, VertexRole};
 use breathing_torso::dynamics::kinematics::positions_and_velocities;
 use breathing_torso::dynamics::{
     Activations, Data, Layout, Model, Params, path_length, rest_state,
@@ -24,6 +34,9 @@ struct Figures {
     descent: f64,
     strain: f64,
     abdominal_pressure: f64,
+    rib_cage: f64,
+    dome: f64,
+    insertion_pull: (f64, f64),
 }
 
 fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
@@ -52,9 +65,12 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
     let rest = observe(&model, &compartments, &data.pos, &data.vel, 0.0);
     positions_and_velocities(&model, &mut data, &l, &eq.state);
     let o = observe(&model, &compartments, &data.pos, &data.vel, 0.0);
-    // force-weighted mean strain of the diaphragm's elements
+    // force-weighted mean strain of the diaphragm's elements, and the pull of the fibres on
+    // the insertions: outward (from the cavity's axis) and cranial components [N]
     let el = &model.elements;
     let (mut num, mut den) = (0.0, 0.0);
+    let (mut outward, mut cranial) = (0.0, 0.0);
+    let axis_x = anatomy.abdomen.axis_x;
     for e in 0..model.muscle_count {
         if el.group[e] != MuscleGroup::Diaphragm.index() as u8 {
             continue;
@@ -66,12 +82,32 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
         let f = el.stiffness[e] * beta * tissue;
         num += f * (len - el.rest_length[e]);
         den += f * tissue;
+        let tension = el.stiffness[e] * (len - el.rest_length[e] * (1.0 - a * el.gain[e])).max(0.0);
+        for (end, next) in [
+            (path[0], path[1]),
+            (path[path.len() - 1], path[path.len() - 2]),
+        ] {
+            if !matches!(
+                anatomy.anchors[end as usize].body,
+                breathing_torso::anatomy::Body::Rib(_) | breathing_torso::anatomy::Body::Sternum
+            ) {
+                continue;
+            }
+            let p = data.pos[end as usize];
+            let u = (data.pos[next as usize] - p).normalize();
+            let radial = nalgebra::Vector3::new(p.x - axis_x, 0.0, p.z).normalize();
+            outward += tension * u.dot(&radial);
+            cranial += tension * u.y;
+        }
     }
     Figures {
         volume: o.thorax - rest.thorax,
         descent: -(o.diaphragm_displacement - rest.diaphragm_displacement),
         strain: num / den,
         abdominal_pressure: o.abdominal_pressure - rest.abdominal_pressure,
+        rib_cage: o.rib_cage_displaced - rest.rib_cage_displaced,
+        dome: o.thorax - rest.thorax - (o.rib_cage_displaced - rest.rib_cage_displaced),
+        insertion_pull: (outward, cranial),
     }
 }
 
@@ -188,9 +224,11 @@ fn main() {
     let base = Params::for_posture(config.subject.posture);
     type Variant = (&'static str, fn(&mut Params));
     let only = std::env::args().nth(2);
-    let variants: [Variant; 10] = [
+    let variants: [Variant; 12] = [
         ("as is", |_| {}),
         ("fibre chords", |_| {}),
+        ("insertions fixed", |_| {}),
+        ("apposed insertions", |_| {}),
         ("dome membrane 0", |p| p.dome_membrane_stiffness = 0.0),
         ("tendon / 2", |p| p.tendon_stiffness *= 0.5),
         ("dome support 0", |p| p.dome_support = 0.0),
@@ -208,10 +246,67 @@ fn main() {
         geometry(an, &base);
     }
     println!("diaphragm activation {a} alone, static equilibrium; level 0 / 1 / 2");
+    // The fibres' insertions moved off the ribs onto fixed anchors at the same places: the
+    // ribs no longer feel the fibres' pull (the abdominal pressure on the rim still acts).
+    let grounded: Vec<Anatomy> = anatomies
+        .iter()
+        .map(|an| {
+            let mut an = an.clone();
+            for m in 0..an.muscles.len() {
+                if an.muscles[m].group != MuscleGroup::Diaphragm {
+                    continue;
+                }
+                for k in 0..an.muscles[m].path.len() {
+                    let n = an.muscles[m].path[k] as usize;
+                    if matches!(an.anchors[n].body, Body::Rib(_) | Body::Sternum) {
+                        an.anchors.push(Anchor {
+                            body: Body::Ground,
+                            rest: an.anchors[n].rest,
+                        });
+                        an.muscles[m].path[k] = (an.anchors.len() - 1) as u32;
+                    }
+                }
+            }
+            an
+        })
+        .collect();
+    // Each fibre leaves its insertion straight up, along the rib cage's wall (the smooth
+    // dome's tangent at the margin), to a point carried by the rib at the insertion's height
+    // below the first dome vertex, then to that vertex.
+    let apposed: Vec<Anatomy> = anatomies
+        .iter()
+        .map(|an| {
+            let mut an = an.clone();
+            for m in 0..an.muscles.len() {
+                if an.muscles[m].group != MuscleGroup::Diaphragm {
+                    continue;
+                }
+                let path = an.muscles[m].path.clone();
+                let r = path[0] as usize;
+                let body = an.anchors[r].body;
+                if !matches!(body, Body::Rib(_) | Body::Sternum) {
+                    continue;
+                }
+                let v = an.anchors[path[1] as usize].rest;
+                let rest = nalgebra::Point3::new(v.x, an.anchors[r].rest.y, v.z);
+                an.anchors.push(Anchor { body, rest });
+                let z = (an.anchors.len() - 1) as u32;
+                an.muscles[m].path.insert(1, z);
+            }
+            an
+        })
+        .collect();
     for (name, change) in variants {
         if only.as_deref().is_some_and(|o| !name.starts_with(o)) {
             continue;
         }
+        let anatomies = if name == "insertions fixed" {
+            &grounded
+        } else if name == "apposed insertions" {
+            &apposed
+        } else {
+            &anatomies
+        };
         let mut p = base.clone();
         change(&mut p);
         let f: Vec<Figures> = anatomies
@@ -240,6 +335,23 @@ fn main() {
             f[0].abdominal_pressure,
             f[1].abdominal_pressure,
             f[2].abdominal_pressure,
+        );
+        println!(
+            "{:>24}  rib cage displaced {:.4} / {:.4} / {:.4} L, the rest (dome) {:.4} / {:.4} / {:.4} L, \
+             fibres' pull on the ribs outward {:.1} / {:.1} / {:.1} N, cranial {:.1} / {:.1} / {:.1} N",
+            "",
+            1e3 * f[0].rib_cage,
+            1e3 * f[1].rib_cage,
+            1e3 * f[2].rib_cage,
+            1e3 * f[0].dome,
+            1e3 * f[1].dome,
+            1e3 * f[2].dome,
+            f[0].insertion_pull.0,
+            f[1].insertion_pull.0,
+            f[2].insertion_pull.0,
+            f[0].insertion_pull.1,
+            f[1].insertion_pull.1,
+            f[2].insertion_pull.1,
         );
     }
 }
