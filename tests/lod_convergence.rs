@@ -4,8 +4,10 @@
 //! that the levels' quiet tidal volumes agree within 5 %.
 //!
 //! Asserted: levels 1 and 2 (the default and full detail). Printed, not asserted: level 0,
-//! which falls short of that target (its quiet tidal volume is 7.5 % below level 2's,
-//! its diaphragm alone about 14 %: its dome has 28 muscular vertices and 52 fibre elements).
+//! which falls short of that target (its quiet tidal volume is 6.2 % below level 2's, its
+//! diaphragm alone 11.9 %: its dome has 28 muscular vertices and 52 fibre elements, whose
+//! chords from the insertions pull the lower ribs inward, `cargo run --release --example
+//! lod_diaphragm`).
 
 use breathing_torso::Torso;
 use breathing_torso::model::run::{BreathSummary, run, summarise};
@@ -29,6 +31,7 @@ fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
     let mut diaphragm_only = Drive::quiet();
     diaphragm_only.ribs.amplitude = 0.0;
     let mut vt = Vec::new();
+    let mut alone = Vec::new();
     for lod in 0..3 {
         let s = quiet(lod, Drive::quiet());
         let d = quiet(lod, diaphragm_only);
@@ -41,11 +44,13 @@ fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
             d.tidal_volume
         );
         vt.push(s.tidal_volume);
+        alone.push(d.tidal_volume);
     }
     for lod in [0, 1] {
         println!(
-            "level {lod} against level 2: {:+.1} %",
-            100.0 * (vt[lod] / vt[2] - 1.0)
+            "level {lod} against level 2: {:+.1} %, diaphragm alone {:+.1} %",
+            100.0 * (vt[lod] / vt[2] - 1.0),
+            100.0 * (alone[lod] / alone[2] - 1.0)
         );
     }
     let gap = (vt[1] / vt[2] - 1.0).abs();

@@ -48,6 +48,10 @@ const DOME_FULLNESS: f64 = 0.7;
 /// Height of the dome/wall boundary on the unit sphere (u_y above it: dome).
 const DOME_CUT: f64 = 0.2;
 
+/// Chords by which the smooth dome's arc over one edge is measured ([`Abdomen::dome_arc`]);
+/// the arc of a level-0 edge (the longest) changes by under 1e-4 of itself from 32 to 64.
+const ARC_SAMPLES: usize = 32;
+
 /// Subdivisions of the icosphere on which the smooth dome's cap volume is measured (10,242
 /// vertices, four times the finest level of detail).
 const REFERENCE_SUBDIVISIONS: u32 = 5;
@@ -114,6 +118,23 @@ impl DomeShape<'_> {
                 Point3::origin()
             }
         }));
+    }
+
+    /// Length [m] of the smooth dome's curve between the points of unit-sphere directions
+    /// `a` and `b` (rim points given by the direction of their azimuth at the rim's height,
+    /// [`DOME_CUT`]): the image of the great-circle arc between them, measured by
+    /// [`ARC_SAMPLES`] chords. It is the length of the tissue a dome edge stands for; the edge
+    /// itself is its chord, shorter on a coarse dome.
+    fn arc(&self, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+        let mut prev = self.point(a);
+        let mut length = 0.0;
+        for k in 1..=ARC_SAMPLES {
+            let f = k as f64 / ARC_SAMPLES as f64;
+            let p = self.point(&(a * (1.0 - f) + b * f).normalize());
+            length += (p - prev).norm();
+            prev = p;
+        }
+        length
     }
 
     /// Volume [m^3] between the faceted dome and the rim loop: the cap the dome takes from
@@ -193,6 +214,12 @@ pub struct Abdomen {
     /// that much smaller than the smooth surfaces'; the observed volumes are corrected by it,
     /// so that the levels of detail agree on the split of the trunk (dynamics use the mesh).
     pub dome_faceting_volume: f64,
+    /// Length [m] of the smooth dome's curve over each edge of the dome and its rim (key: the
+    /// edge's surface vertices, smaller first), the length of the tissue the edge's chord
+    /// stands for; empty for a subject's own cavity (no smooth surface: its edges are the
+    /// tissue). A coarse dome's chords cut across the dome's curvature: at level of detail 0
+    /// they are 6 % shorter than the arcs, at level 2 under 1 %.
+    pub dome_arc: HashMap<(u32, u32), f64>,
 }
 
 impl Abdomen {
@@ -418,6 +445,28 @@ pub fn build(
     };
     let dome_faceting_volume = shape.faceting_volume(&sphere, &dirs)?;
     let in_dome: Vec<bool> = (0..n).map(|v| dirs[v].y > DOME_CUT).collect();
+    // The smooth dome's arc over each edge between dome and rim vertices; a rim vertex sits on
+    // the margin, the smooth dome's curve at the rim's height, in its azimuth's direction.
+    let on_smooth = |v: usize| {
+        let u = dirs[v];
+        if rim_set.contains(&(v as u32)) {
+            let r = u.x.hypot(u.z).max(1e-12);
+            let h = (1.0 - DOME_CUT * DOME_CUT).sqrt() / r;
+            Vector3::new(u.x * h, DOME_CUT, u.z * h)
+        } else {
+            u
+        }
+    };
+    let mut dome_arc = HashMap::new();
+    for t in &sphere.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            if in_dome[a as usize] && in_dome[b as usize] && !dome_arc.contains_key(&(a, b)) {
+                let arc = shape.arc(&on_smooth(a as usize), &on_smooth(b as usize));
+                dome_arc.insert((a, b), arc);
+            }
+        }
+    }
 
     let mut roles = Vec::with_capacity(n);
     let mut positions = Vec::with_capacity(n);
@@ -525,5 +574,6 @@ pub fn build(
         floor_y,
         apex_y,
         dome_faceting_volume,
+        dome_arc,
     })
 }

@@ -25,6 +25,11 @@ pub struct MuscleElement {
     pub side: Option<Side>,
     /// Force at full activation, isometric at the rest length [N].
     pub max_force: f64,
+    /// Length of the tissue the element stands for over its path's length at rest: the
+    /// smooth dome's arc over the faceted dome's chords for the diaphragm
+    /// ([`Abdomen::dome_arc`]), 1 elsewhere. A fibre's contraction (beta a of its length) and
+    /// its stiffness (F / (beta l)) are the tissue's, whatever the chords that carry it.
+    pub length_ratio: f64,
 }
 
 /// A ball joint between two bodies, as a stiff zero-length spring between two anchors that
@@ -173,6 +178,7 @@ fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<M
                         gain,
                         side: Some(side),
                         max_force: force,
+                        length_ratio: 1.0,
                     });
                 }
             }
@@ -208,6 +214,7 @@ fn scalenes(
                 gain: 1.0,
                 side: Some(side),
                 max_force: SCALENE_FORCE_PER_SIDE / per_side as f64,
+                length_ratio: 1.0,
             });
         }
     }
@@ -361,6 +368,20 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
         .flat_map(|(p, c)| p.windows(2).map(move |w| (w[0], w[1], c)))
         .collect();
     let span = ((edges.len() as f64 / count(group, f) as f64).round() as usize).max(1);
+    // The smooth dome's arc over a run of vertices against its chords (1 without a smooth
+    // dome, or if an edge of the run has no arc).
+    let smooth_ratio = |run: &[usize]| {
+        let (mut arc, mut chord) = (0.0, 0.0);
+        for w in run.windows(2) {
+            let key = (w[0].min(w[1]) as u32, w[0].max(w[1]) as u32);
+            match abdomen.dome_arc.get(&key) {
+                Some(a) => arc += a,
+                None => return 1.0,
+            }
+            chord += (at(w[1]) - at(w[0])).norm();
+        }
+        if chord > 0.0 { arc / chord } else { 1.0 }
+    };
     // Elements: one per distinct run of vertices and side, carrying the summed force of the
     // fibres along it. Runs are cut from the tendon end, so that fibres which have converged
     // share their elements.
@@ -377,6 +398,7 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
                 .iter()
                 .map(|&v| abdomen.anchor[v])
                 .collect();
+            let length_ratio = smooth_ratio(&path[w[1]..=w[0]]);
             let k = (run, code(side));
             match index.get(&k) {
                 Some(&e) => out[e].max_force += force,
@@ -388,6 +410,7 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
                         gain: 1.0,
                         side,
                         max_force: force,
+                        length_ratio,
                     });
                 }
             }
@@ -611,6 +634,7 @@ fn abdominals(
                 gain: 1.0,
                 side: Some(side),
                 max_force: per_chain,
+                length_ratio: 1.0,
             });
         }
     }

@@ -490,6 +490,7 @@ pub(super) fn fit_cavity(
         .fold(f64::NEG_INFINITY, f64::max);
     // the subject's own cavity is the reference: no smooth dome to correct toward
     abdomen.dome_faceting_volume = 0.0;
+    abdomen.dome_arc.clear();
     let fitted_mesh = TriMesh {
         vertices: fitted,
         triangles: abdomen.triangles.clone(),

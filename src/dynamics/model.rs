@@ -360,7 +360,12 @@ impl Model {
         for m in &anatomy.muscles {
             let l0 = path_length(&m.path).max(1e-4);
             let beta = params.beta_for(m.group);
-            let k = m.max_force / (beta * l0);
+            // The tissue's length l0 s (s: the element's length ratio, the smooth dome's arc
+            // over the chords for the diaphragm) sets its contraction beta a l0 s and its
+            // stiffness F_max / (beta l0 s); the path's chords l0 carry them, so a full
+            // isometric contraction still gives F_max.
+            let s = m.length_ratio;
+            let k = m.max_force / (beta * l0 * s);
             let side = match m.side {
                 Some(Side::Right) => 0,
                 Some(Side::Left) => 1,
@@ -374,7 +379,7 @@ impl Model {
                 c,
                 m.group.index() as u8,
                 side,
-                beta * m.gain,
+                beta * m.gain * s,
             );
         }
         let muscle_count = elements.len();
