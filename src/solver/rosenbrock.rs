@@ -510,16 +510,25 @@ impl Rosenbrock {
             }
         }
         let (atol, rtol) = (self.options.atol, self.options.rtol);
-        let mut sum = 0.0;
         for l in 0..n {
             let (mut y1, mut e) = (0.0, 0.0);
             for j in 0..4 {
                 y1 += k.m[j] * w.u[j * n + l];
                 e += k.e[j] * w.u[j * n + l];
             }
-            let y1 = y[l] + y1;
-            w.ynew[l] = y1;
-            let sc = (atol + rtol * y[l].abs().max(y1.abs())).max(f64::MIN_POSITIVE);
+            w.ynew[l] = y[l] + y1;
+            w.ytmp[l] = e;
+        }
+        // the problem's error weights, as the explicit pairs use them
+        let weights = ode.error_weights();
+        let mut sum = 0.0;
+        for l in 0..n {
+            let (r, wt) = match &weights {
+                Some(ew) => (ew.reference[l] as usize, ew.weight[l]),
+                None => (l, 1.0),
+            };
+            let sc = (wt * atol + rtol * y[r].abs().max(w.ynew[r].abs())).max(f64::MIN_POSITIVE);
+            let e = w.ytmp[l];
             sum += (e / sc) * (e / sc);
         }
         let err = (sum / n as f64).sqrt();
