@@ -1,12 +1,15 @@
 //! How well the stiff method's Jacobian approximates the true one at a state of quiet
-//! breathing: central differences of the full right-hand side (scaled mass matrix, volume
-//! inertances included) against [`TorsoJacobian`] (sparse part plus rank-two pressure part),
-//! per block of rows and columns (positions, velocities), as the relative Frobenius error.
+//! breathing: central differences of the full right-hand side (the scaled mass matrix whole,
+//! volume inertances included) against [`TorsoJacobian::full`] (sparse part, rank-two
+//! pressure part and the mass matrix's 32 rank-one terms, as the stiff method uses it) and
+//! against [`TorsoJacobian::new`] (the mass matrix block by block, as the equilibrium's Newton
+//! uses it), per block of rows and columns (positions, velocities), as the relative Frobenius
+//! error. The activations are fixed (0.05 + 0.02 g for group g), not the drive's.
 //!
 //! `cargo run --release --example stiff_jacobian -- LOD TIME [DIR]`: the default subject at
-//! level of detail `LOD`, quiet drive, after `TIME` seconds; with `DIR`, also writes both
-//! dense matrices (`true.f64`, `ours.f64`, `local.f64`, row-major, f64 little-endian) and the state's
-//! layout for an eigenvalue analysis.
+//! level of detail `LOD`, quiet drive, state after `TIME` seconds; with `DIR`, also writes the
+//! dense matrices (`true.f64`, `ours.f64`, `local.f64`, row-major, f64 little-endian) and the
+//! state's layout (`layout.txt`) for an eigenvalue analysis.
 
 use breathing_torso::Torso;
 use breathing_torso::dynamics::jacobian::TorsoJacobian;
