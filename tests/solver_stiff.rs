@@ -336,3 +336,128 @@ fn method_is_named_and_coded() {
     assert_eq!(Method::Rosenbrock.code(), 3);
     assert!(Method::Rosenbrock.tableau().is_none());
 }
+
+/// A damped oscillator x' = v, v' = -w0^2 x - 2 zeta w0 v (w0 = 2 pi 2 Hz, zeta = 0.3),
+/// optionally giving its velocity the error weight `weight` ([`Ode::error_weights`]), or
+/// integrated in the rescaled velocity u = v / `scale` without weights.
+struct Oscillator {
+    weight: Option<[f64; 2]>,
+    scale: f64,
+}
+const REFERENCE: [u32; 2] = [0, 1];
+const W0: f64 = 2.0 * std::f64::consts::PI * 2.0;
+const ZETA: f64 = 0.3;
+impl Ode for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], d: &mut [f64]) {
+        let v = self.scale * y[1];
+        d[0] = v;
+        d[1] = (-W0 * W0 * y[0] - 2.0 * ZETA * W0 * v) / self.scale;
+    }
+    fn error_weights(&self) -> Option<breathing_torso::solver::ErrorWeights<'_>> {
+        self.weight
+            .as_ref()
+            .map(|w| breathing_torso::solver::ErrorWeights {
+                reference: &REFERENCE,
+                weight: w,
+            })
+    }
+}
+
+/// The stiff method reads the problem's error weights as the explicit pairs do: a weight w
+/// on the velocity's absolute tolerance is the same norm as integrating u = v / w with no
+/// weights (scale atol_v = w atol, |e_v| / scale = |e_u| / (atol + rtol |u|) when the
+/// relative part refers to the component itself and atol dominates), so the two runs take
+/// the same steps; without the weight (the stiff method's old norm) it takes more.
+#[test]
+fn error_weights_are_those_of_the_explicit_pairs() {
+    // rtol 0: the norm is purely absolute, so the equivalence is exact
+    let o = Options {
+        rtol: 0.0,
+        atol: 1e-7,
+        ..Options::default()
+    };
+    let w = 50.0;
+    let run = |ode: &mut Oscillator, y0: [f64; 2]| {
+        let mut s = Integrator::new(Method::Rosenbrock, o, 2).unwrap();
+        let (mut t, mut y) = (0.0, y0);
+        s.integrate(ode, &mut t, &mut y, 3.0).unwrap();
+        (s.stats().steps + s.stats().rejected, y)
+    };
+    let (weighted, yw) = run(
+        &mut Oscillator {
+            weight: Some([1.0, w]),
+            scale: 1.0,
+        },
+        [0.01, 0.0],
+    );
+    let (rescaled, yr) = run(
+        &mut Oscillator {
+            weight: None,
+            scale: w,
+        },
+        [0.01, 0.0],
+    );
+    let (plain, _) = run(
+        &mut Oscillator {
+            weight: None,
+            scale: 1.0,
+        },
+        [0.01, 0.0],
+    );
+    println!("attempts: weighted {weighted}, rescaled {rescaled}, unweighted {plain}");
+    assert!(weighted.abs_diff(rescaled) <= 1, "{weighted} vs {rescaled}");
+    assert!((yw[0] - yr[0]).abs() < 1e-9, "{} vs {}", yw[0], yr[0]);
+    // the unweighted norm holds the velocity to atol: more steps (not w^(1/3) = 3.7 times
+    // more, as the position's error bounds the steps where the velocity passes zero)
+    assert!(
+        plain as f64 > 1.1 * weighted as f64,
+        "{plain} vs {weighted}"
+    );
+}
+
+/// Communication points cost the stiff method no step of its own: with
+/// [`Integrator::integrate_ahead`] at 56 Hz it takes as many steps as one call to the end
+/// (and fewer than a run stopping at every point), and its Hermite states at the points stay
+/// within reach of the exact solution (10 rtol of the amplitude).
+#[test]
+fn integrate_ahead_does_not_clip_the_steps() {
+    let o = opts(1e-3, 1e-6);
+    let mut ode = Oscillator {
+        weight: None,
+        scale: 1.0,
+    };
+    let mut one = Integrator::new(Method::Rosenbrock, o, 2).unwrap();
+    let (mut t, mut y) = (0.0, [0.01, 0.0]);
+    one.integrate(&mut ode, &mut t, &mut y, 3.0).unwrap();
+    let mut ahead = Integrator::new(Method::Rosenbrock, o, 2).unwrap();
+    let mut clipped = Integrator::new(Method::Rosenbrock, o, 2).unwrap();
+    let (mut t, mut y) = (0.0, [0.01, 0.0]);
+    let (mut tc, mut yc) = (0.0, [0.01, 0.0]);
+    let mut worst = 0.0f64;
+    for i in 1..=168 {
+        let tau = i as f64 / 56.0;
+        ahead
+            .integrate_ahead(&mut ode, &mut t, &mut y, tau)
+            .unwrap();
+        clipped.integrate(&mut ode, &mut tc, &mut yc, tau).unwrap();
+        assert_eq!(t, tau);
+        // exact solution of the underdamped oscillator
+        let wd = W0 * (1.0 - ZETA * ZETA).sqrt();
+        let x = 0.01
+            * (-ZETA * W0 * tau).exp()
+            * ((wd * tau).cos() + ZETA * W0 / wd * (wd * tau).sin());
+        worst = worst.max((y[0] - x).abs());
+    }
+    let (s1, sa, sc) = (
+        one.stats().steps,
+        ahead.stats().steps,
+        clipped.stats().steps,
+    );
+    println!("steps: one call {s1}, ahead {sa}, clipped {sc}; worst error {worst:.2e}");
+    assert!(sa <= s1 + 1, "{sa} steps ahead vs {s1} in one call");
+    assert!(sc >= 168 && sa < sc, "ahead {sa}, clipped {sc}");
+    assert!(worst < 10.0 * 1e-3 * 0.01, "worst error {worst:e}");
+}

@@ -238,3 +238,71 @@ fn params_override_is_compiled_and_validated() {
         .expect("negative bulk modulus refused");
     assert!(err.to_string().contains("params.bulk_modulus"), "{err}");
 }
+
+/// Row-relative error max |J_ij - D_ij| / max_j |D_ij| of `jac` against the dense matrix `d`.
+fn row_relative(jac: &[f64], d: &[f64], n: usize) -> f64 {
+    let mut worst = 0.0f64;
+    for i in 0..n {
+        let row = &d[i * n..(i + 1) * n];
+        let scale = row.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
+        for j in 0..n {
+            worst = worst.max((jac[i * n + j] - row[j]).abs() / scale);
+        }
+    }
+    worst
+}
+
+/// The Jacobian the stiff method integrates with ([`TorsoJacobian::full`]) is that of the
+/// right-hand side it integrates, the scaled mass matrix whole (the rigid bodies' coupling and
+/// the cavities' volume inertances): central differences of `dynamics::rhs` at a breathing
+/// state agree within 1e-4 of each row's largest entry (central differences with steps of
+/// 1e-6 relative: truncation ~1e-12, round-off ~1e-10 relative to the row, so 1e-4 leaves
+/// room for the sparse part's forward differences). The local Jacobian (mass blocks alone),
+/// which the stiff method used before, is off by the order of the entries themselves.
+#[test]
+fn full_jacobian_matches_the_full_right_hand_side() {
+    let model = compile(0);
+    let mut data = Data::new(&model);
+    let mut torso = Torso::new(config(0, Method::Dopri5, 1e-8)).unwrap();
+    torso.advance_to(1.2).unwrap();
+    let y = torso.state().to_vec();
+    let n = y.len();
+    let mut groups = [0.0; 8];
+    for (g, v) in groups.iter_mut().enumerate() {
+        *v = 0.05 + 0.02 * g as f64;
+    }
+    let act = Activations::new(&groups, 1.0, 1.0);
+    let mut f0 = vec![0.0; n];
+    dynamics::rhs(&model, &mut data, &act, &y, &mut f0);
+    let dense_of = |tj: &mut TorsoJacobian, data: &mut Data| {
+        let st = tj.structure();
+        let mut jac = Jacobian::zeros(st.pattern.clone(), st.rank);
+        tj.evaluate(&model, data, &act, &y, &f0, &mut jac);
+        jac.to_dense()
+    };
+    let full = dense_of(&mut TorsoJacobian::full(&model), &mut data);
+    let local = dense_of(&mut TorsoJacobian::new(&model), &mut data);
+    let (mut yp, mut fp, mut fm) = (y.clone(), vec![0.0; n], vec![0.0; n]);
+    let mut truth = vec![0.0; n * n];
+    for j in 0..n {
+        let d = 1e-6 * y[j].abs().max(1e-2);
+        yp[j] = y[j] + d;
+        dynamics::rhs(&model, &mut data, &act, &yp, &mut fp);
+        yp[j] = y[j] - d;
+        dynamics::rhs(&model, &mut data, &act, &yp, &mut fm);
+        yp[j] = y[j];
+        for i in 0..n {
+            truth[i * n + j] = (fp[i] - fm[i]) / (2.0 * d);
+        }
+    }
+    let (e_full, e_local) = (
+        row_relative(&full, &truth, n),
+        row_relative(&local, &truth, n),
+    );
+    println!("row-relative error: full {e_full:.2e}, local {e_local:.2e}");
+    assert!(e_full < 1e-4, "full Jacobian: {e_full:e}");
+    assert!(
+        e_local > 0.1,
+        "the local Jacobian should miss the mass coupling: {e_local:e}"
+    );
+}

@@ -445,6 +445,61 @@ impl MassMatrix {
         }
     }
 
+    /// The map L = M^-1 M_b from the local accelerations of [`MassMatrix::solve_local`] to
+    /// the true ones of [`MassMatrix::solve`], as L = I + Σ_k a_k b_k^T (returned as the
+    /// column pairs `(a_k, b_k)`, generalised dimension each). With B the blocks of
+    /// [`MassMatrix::solve`] (the rigid bodies' whole 30 x 30 block, each vertex's 3 x 3),
+    /// M^-1 = B^-1 - Z S U^T B^-1 (Woodbury), so L = B^-1 M_b - Z S (M_b Z)^T; B^-1 M_b
+    /// differs from the identity on the rigid bodies only, by R - I = B_r^-1 M_b,r - I
+    /// (30 pairs: the columns of R - I with the unit vectors), and the volume inertances add
+    /// two pairs (-Z S's columns with M_b Z's). The stiff method's Jacobian is the local
+    /// one's image under L, which keeps its sparse part and adds these 32 to its low rank.
+    pub fn local_to_full(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+        let n = self.u.len() / 2;
+        let mut pairs = Vec::with_capacity(RIGID + 2);
+        // M_b's rigid part: each rib's diagonal entry, the sternum's 6 x 6 block
+        let local = |i: usize, j: usize| -> f64 {
+            if (i < RIBS || j < RIBS) && i != j {
+                0.0
+            } else {
+                self.rigid[i * RIGID + j]
+            }
+        };
+        for j in 0..RIGID {
+            let mut a = vec![0.0; n];
+            for (i, ai) in a[..RIGID].iter_mut().enumerate() {
+                let r: f64 = (0..RIGID)
+                    .map(|k| self.rigid_inverse[i * RIGID + k] * local(k, j))
+                    .sum();
+                *ai = r - f64::from(u8::from(i == j));
+            }
+            let mut b = vec![0.0; n];
+            b[j] = 1.0;
+            pairs.push((a, b));
+        }
+        // M_b Z
+        let mut mz = [self.z[..n].to_vec(), self.z[n..].to_vec()];
+        for col in &mut mz {
+            let mut rigid = [0.0; RIGID];
+            for (i, out) in rigid.iter_mut().enumerate() {
+                *out = (0..RIGID).map(|k| local(i, k) * col[k]).sum();
+            }
+            col[..RIGID].copy_from_slice(&rigid);
+            for (b, v) in self.vertex.iter().zip(col[RIGID..].chunks_exact_mut(3)) {
+                let x = b * Vector3::new(v[0], v[1], v[2]);
+                v.copy_from_slice(x.as_slice());
+            }
+        }
+        for (k, yk) in mz.into_iter().enumerate() {
+            // column k of -Z S
+            let a: Vec<f64> = (0..n)
+                .map(|i| -(self.z[i] * self.s[(0, k)] + self.z[n + i] * self.s[(1, k)]))
+                .collect();
+            pairs.push((a, yk));
+        }
+        pairs
+    }
+
     /// Kinetic energy q'^T M q' / 2 of the generalised velocities `v`.
     pub fn kinetic_energy(&self, v: &[f64]) -> f64 {
         let mut e = 0.0;

@@ -40,6 +40,11 @@ pub struct TorsoJacobian {
     /// The frozen right-hand side at the evaluation point (the differences' base).
     f0: Vec<f64>,
     grad: Vec<Vector3<f64>>,
+    /// The pairs (a_k, b_k) of L = M^-1 M_b = I + Σ a_k b_k^T
+    /// ([`super::inertia::MassMatrix::local_to_full`]) in the state's acceleration rows,
+    /// when the Jacobian is that of the full right-hand side ([`TorsoJacobian::full`]);
+    /// empty for the local one ([`TorsoJacobian::new`]).
+    full_mass: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 /// Block index of a body: ribs 0..24, the sternum 24, free vertex j 25 + j.
@@ -157,7 +162,30 @@ impl TorsoJacobian {
             f2: vec![0.0; n],
             f0: vec![0.0; n],
             grad: vec![Vector3::zeros(); model.rest.len()],
+            full_mass: Vec::new(),
         }
+    }
+
+    /// The Jacobian of the full right-hand side ([`super::rhs`], the scaled mass matrix
+    /// whole), for the stiff integrator: the local one's image under L = M^-1 M_b, whose
+    /// sparse part is the local one's and whose low rank grows from 2 to 34 (module doc).
+    pub fn full(model: &Model) -> TorsoJacobian {
+        let mut j = TorsoJacobian::new(model);
+        let l = Layout::new(model);
+        let n = l.len;
+        let embed = |g: &[f64]| {
+            let mut v = vec![0.0; n];
+            v[l.theta_dot..].copy_from_slice(g);
+            v
+        };
+        j.full_mass = model
+            .mass
+            .local_to_full()
+            .iter()
+            .map(|(a, b)| (embed(a), embed(b)))
+            .collect();
+        j.structure.rank = 2 + j.full_mass.len();
+        j
     }
 
     /// Pattern, grouping and rank, for the solver.
@@ -287,6 +315,39 @@ impl TorsoJacobian {
                 let down = volume_rate(model, data, tris);
                 self.ypert[i] = y[i];
                 vk[i] = -eta * (up - down) / (2.0 * d);
+            }
+        }
+        // the full right-hand side's Jacobian: L J_local = J_local + Σ a_k (J_local^T b_k)^T
+        for (k, (a, b)) in self.full_mass.iter().enumerate() {
+            let r = 2 + k;
+            jac.u[r * n..(r + 1) * n].copy_from_slice(a);
+            let (head, tail) = jac.v.split_at_mut(r * n);
+            let vr = &mut tail[..n];
+            vr.fill(0.0);
+            for (i, &bi) in b.iter().enumerate() {
+                if bi == 0.0 {
+                    continue;
+                }
+                for (&c, &s) in jac
+                    .pattern
+                    .row(i)
+                    .iter()
+                    .zip(&jac.values[jac.pattern.row_range(i)])
+                {
+                    vr[c as usize] += s * bi;
+                }
+            }
+            for p in 0..2 {
+                let ub: f64 = jac.u[p * n..(p + 1) * n]
+                    .iter()
+                    .zip(b)
+                    .map(|(x, y)| x * y)
+                    .sum();
+                if ub != 0.0 {
+                    for (v, &w) in vr.iter_mut().zip(&head[p * n..(p + 1) * n]) {
+                        *v += ub * w;
+                    }
+                }
             }
         }
         evals

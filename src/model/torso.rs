@@ -305,7 +305,7 @@ impl Torso {
             markers: MarkerOutputs::default(),
             marker_set: None,
             jacobian: (config.solver.method == Method::Rosenbrock)
-                .then(|| Box::new(TorsoJacobian::new(model))),
+                .then(|| Box::new(TorsoJacobian::full(model))),
             config,
             compiled,
             at_start: false,
@@ -736,7 +736,7 @@ impl Torso {
             ));
         }
         if integrator.method() == Method::Rosenbrock && self.jacobian.is_none() {
-            self.jacobian = Some(Box::new(TorsoJacobian::new(&self.compiled.model)));
+            self.jacobian = Some(Box::new(TorsoJacobian::full(&self.compiled.model)));
         }
         self.integrator = integrator;
         self.at_start = false;
@@ -784,7 +784,7 @@ impl Torso {
             ));
         }
         if solver.method() == Method::Rosenbrock && self.jacobian.is_none() {
-            self.jacobian = Some(Box::new(TorsoJacobian::new(&self.compiled.model)));
+            self.jacobian = Some(Box::new(TorsoJacobian::full(&self.compiled.model)));
         }
         self.integrator.copy_memory_from(solver);
         self.at_start = false;

@@ -296,8 +296,8 @@ impl Integrator {
     /// continues from the internal point rather than from `y` (when `y` is still the state
     /// this call gave; any other state restarts), so communication points cost
     /// no step of their own and, while they fall inside one step, no evaluation at all. A
-    /// call from any other point restarts from `(t, y)`. The stiff method steps exactly to
-    /// `t_end` as [`Integrator::integrate`] does. On error, `*t` and `y` hold the last
+    /// call from any other point restarts from `(t, y)`. The stiff method runs past `t_end`
+    /// likewise, its states read from the cubic Hermite interpolant of its last step. On error, `*t` and `y` hold the last
     /// accepted step (or stay as given when none was accepted).
     pub fn integrate_ahead<O: Ode + ?Sized>(
         &mut self,
@@ -306,12 +306,12 @@ impl Integrator {
         y: &mut [f64],
         t_end: f64,
     ) -> Result<(), SolverError> {
-        if self.method == Method::Rosenbrock || self.stiff.is_some() {
-            return self.integrate(ode, t, y, t_end);
-        }
         self.check_call(ode, *t, y, t_end)?;
         if t_end == *t {
             return Ok(());
+        }
+        if self.method == Method::Rosenbrock || self.stiff.is_some() {
+            return self.stiff_ahead(ode, t, y, t_end);
         }
         self.ensure_workspace();
         let n = self.dim;
@@ -354,6 +354,77 @@ impl Integrator {
             y.copy_from_slice(&a.y);
         } else {
             interpolate(&a.dense, &a.y0, (t_end - a.t0) / a.h, y);
+        }
+        *t = t_end;
+        a.out_t = t_end;
+        a.out_y.copy_from_slice(y);
+        a.valid = true;
+        Ok(())
+    }
+
+    /// [`Integrator::integrate_ahead`] for the stiff method: its steps run past `t_end` and
+    /// the caller's state comes from the last step's cubic Hermite interpolant.
+    fn stiff_ahead<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: &mut f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        let n = self.dim;
+        let r = self
+            .stiff
+            .get_or_insert_with(|| Box::new(Rosenbrock::new(self.options, n)));
+        let a = &mut self.ahead;
+        for (buf, len) in [
+            (&mut a.y, n),
+            (&mut a.y0, n),
+            (&mut a.out_y, n),
+            (&mut a.dense, 2 * n),
+        ] {
+            if buf.len() != len {
+                buf.clear();
+                buf.resize(len, 0.0);
+                a.valid = false;
+            }
+        }
+        let resume =
+            a.valid && a.out_t == *t && a.t >= *t && a.have_step && a.out_y.as_slice() == &*y;
+        if !resume {
+            a.t = *t;
+            a.y.copy_from_slice(y);
+            a.have_step = false;
+        }
+        a.valid = false;
+        if a.t < t_end {
+            let mut yint = std::mem::take(&mut a.y);
+            let mut tint = a.t;
+            let result = r.run(ode, &mut tint, &mut yint, t_end, true, &[], &mut |_, _| {});
+            let a = &mut self.ahead;
+            a.y = yint;
+            if let Err(e) = result {
+                if tint > *t {
+                    *t = tint;
+                    y.copy_from_slice(&a.y);
+                }
+                a.t = tint;
+                return Err(e);
+            }
+            let (h, y0, f0, f1) = r.last_step();
+            a.t0 = tint - h;
+            a.h = h;
+            a.t = tint;
+            a.y0.copy_from_slice(y0);
+            a.dense[..n].copy_from_slice(f0);
+            a.dense[n..].copy_from_slice(f1);
+            a.have_step = true;
+        }
+        let a = &mut self.ahead;
+        if a.t == t_end {
+            y.copy_from_slice(&a.y);
+        } else {
+            let (f0, f1) = a.dense.split_at(n);
+            super::rosenbrock::hermite(y, &a.y0, &a.y, f0, f1, a.h, (t_end - a.t0) / a.h);
         }
         *t = t_end;
         a.out_t = t_end;
@@ -648,7 +719,7 @@ impl Integrator {
             self.stiff = Some(Box::new(Rosenbrock::new(self.options, self.dim)));
         }
         if let Some(r) = &mut self.stiff {
-            return r.run(ode, t, y, t_end, output_times, callback);
+            return r.run(ode, t, y, t_end, false, output_times, callback);
         }
         self.ensure_workspace();
         self.ensure_fsal(ode, *t, y)?;

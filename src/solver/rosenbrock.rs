@@ -174,6 +174,9 @@ pub(super) struct Rosenbrock {
     f0_y: Vec<f64>,
     f0: Vec<f64>,
     pub(super) stats: Stats,
+    /// Size of the last step attempted (that of the last accepted one once `run` returns).
+    #[serde(skip)]
+    last_h: f64,
     #[serde(skip)]
     work: Work,
 }
@@ -196,6 +199,7 @@ impl Rosenbrock {
             f0_y: vec![0.0; dim],
             f0: vec![0.0; dim],
             stats: Stats::default(),
+            last_h: 0.0,
             work: Work::default(),
         }
     }
@@ -212,6 +216,7 @@ impl Rosenbrock {
             f0_y: self.f0_y.clone(),
             f0: self.f0.clone(),
             stats: self.stats,
+            last_h: 0.0,
             work: Work::default(),
         }
     }
@@ -232,6 +237,12 @@ impl Rosenbrock {
         self.f0.clone_from(&src.f0);
         self.stats = src.stats;
         self.work = Work::default();
+    }
+
+    /// The last accepted step of [`Rosenbrock::run`]: its size, start state and slopes
+    /// f(t0, y0), f(t0 + h, y1) (y1 is the state `run` ended with), for [`hermite`].
+    pub(super) fn last_step(&self) -> (f64, &[f64], &[f64], &[f64]) {
+        (self.last_h, &self.work.yold, &self.work.fold, &self.f0)
     }
 
     pub(super) fn invalidate(&mut self) {
@@ -316,12 +327,17 @@ impl Rosenbrock {
         w.solver.clear();
     }
 
+    /// Accepted steps from `(t, y)` to `t_end`: the last one shortened to land on it, or,
+    /// with `past`, not shortened (the integration ends at the first step end at or past
+    /// `t_end`, whose step [`Rosenbrock::last_step`] gives for the dense output).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn run<O: Ode + ?Sized>(
         &mut self,
         ode: &mut O,
         t: &mut f64,
         y: &mut [f64],
         t_end: f64,
+        past: bool,
         output_times: &[f64],
         callback: &mut dyn FnMut(f64, &[f64]),
     ) -> Result<(), SolverError> {
@@ -337,7 +353,7 @@ impl Rosenbrock {
         if self.h_next <= 0.0 || !self.h_next.is_finite() {
             self.h_next = match opts.h_init {
                 Some(h) => h,
-                None => self.initial_step(*t, y, t_end),
+                None => self.initial_step(*t, y, t_end, ode.error_weights()),
             };
         }
         let k = coefficients();
@@ -351,8 +367,10 @@ impl Rosenbrock {
         };
         let mut chain = Chain::new(self.h_next);
         while *t < t_end {
-            let p = chain.plan(&mut self.h_next, *t, t_end, &opts)?;
+            let horizon = if past { f64::INFINITY } else { t_end };
+            let p = chain.plan(&mut self.h_next, *t, horizon, &opts)?;
             let h = p.h;
+            self.last_h = h;
             if !self.work.has_jac || self.work.jac_age >= JACOBIAN_MAX_AGE {
                 self.evaluate_jacobian(ode, *t, y);
             }
@@ -510,16 +528,25 @@ impl Rosenbrock {
             }
         }
         let (atol, rtol) = (self.options.atol, self.options.rtol);
-        let mut sum = 0.0;
         for l in 0..n {
             let (mut y1, mut e) = (0.0, 0.0);
             for j in 0..4 {
                 y1 += k.m[j] * w.u[j * n + l];
                 e += k.e[j] * w.u[j * n + l];
             }
-            let y1 = y[l] + y1;
-            w.ynew[l] = y1;
-            let sc = (atol + rtol * y[l].abs().max(y1.abs())).max(f64::MIN_POSITIVE);
+            w.ynew[l] = y[l] + y1;
+            w.ytmp[l] = e;
+        }
+        // the problem's error weights, as the explicit pairs use them
+        let weights = ode.error_weights();
+        let mut sum = 0.0;
+        for l in 0..n {
+            let (r, wt) = match &weights {
+                Some(ew) => (ew.reference[l] as usize, ew.weight[l]),
+                None => (l, 1.0),
+            };
+            let sc = (wt * atol + rtol * y[r].abs().max(w.ynew[r].abs())).max(f64::MIN_POSITIVE);
+            let e = w.ytmp[l];
             sum += (e / sc) * (e / sc);
         }
         let err = (sum / n as f64).sqrt();
@@ -530,12 +557,25 @@ impl Rosenbrock {
         }
     }
 
-    /// First step: 0.01 ‖y‖/‖f‖ in the weighted norm (Hairer's first guess), capped by the
+    /// First step: 0.01 ‖y‖/‖f‖ in the weighted norm (Hairer's first guess; the problem's
+    /// error weights as in the step's error norm), capped by the
     /// span and h_max; the controller grows it quickly.
-    fn initial_step(&self, t: f64, y: &[f64], t_end: f64) -> f64 {
+    fn initial_step(
+        &self,
+        t: f64,
+        y: &[f64],
+        t_end: f64,
+        weights: Option<super::ErrorWeights>,
+    ) -> f64 {
         let n = self.dim;
         let (atol, rtol) = (self.options.atol, self.options.rtol);
-        let sc = |i: usize| (atol + rtol * y[i].abs()).max(f64::MIN_POSITIVE);
+        let sc = |i: usize| {
+            let (r, w) = match &weights {
+                Some(ew) => (ew.reference[i] as usize, ew.weight[i]),
+                None => (i, 1.0),
+            };
+            (w * atol + rtol * y[r].abs()).max(f64::MIN_POSITIVE)
+        };
         let d0 = ((0..n).map(|i| (y[i] / sc(i)).powi(2)).sum::<f64>() / n as f64).sqrt();
         let d1 = ((0..n).map(|i| (self.f0[i] / sc(i)).powi(2)).sum::<f64>() / n as f64).sqrt();
         let h = if d0 < 1e-5 || d1 < 1e-5 {
@@ -574,7 +614,15 @@ fn dense_differences<O: Ode + ?Sized>(
 }
 
 /// Cubic Hermite interpolant at θ of (y0, f0) and (y1, f1) over a step h.
-fn hermite(out: &mut [f64], y0: &[f64], y1: &[f64], f0: &[f64], f1: &[f64], h: f64, th: f64) {
+pub(super) fn hermite(
+    out: &mut [f64],
+    y0: &[f64],
+    y1: &[f64],
+    f0: &[f64],
+    f1: &[f64],
+    h: f64,
+    th: f64,
+) {
     let h00 = (1.0 + 2.0 * th) * (1.0 - th) * (1.0 - th);
     let h10 = th * (1.0 - th) * (1.0 - th);
     let h01 = th * th * (3.0 - 2.0 * th);
