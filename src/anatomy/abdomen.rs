@@ -216,9 +216,9 @@ pub struct Abdomen {
     pub dome_faceting_volume: f64,
     /// Length [m] of the smooth dome's curve over each edge of the dome and its rim (key: the
     /// edge's surface vertices, smaller first), the length of the tissue the edge's chord
-    /// stands for; empty for a subject's own cavity (no smooth surface: its edges are the
-    /// tissue). A coarse dome's chords cut across the dome's curvature: at level of detail 0
-    /// they are 6 % shorter than the arcs, at level 2 under 1 %.
+    /// stands for. A coarse dome's chords cut across the dome's curvature. For a subject's own
+    /// cavity, which the coarse mesh samples as it samples the smooth dome, each edge keeps
+    /// the generated dome's arc over chord on its fitted chord.
     pub dome_arc: HashMap<(u32, u32), f64>,
 }
 
