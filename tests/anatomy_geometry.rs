@@ -396,6 +396,11 @@ fn dome_arcs_are_the_limit_of_finer_chords() {
         .enumerate()
         .map(|(v, &n)| (n, v as u32))
         .collect();
+    // Edges from an insertion are left out: the arc starts at the margin point in the
+    // insertion's azimuth at the rim's height, while the finer levels' vertices along the
+    // same parametric great circle include wall and insertion vertices of their own, so their
+    // chords follow another curve (level 2's were 34 % shorter than level 0's on one edge).
+    // Those edges' arcs are checked above against their own chords only.
     let mut fibre_edges: Vec<(u32, u32)> = levels[0]
         .muscles
         .iter()
