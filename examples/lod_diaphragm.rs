@@ -125,7 +125,9 @@ fn geometry(anatomy: &Anatomy, params: &Params) {
         .filter(|m| m.group == MuscleGroup::Diaphragm)
     {
         fl += m.max_force * path_length(&pos, &m.path);
-        fs += m.max_force * path_length(&pos, &m.path) * m.length_ratio;
+        fs += m.max_force
+            * m.tissue_length
+                .unwrap_or_else(|| path_length(&pos, &m.path));
         ftot += m.max_force;
         n += 1;
     }

@@ -171,8 +171,8 @@ fn variants() -> breathing_torso::Result<()> {
     Ok(())
 }
 
-/// Total rest length of the diaphragm's fibres by posture, level of detail and subject,
-/// relative to standing.
+/// Total rest length of the diaphragm's fibres (their tissue length, the smooth dome's arcs
+/// over their routes) by posture, level of detail and subject, relative to standing.
 fn lengths() -> breathing_torso::Result<()> {
     use breathing_torso::anatomy::{Anatomy, MuscleGroup, Sex, Subject};
     for (sex, stature, mass) in [
@@ -193,15 +193,7 @@ fn lengths() -> breathing_torso::Result<()> {
                 Ok(a.muscles
                     .iter()
                     .filter(|m| m.group == MuscleGroup::Diaphragm)
-                    .map(|m| {
-                        m.path
-                            .windows(2)
-                            .map(|w| {
-                                (a.anchors[w[1] as usize].rest - a.anchors[w[0] as usize].rest)
-                                    .norm()
-                            })
-                            .sum::<f64>()
-                    })
+                    .filter_map(|m| m.tissue_length)
                     .sum())
             };
             let up = total(Posture::Standing)?;

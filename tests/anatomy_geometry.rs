@@ -312,7 +312,7 @@ fn diaphragm_fibres_reach_the_tendon_from_every_insertion_at_every_level_of_deta
 /// the shortfall goes as the chord's length, a quarter as much. Asserted: level 2's four
 /// chords fall short by at most half as much as level 0's one (first order, with a factor of
 /// two for the uneven spacing of normalised midpoints). Every edge's arc is at least its
-/// chord, and each diaphragm element's length ratio is its route's arcs over its chords.
+/// chord, and each diaphragm element's tissue length is its route's arcs.
 #[test]
 fn dome_arcs_are_the_limit_of_finer_chords() {
     use breathing_torso::anatomy::VertexRole;
@@ -342,17 +342,20 @@ fn dome_arcs_are_the_limit_of_finer_chords() {
             .iter()
             .filter(|m| m.group == MuscleGroup::Diaphragm)
         {
-            let (mut arcs, mut chords) = (0.0, 0.0);
-            for w in m.path.windows(2) {
-                let (p, q) = (vertex_of[&w[0]], vertex_of[&w[1]]);
-                arcs += ab.dome_arc[&(p.min(q), p.max(q))];
-                chords += (at(q) - at(p)).norm();
-            }
+            let arcs: f64 = m
+                .path
+                .windows(2)
+                .map(|w| {
+                    let (p, q) = (vertex_of[&w[0]], vertex_of[&w[1]]);
+                    ab.dome_arc[&(p.min(q), p.max(q))]
+                })
+                .sum();
+            let tissue = m
+                .tissue_length
+                .expect("a diaphragm element's tissue length");
             assert!(
-                (m.length_ratio - arcs / chords).abs() < 1e-12,
-                "level {lod}: element length ratio {} against {}",
-                m.length_ratio,
-                arcs / chords
+                (tissue - arcs).abs() < 1e-12 * arcs,
+                "level {lod}: element tissue length {tissue} against its arcs {arcs}"
             );
         }
     }
@@ -393,6 +396,11 @@ fn dome_arcs_are_the_limit_of_finer_chords() {
         .enumerate()
         .map(|(v, &n)| (n, v as u32))
         .collect();
+    // Edges from an insertion are left out: the arc starts at the margin point in the
+    // insertion's azimuth at the rim's height, while the finer levels' vertices along the
+    // same parametric great circle include wall and insertion vertices of their own, so their
+    // chords follow another curve (level 2's were 34 % shorter than level 0's on one edge).
+    // Those edges' arcs are checked above against their own chords only.
     let mut fibre_edges: Vec<(u32, u32)> = levels[0]
         .muscles
         .iter()

@@ -190,6 +190,12 @@ fn fitting_to_the_generated_surfaces_changes_nothing() {
             (m.max_force - g.max_force).abs() < 1e-6 * g.max_force,
             "{m:?} vs {g:?}"
         );
+        // the tissue a diaphragm fibre stands for (the smooth dome's arcs over its route),
+        // carried to the fitted chords
+        match (m.tissue_length, g.tissue_length) {
+            (Some(a), Some(b)) => assert!((a - b).abs() < 1e-6 * b, "{m:?} vs {g:?}"),
+            (a, b) => assert_eq!(a, b, "{m:?} vs {g:?}"),
+        }
     }
     let fit = fitted.cavity_fit.clone().unwrap();
     assert_eq!(fit.carriers_changed, 0);

@@ -260,13 +260,17 @@ fn supine_diaphragm_starts_higher_and_longer() {
         "FRC falls by {} L",
         frc_up - frc_supine
     );
+    // The fibres' tissue length (the smooth dome's arcs over their routes), which sets their
+    // contraction in the dynamics, rather than the chords that carry it.
     let fibres = |subject: &Subject, lod| {
         let a = Anatomy::build(subject, lod).unwrap();
         a.muscles
             .iter()
             .filter(|m| m.group == MuscleGroup::Diaphragm)
-            .flat_map(|m| m.path.windows(2))
-            .map(|w| (a.anchors[w[1] as usize].rest - a.anchors[w[0] as usize].rest).norm())
+            .map(|m| {
+                m.tissue_length
+                    .expect("a diaphragm element's tissue length")
+            })
             .sum::<f64>()
     };
     for (sex, stature, mass) in [(Sex::Male, 1.75, 75.0), (Sex::Female, 1.63, 60.0)] {

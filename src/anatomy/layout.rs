@@ -25,11 +25,13 @@ pub struct MuscleElement {
     pub side: Option<Side>,
     /// Force at full activation, isometric at the rest length [N].
     pub max_force: f64,
-    /// Length of the tissue the element stands for over its path's length at rest: the
-    /// smooth dome's arc over the faceted dome's chords for the diaphragm
-    /// ([`Abdomen::dome_arc`]), 1 elsewhere. A fibre's contraction (beta a of its length) and
-    /// its stiffness (F / (beta l)) are the tissue's, whatever the chords that carry it.
-    pub length_ratio: f64,
+    /// Rest length [m] of the tissue the element stands for, where its path does not measure
+    /// it: for the diaphragm the smooth dome's arcs over the edges of its route
+    /// ([`Abdomen::dome_arc`]); `None` elsewhere (the path's rest length is the tissue's). A
+    /// fibre's contraction (beta a of its length) and its stiffness (F / (beta l)) are the
+    /// tissue's, whatever the chords that carry it: the model scales them by this length over
+    /// the path's rest length, as the model measures it (via points included).
+    pub tissue_length: Option<f64>,
 }
 
 /// A ball joint between two bodies, as a stiff zero-length spring between two anchors that
@@ -178,7 +180,7 @@ fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<M
                         gain,
                         side: Some(side),
                         max_force: force,
-                        length_ratio: 1.0,
+                        tissue_length: None,
                     });
                 }
             }
@@ -214,7 +216,7 @@ fn scalenes(
                 gain: 1.0,
                 side: Some(side),
                 max_force: SCALENE_FORCE_PER_SIDE / per_side as f64,
-                length_ratio: 1.0,
+                tissue_length: None,
             });
         }
     }
@@ -368,19 +370,15 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
         .flat_map(|(p, c)| p.windows(2).map(move |w| (w[0], w[1], c)))
         .collect();
     let span = ((edges.len() as f64 / count(group, f) as f64).round() as usize).max(1);
-    // The smooth dome's arc over a run of vertices against its chords (1 without a smooth
-    // dome, or if an edge of the run has no arc).
-    let smooth_ratio = |run: &[usize]| {
-        let (mut arc, mut chord) = (0.0, 0.0);
-        for w in run.windows(2) {
-            let key = (w[0].min(w[1]) as u32, w[0].max(w[1]) as u32);
-            match abdomen.dome_arc.get(&key) {
-                Some(a) => arc += a,
-                None => return 1.0,
-            }
-            chord += (at(w[1]) - at(w[0])).norm();
-        }
-        if chord > 0.0 { arc / chord } else { 1.0 }
+    // The smooth dome's arcs over a run of vertices (`None` if an edge of the run has no
+    // arc: the run's path is then the tissue).
+    let tissue_length = |run: &[usize]| -> Option<f64> {
+        run.windows(2)
+            .map(|w| {
+                let key = (w[0].min(w[1]) as u32, w[0].max(w[1]) as u32);
+                abdomen.dome_arc.get(&key).copied()
+            })
+            .sum()
     };
     // Elements: one per distinct run of vertices and side, carrying the summed force of the
     // fibres along it. Runs are cut from the tendon end, so that fibres which have converged
@@ -398,7 +396,7 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
                 .iter()
                 .map(|&v| abdomen.anchor[v])
                 .collect();
-            let length_ratio = smooth_ratio(&path[w[1]..=w[0]]);
+            let tissue_length = tissue_length(&path[w[1]..=w[0]]);
             let k = (run, code(side));
             match index.get(&k) {
                 Some(&e) => out[e].max_force += force,
@@ -410,7 +408,7 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
                         gain: 1.0,
                         side,
                         max_force: force,
-                        length_ratio,
+                        tissue_length,
                     });
                 }
             }
@@ -634,7 +632,7 @@ fn abdominals(
                 gain: 1.0,
                 side: Some(side),
                 max_force: per_chain,
-                length_ratio: 1.0,
+                tissue_length: None,
             });
         }
     }

@@ -490,7 +490,17 @@ pub(super) fn fit_cavity(
         .fold(f64::NEG_INFINITY, f64::max);
     // the subject's own cavity is the reference: no smooth dome to correct toward
     abdomen.dome_faceting_volume = 0.0;
-    abdomen.dome_arc.clear();
+    // Its dome edges stand for as much more tissue than their chords as the generated dome's
+    // did (the same edges over the same parametric directions): each edge keeps its arc over
+    // chord on the fitted chord, so that a fitted cavity's fibres have the tissue lengths of
+    // the generated ones to within the fit's change of their chords.
+    for (&(a, b), arc) in abdomen.dome_arc.iter_mut() {
+        let generated = (template[b as usize] - template[a as usize]).norm();
+        let subject = (fitted[b as usize] - fitted[a as usize]).norm();
+        if generated > 0.0 {
+            *arc *= subject / generated;
+        }
+    }
     let fitted_mesh = TriMesh {
         vertices: fitted,
         triangles: abdomen.triangles.clone(),

@@ -1,8 +1,9 @@
 //! Stage 2: forces on anchors.
 //!
 //! - Muscle and membrane elements (thesis eq. 2.2): f = c e + gamma e', e = |r| - l(t), with
-//!   l(t) = l0 r(t) (eq. 2.3) and r = 1 - beta_max a g for muscles (a the side's activation of
-//!   the group, g the element's regional gain). Muscles only pull (Zajac 1989, thesis 2.1):
+//!   l(t) = l0 r(t) (eq. 2.3) and r = 1 - beta_max a g s for muscles (a the side's activation
+//!   of the group, g the element's regional gain, s the tissue's rest length over the path's:
+//!   the smooth dome's arcs over the chords for a diaphragm fibre, else 1). Muscles only pull (Zajac 1989, thesis 2.1):
 //!   their tension is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps
 //!   ([`super::Params::tension_toe`]) in place of max(0, f), so that the right-hand side is
 //!   smooth where a muscle goes slack. A two-point element also damps its ends' relative
@@ -769,6 +770,87 @@ mod tests {
                 }
             }
             assert!(reference.iter().any(|f| f.norm() > 0.0));
+        }
+    }
+
+    /// A diaphragm element's tissue length differs from its path's rest length (their ratio
+    /// s: above 1 where chords cut the dome's curve, below 1 where short segments through via
+    /// points carry the path's core); its contraction beta a g s and its stiffness
+    /// F / (beta l0 s) still give its maximal force F when fully activated at its rest length
+    /// (isometric, thesis eq. 2.2-2.3 with the force at full activation the element's F), and
+    /// no force at rest unactivated; the model's rest length times s is the tissue length,
+    /// via points' core included. Levels of detail 0 (two-point elements) and 2 (elements
+    /// wrapping two edges through a via point).
+    #[test]
+    fn diaphragm_elements_with_longer_tissue_give_their_force() {
+        use crate::anatomy::MuscleGroup;
+        for lod in [0, 2] {
+            let anatomy = Anatomy::build(&Subject::default(), lod).unwrap();
+            let mut params = Params::for_posture(anatomy.subject.posture);
+            // a toe far below the forces, so that the tension is the spring's force
+            params.tension_toe = 1e-9;
+            let model = Model::compile(&anatomy, params);
+            let pos: Vec<_> = anatomy.anchors.iter().map(|a| a.rest).collect();
+            let vel = vec![Vector3::zeros(); pos.len()];
+            let mut groups = [0.0; 8];
+            groups[MuscleGroup::Diaphragm.index()] = 1.0;
+            let full = Activations::new(&groups, 1.0, 1.0).table();
+            let none = Activations::new(&[0.0; 8], 1.0, 1.0).table();
+            let el = &model.elements;
+            let (mut checked, mut via, mut away) = (0, 0, 0);
+            for (e, m) in anatomy.muscles.iter().enumerate() {
+                if m.group != MuscleGroup::Diaphragm {
+                    continue;
+                }
+                let tissue = m
+                    .tissue_length
+                    .expect("a diaphragm element's tissue length");
+                let l0 = el.rest_length[e];
+                let s = tissue / l0;
+                away += usize::from((s - 1.0).abs() > 1e-3);
+                let beta = model.params.beta_for(m.group);
+                assert!(
+                    (el.gain[e] - beta * m.gain * s).abs() < 1e-12,
+                    "lod {lod}, element {e}: gain {} against beta g s {}",
+                    el.gain[e],
+                    beta * m.gain * s
+                );
+                // the tension along the element: its pull on its first anchor, over the
+                // share of the first segment's length along it
+                let tension = |level: &[f64; 256]| {
+                    let mut force = vec![Vector3::zeros(); pos.len()];
+                    Pass::new(&model, &pos, &vel, level).single(e, &mut force);
+                    let (a, b) = (m.path[0] as usize, m.path[1] as usize);
+                    let d = pos[b] - pos[a];
+                    let along = if m.path.len() == 2 {
+                        1.0
+                    } else {
+                        d.norm() / super::via_segment_length(&d)
+                    };
+                    force[a].norm() / along
+                };
+                let f_full = tension(&full);
+                assert!(
+                    (f_full - m.max_force * m.gain).abs() < 1e-9 * m.max_force,
+                    "lod {lod}, element {e} (s = {s}): {f_full} N at full activation, F = {} N",
+                    m.max_force
+                );
+                let f_rest = tension(&none);
+                assert!(
+                    f_rest < 1e-8,
+                    "lod {lod}, element {e}: {f_rest} N at rest unactivated"
+                );
+                checked += 1;
+                via += usize::from(m.path.len() > 2);
+            }
+            assert!(checked > 0, "lod {lod}: no diaphragm elements");
+            assert!(
+                away > 0,
+                "lod {lod}: no diaphragm element with s away from 1"
+            );
+            if lod == 2 {
+                assert!(via > 0, "level 2 has diaphragm elements through via points");
+            }
         }
     }
 

@@ -42,7 +42,9 @@ pub struct Elements {
     pub group: Vec<u8>,
     /// Side code: 0 right, 1 left, 2 midline.
     pub side: Vec<u8>,
-    /// Contraction per unit activation, beta_max g (g: the regional gain).
+    /// Contraction per unit activation, beta_max g s (g: the regional gain; s: the tissue's
+    /// rest length over the path's, [`crate::anatomy::MuscleElement::tissue_length`], 1 for
+    /// most elements).
     pub gain: Vec<f64>,
     /// Index of the element's activation in [`Activations::table`](super::Activations::table):
     /// 3 group + side for a muscle, [`PASSIVE`] (whose entry is 0) for the membrane.
@@ -355,16 +357,16 @@ impl Model {
             2.0 * params.damping_ratio / (2.0 * std::f64::consts::PI * params.inertia_frequency);
         let path_length = |path: &[u32]| path_length(&rest, path);
 
-        // Muscles: c = F_max / (beta_max l0) so that a full isometric contraction gives F_max.
+        // Muscles: c = F_max / (beta_max l0 s) so that a full isometric contraction gives F_max.
         let mut elements = Elements::default();
         for m in &anatomy.muscles {
             let l0 = path_length(&m.path).max(1e-4);
             let beta = params.beta_for(m.group);
-            // The tissue's length l0 s (s: the element's length ratio, the smooth dome's arc
-            // over the chords for the diaphragm) sets its contraction beta a l0 s and its
+            // The tissue's length l0 s (s: its rest length over the path's, the smooth dome's
+            // arcs over the chords for the diaphragm) sets its contraction beta a l0 s and its
             // stiffness F_max / (beta l0 s); the path's chords l0 carry them, so a full
             // isometric contraction still gives F_max.
-            let s = m.length_ratio;
+            let s = m.tissue_length.map_or(1.0, |t| t / l0);
             let k = m.max_force / (beta * l0 * s);
             let side = match m.side {
                 Some(Side::Right) => 0,
