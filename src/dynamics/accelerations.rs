@@ -27,7 +27,8 @@ pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [
 
 /// As [`compute`], with the mass matrix's block-diagonal part only (the cavities' volume
 /// inertances left out, [`super::inertia::MassMatrix::solve_local`]): the right-hand side
-/// whose Jacobian the stiff method approximates with a sparse one.
+/// whose Jacobian is sparse plus rank 2 ([`super::jacobian::TorsoJacobian::new`]; the
+/// stiff method's maps it through the whole mass matrix).
 pub fn compute_local(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
     forces_and_rates(model, data, l, y, dy);
     model.mass.solve_local(&mut dy[l.theta_dot..]);

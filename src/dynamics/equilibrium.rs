@@ -10,9 +10,9 @@
 //! then set back to zero (pseudo-transient continuation, Kelley & Keyes 1998, SIAM J. Numer. Anal.
 //! 35:508): on the positions it is Newton's step for the loads with (1/h^2) M - (1/h) D added
 //! to the stiffness, a damping that keeps the first steps on the model's own damped motion
-//! and vanishes as h grows. J is the stiff method's sparse plus rank-2 Jacobian
-//! ([`super::jacobian::TorsoJacobian`]), solved by its block LU with the Woodbury correction
-//! ([`crate::solver::sparse::ShiftedSolver`]). h grows as the loads fall (switched evolution
+//! and vanishes as h grows. J is the sparse plus rank-2 Jacobian of the block-local
+//! accelerations ([`super::jacobian::TorsoJacobian::new`]), solved by its block LU with the
+//! Woodbury correction ([`crate::solver::sparse::ShiftedSolver`]). h grows as the loads fall (switched evolution
 //! relaxation, Mulder & van Leer 1985, AIAA paper 85-1519); a step that does not lower the
 //! loads' 2-norm is retried with a fresh Jacobian, then a shorter h. Starting short from the
 //! rest pose, which is stable, and only ever lowering the loads, the first iterations follow the

@@ -423,8 +423,9 @@ impl MassMatrix {
     /// f <- M_b^-1 f with M_b the mass matrix's blocks of each body alone (each rib's
     /// diagonal entry, the sternum's 6 x 6 block, each vertex's 3 x 3 block; the coupling of
     /// the rigid bodies and the volume inertances left out): an approximation of
-    /// [`MassMatrix::solve`] whose Jacobian keeps the sparsity of the forces', for the stiff
-    /// method's Jacobian.
+    /// [`MassMatrix::solve`] whose Jacobian keeps the sparsity of the forces': the
+    /// equilibrium's residual, and the stiff method's Jacobian before
+    /// [`MassMatrix::local_to_full`] maps it to the whole mass matrix's.
     pub fn solve_local(&self, f: &mut [f64]) {
         for (x, inv) in f[..RIBS].iter_mut().zip(&self.rib_local) {
             *x *= inv;

@@ -1,5 +1,9 @@
-//! The Jacobian of the right-hand side for the stiff method, as a sparse part plus a rank-2
-//! part: J = S + u_A (dP_A/dV_A) (dV_A/dy)^T + u_T (dP_T/dV_T) (dV_T/dy)^T.
+//! The Jacobian of the right-hand side for the stiff method and for the equilibrium's
+//! Newton iterations, as a sparse part plus a low-rank part.
+//!
+//! [`TorsoJacobian::new`] gives the Jacobian of the block-local right-hand side (the mass
+//! matrix's blocks of each body alone, [`super::accelerations::compute_local`]), sparse plus
+//! rank 2: J_b = S + u_A (dP_A/dV_A) (dV_A/dy)^T + u_T (dP_T/dV_T) (dV_T/dy)^T.
 //!
 //! - S is the Jacobian with the abdominal and pleural pressures frozen
 //!   ([`super::forces::accumulate_frozen`]): every force is then local (elements, springs,
@@ -8,18 +12,27 @@
 //!   the positions and velocities of the bodies it shares an element, a spring or a pressure
 //!   triangle with. S is estimated by forward differences, one evaluation per colour of a
 //!   distance-2 column colouring (Curtis, Powell & Reid 1974).
-//! - The right-hand side differenced is the one with the mass matrix's block-diagonal part
-//!   only ([`super::accelerations::compute_local`]): the cavities' rank-two volume inertances
-//!   of `dynamics::inertia` would make every row dense. The stiff method is a W-method
-//!   (ROS34PW2), whose order does not need the exact Jacobian.
 //! - The two global pressures (thesis eq. 2.5: P_A = K (V0/V - 1) - mu dV/dt; lung recoil
-//!   and airway flow P_T = -P_L(V_T) - R dV_T/dt) couple every wall point to every other. Their part is exact in
-//!   rank: u = ∂f/∂P, the response of the accelerations to a unit pressure (f is linear in
-//!   each pressure, so one evaluation with P + 1 gives it exactly), times dP/dV
-//!   (-K V0 / V^2 and -E_L), times the volume gradient dV/dy, plus the viscous terms' -eta
-//!   dV/dy on the matching velocities: for a free vertex the
-//!   area-weighted normal Σ (b x c)/6 over its triangles (divergence theorem), for the ribs
-//!   and the sternum (whose anchors carry wall points) central differences of the volume.
+//!   and airway flow P_T = -P_L(V_T) - R dV_T/dt) couple every wall point to every other.
+//!   Their part is exact in rank: u = ∂f/∂P, the response of the accelerations to a unit
+//!   pressure (f is linear in each pressure, so one evaluation with P + 1 gives it exactly),
+//!   times dP/dV (-K V0 / V^2 and -E_L), times the volume gradient dV/dy, plus the viscous
+//!   terms' -eta dV/dy on the matching velocities: for a free vertex the area-weighted
+//!   normal Σ (b x c)/6 over its triangles (divergence theorem), for the ribs and the
+//!   sternum (whose anchors carry wall points) central differences of the volume.
+//!
+//! [`TorsoJacobian::full`] gives the Jacobian of the full right-hand side ([`super::rhs`],
+//! the whole mass matrix M, whose rigid bodies are coupled and whose cavities add rank-two
+//! volume inertances), which the stiff method (ROS34PW2, a W-method) uses. Forces f and
+//! accelerations relate by a = M^-1 f = L M_b^-1 f with L = M^-1 M_b, M_b the block
+//! diagonal; L does not depend on the state, so the full Jacobian is L J_b. L is the
+//! identity plus 32 rank-one terms a_k b_k^T ([`super::inertia::MassMatrix::local_to_full`]:
+//! 30 for the rigid bodies' coupled block, 2 for the volume inertances), and
+//! L J_b = J_b + Σ a_k (J_b^T b_k)^T keeps S as the sparse part and grows the rank from 2
+//! to 34. Differencing the full right-hand side instead would make every row dense. The
+//! equilibrium's Newton iterations keep the block-local Jacobian: their residual is the
+//! block-local accelerations, which vanish where the true ones do, and J_b is exactly its
+//! Jacobian.
 
 use super::forces;
 use super::model::{Carrier, Model, RIBS, volume};

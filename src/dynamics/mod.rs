@@ -173,8 +173,9 @@ impl Data {
 }
 
 /// The right-hand side with the mass matrix's block-diagonal part only (no volume
-/// inertances, `inertia::MassMatrix::solve_local`): the function whose Jacobian
-/// [`jacobian::TorsoJacobian`] gives, for the stiff method.
+/// inertances, `inertia::MassMatrix::solve_local`): the equilibrium's residual, whose
+/// Jacobian [`jacobian::TorsoJacobian::new`] gives (the stiff method's,
+/// [`jacobian::TorsoJacobian::full`], maps it through the whole mass matrix).
 pub fn rhs_local(model: &Model, data: &mut Data, act: &Activations, y: &[f64], dy: &mut [f64]) {
     let layout = Layout::new(model);
     kinematics::positions_and_velocities(model, data, &layout, y);

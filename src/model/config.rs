@@ -43,10 +43,10 @@ pub struct SolverConfig {
     pub atol: f64,
     /// Largest internal step [s], in [1e-5, 1] (default 0.05).
     pub max_step: f64,
-    /// Whether the explicit methods step past the times the model is advanced to and read
-    /// the state there from the step's continuous extension (default), or end a step on
-    /// each of them (`false`: every communication point costs at least one step). See
-    /// [`crate::solver::Integrator::integrate_ahead`].
+    /// Whether the methods step past the times the model is advanced to and read the state
+    /// there from the step's continuous extension (default; the stiff method's restarts
+    /// still end on the time), or end a step on each of them (`false`: every communication
+    /// point costs at least one step). See [`crate::solver::Integrator::integrate_ahead`].
     #[serde(default = "step_past_outputs_default")]
     pub step_past_outputs: bool,
 }

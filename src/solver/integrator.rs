@@ -297,7 +297,9 @@ impl Integrator {
     /// this call gave; any other state restarts), so communication points cost
     /// no step of their own and, while they fall inside one step, no evaluation at all. A
     /// call from any other point restarts from `(t, y)`. The stiff method runs past `t_end`
-    /// likewise, its states read from the cubic Hermite interpolant of its last step. On error, `*t` and `y` hold the last
+    /// likewise, its states read from the cubic Hermite interpolant of its last step, but a
+    /// restart's steps end on `t_end` (the interpolant is not stiffly accurate, and a state
+    /// read from it would start the next restart). On error, `*t` and `y` hold the last
     /// accepted step (or stay as given when none was accepted).
     pub fn integrate_ahead<O: Ode + ?Sized>(
         &mut self,
@@ -363,7 +365,9 @@ impl Integrator {
     }
 
     /// [`Integrator::integrate_ahead`] for the stiff method: its steps run past `t_end` and
-    /// the caller's state comes from the last step's cubic Hermite interpolant.
+    /// the caller's state comes from the last step's cubic Hermite interpolant, except on a
+    /// restart (the first call after [`Integrator::invalidate`], or from another state),
+    /// whose steps end on `t_end` so that the state it gives is a step's own.
     fn stiff_ahead<O: Ode + ?Sized>(
         &mut self,
         ode: &mut O,
@@ -399,7 +403,12 @@ impl Integrator {
         if a.t < t_end {
             let mut yint = std::mem::take(&mut a.y);
             let mut tint = a.t;
-            let result = r.run(ode, &mut tint, &mut yint, t_end, true, &[], &mut |_, _| {});
+            // A restart's first run lands on t_end: the cubic Hermite interpolant is not
+            // stiffly accurate (its error in a stiff component is about |h lambda| / 6 times
+            // the step's error estimate), so a state read from it must not become the start
+            // of the next restart when the inputs change on every call.
+            let past = resume;
+            let result = r.run(ode, &mut tint, &mut yint, t_end, past, &[], &mut |_, _| {});
             let a = &mut self.ahead;
             a.y = yint;
             if let Err(e) = result {

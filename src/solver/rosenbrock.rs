@@ -85,6 +85,11 @@ const REUSE_BAND: (f64, f64) = (0.8, 1.25);
 const HOLD_RATIO: f64 = 1.2;
 /// The Jacobian is re-evaluated after this many accepted steps.
 const JACOBIAN_MAX_AGE: u32 = 40;
+/// A rejection re-evaluates the Jacobian when it is at least this many accepted steps old,
+/// or on the second rejection in a row (a W-method keeps its order with a stale matrix; a
+/// rejection of a step with a young one is most likely the step size's, which the controller
+/// corrects).
+const JACOBIAN_STALE_AGE: u32 = 3;
 
 /// Transformed coefficients (Hairer & Wanner IV.7): a, c, m, m - m̂, α_i, γ_i.
 #[derive(Clone, Copy, Debug)]
@@ -366,6 +371,7 @@ impl Rosenbrock {
             hold_ratio: HOLD_RATIO,
         };
         let mut chain = Chain::new(self.h_next);
+        let mut rejections_in_row = 0u32;
         while *t < t_end {
             let horizon = if past { f64::INFINITY } else { t_end };
             let p = chain.plan(&mut self.h_next, *t, horizon, &opts)?;
@@ -414,16 +420,22 @@ impl Rosenbrock {
                     *t = t_new;
                     w.jac_fresh = false;
                     w.jac_age += 1;
+                    rejections_in_row = 0;
                 }
                 outcome => {
                     self.stats.rejected += 1;
+                    rejections_in_row += 1;
                     let err = match outcome {
                         Attempt::Error(err) => Some(err),
                         Attempt::NonFinite | Attempt::Singular => None,
                     };
                     chain.reject(&ctl, err, h, *t, &mut self.h_next, &opts)?;
-                    // a stale Jacobian may be the cause: evaluate it afresh
-                    if !self.work.jac_fresh {
+                    // a stale Jacobian may be the cause: evaluate it afresh when it is old,
+                    // when the step failed outright, or when a shorter step failed again
+                    let stale = self.work.jac_age >= JACOBIAN_STALE_AGE
+                        || rejections_in_row >= 2
+                        || err.is_none();
+                    if !self.work.jac_fresh && stale {
                         self.evaluate_jacobian(ode, *t, y);
                     }
                 }
