@@ -72,6 +72,40 @@ struct Ahead {
     dense: Vec<f64>,
 }
 
+impl Ahead {
+    /// Starts a call of [`Integrator::integrate_ahead`] at (`t`, `y`): sizes the buffers
+    /// (state length `n`, dense output `dense_len`), and returns whether the call resumes the
+    /// integration ahead (the caller is exactly where the last call left it); otherwise the
+    /// internal state restarts from (`t`, `y`) with no step. Either way the memory is marked
+    /// invalid until the call succeeds.
+    fn begin(&mut self, n: usize, dense_len: usize, t: f64, y: &[f64]) -> bool {
+        for (buf, len) in [
+            (&mut self.y, n),
+            (&mut self.y0, n),
+            (&mut self.out_y, n),
+            (&mut self.dense, dense_len),
+        ] {
+            if buf.len() != len {
+                buf.clear();
+                buf.resize(len, 0.0);
+                self.valid = false;
+            }
+        }
+        let resume = self.valid
+            && self.out_t == t
+            && self.t >= t
+            && self.have_step
+            && self.out_y.as_slice() == y;
+        if !resume {
+            self.t = t;
+            self.y.copy_from_slice(y);
+            self.have_step = false;
+        }
+        self.valid = false;
+        resume
+    }
+}
+
 /// Adaptive embedded Runge-Kutta integrator with memory across calls.
 ///
 /// Holds the method, its options, the step size to try next, the PI-controller memory,
@@ -318,27 +352,7 @@ impl Integrator {
         self.ensure_workspace();
         let n = self.dim;
         let dense_len = self.work.dense.len();
-        let a = &mut self.ahead;
-        for (buf, len) in [
-            (&mut a.y, n),
-            (&mut a.y0, n),
-            (&mut a.out_y, n),
-            (&mut a.dense, dense_len),
-        ] {
-            if buf.len() != len {
-                buf.clear();
-                buf.resize(len, 0.0);
-                a.valid = false;
-            }
-        }
-        let resume =
-            a.valid && a.out_t == *t && a.t >= *t && a.have_step && a.out_y.as_slice() == &*y;
-        if !resume {
-            a.t = *t;
-            a.y.copy_from_slice(y);
-            a.have_step = false;
-        }
-        a.valid = false;
+        self.ahead.begin(n, dense_len, *t, y);
         let mut yint = std::mem::take(&mut self.ahead.y);
         let mut tint = self.ahead.t;
         let result = self.step_past(ode, &mut tint, &mut yint, t_end);
@@ -380,26 +394,7 @@ impl Integrator {
             .stiff
             .get_or_insert_with(|| Box::new(Rosenbrock::new(self.options, n)));
         let a = &mut self.ahead;
-        for (buf, len) in [
-            (&mut a.y, n),
-            (&mut a.y0, n),
-            (&mut a.out_y, n),
-            (&mut a.dense, 2 * n),
-        ] {
-            if buf.len() != len {
-                buf.clear();
-                buf.resize(len, 0.0);
-                a.valid = false;
-            }
-        }
-        let resume =
-            a.valid && a.out_t == *t && a.t >= *t && a.have_step && a.out_y.as_slice() == &*y;
-        if !resume {
-            a.t = *t;
-            a.y.copy_from_slice(y);
-            a.have_step = false;
-        }
-        a.valid = false;
+        let resume = a.begin(n, 2 * n, *t, y);
         if a.t < t_end {
             let mut yint = std::mem::take(&mut a.y);
             let mut tint = a.t;
