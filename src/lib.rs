@@ -17,7 +17,7 @@
 //! | [`observe`] | volumes, pressures and displacements read off a state |
 //! | [`model`] | the facade [`model::Torso`] |
 //! | [`fit`], [`stats`] | SLP recordings and fitting; validation statistics against spirometry |
-//! | [`fmi`], [`capi`] | the FMI 2.0 co-simulation layer and the native C ABI |
+//! | [`fmi`], [`capi`] | the FMI 2.0 and 3.0 co-simulation layer and the native C ABI |
 //! | `cli`, `bench` | the `torso` command-line tool and its measurements (feature `tools`) |
 //!
 //! The command-line tool and the benchmarks behind `torso bench` are compiled only with the

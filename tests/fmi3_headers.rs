@@ -8,6 +8,10 @@
 //!
 //! Every function of the header is exported (importers such as fmpy resolve them all when
 //! they load the library); those this FMU does not provide return `fmi3Error` with a log line.
+//! Those are written one line each, as invocations of the `not_provided!` and
+//! `no_variables!` macros, which cbindgen does not expand: [`macro_declarations`] writes out
+//! the function each line declares (the macros' fixed leading parameters, then the line's),
+//! and cbindgen reads those too.
 
 use breathing_torso::fmi::fmi3::types::fmi3Status;
 use std::mem::size_of;
@@ -42,6 +46,56 @@ fn official_function_names(dir: &std::path::Path) -> Vec<String> {
     all
 }
 
+/// The exported functions declared one line each through the `not_provided!` and
+/// `no_variables!` macros of `src/fmi/fmi3/ffi.rs`, written out as Rust functions with the
+/// signatures the macros give them: `not_provided!` puts `instance: fmi3Instance` first,
+/// `no_variables!` also the value references and their count.
+fn macro_declarations() -> String {
+    let source = std::fs::read_to_string(root().join("src/fmi/fmi3/ffi.rs")).unwrap();
+    let mut out = String::from("use super::types::*;\n");
+    let mut leading = None;
+    let mut count = 0;
+    for line in source.lines() {
+        let line = line.trim();
+        if line == "not_provided! {" {
+            leading = Some("instance: fmi3Instance");
+            continue;
+        }
+        if line == "no_variables! {" {
+            leading = Some(
+                "instance: fmi3Instance, valueReferences: *const fmi3ValueReference, \
+                 nValueReferences: usize",
+            );
+            continue;
+        }
+        let Some(first) = leading else { continue };
+        if line == "}" {
+            leading = None;
+            continue;
+        }
+        let (name, rest) = line
+            .split_once('(')
+            .expect("a macro line: name(arguments) => ...");
+        let (arguments, _) = rest
+            .split_once(") =>")
+            .expect("a macro line: name(arguments) => ...");
+        let arguments = if arguments.is_empty() {
+            first.to_string()
+        } else {
+            format!("{first}, {arguments}")
+        };
+        out.push_str(&format!(
+            "#[unsafe(no_mangle)]\npub unsafe extern \"C\" fn {name}({arguments}) -> fmi3Status {{}}\n"
+        ));
+        count += 1;
+    }
+    assert!(
+        count > 40,
+        "{count} macro-declared functions found in src/fmi/fmi3/ffi.rs"
+    );
+    out
+}
+
 fn generate_declarations() -> String {
     let mut config = cbindgen::Config {
         language: cbindgen::Language::C,
@@ -68,10 +122,13 @@ fn generate_declarations() -> String {
     ]
     .map(String::from)
     .to_vec();
+    let expanded = std::env::temp_dir().join(format!("bt_fmi3_macros_{}.rs", std::process::id()));
+    std::fs::write(&expanded, macro_declarations()).unwrap();
     let bindings = cbindgen::Builder::new()
         .with_config(config)
         .with_src(root().join("src/fmi/fmi3/types.rs"))
         .with_src(root().join("src/fmi/fmi3/ffi.rs"))
+        .with_src(&expanded)
         .generate()
         .expect("cbindgen reads the FMI 3.0 sources");
     let mut out = Vec::new();

@@ -6,8 +6,9 @@
 use breathing_torso::fmi::ffi::*;
 use breathing_torso::fmi::instance::{FmuState, Instance, LogSink, Phase};
 use breathing_torso::fmi::table;
-use breathing_torso::fmi::types::fmi2Status::{self, *};
+use breathing_torso::fmi::types::fmi2Status::*;
 use breathing_torso::fmi::types::*;
+use breathing_torso::fmi::{FMI2, Status};
 use std::cell::RefCell;
 use std::ffi::CString;
 use std::ptr::{null, null_mut};
@@ -165,7 +166,7 @@ fn null_arguments_are_errors_not_crashes() {
 }
 
 /// Messages received by a test logger: (status, category, message).
-type Log = Rc<RefCell<Vec<(fmi2Status, String, String)>>>;
+type Log = Rc<RefCell<Vec<(Status, String, String)>>>;
 
 fn recording_instance() -> (Instance, Log) {
     let log = Rc::new(RefCell::new(Vec::new()));
@@ -175,7 +176,7 @@ fn recording_instance() -> (Instance, Log) {
             .borrow_mut()
             .push((s, c.to_string(), m.to_string()))
     });
-    (Instance::new("t", None, Some(sink), false), log)
+    (Instance::new(&FMI2, "t", None, Some(sink), false), log)
 }
 
 #[test]
@@ -192,46 +193,69 @@ fn state_machine_and_messages() {
             .2
             .contains("illegal call sequence")
     );
-    assert_eq!(inst.set_real(&[vr("subject.age")], &[55.0]), fmi2OK);
     assert_eq!(
-        inst.set_real(&[vr("activation.scalenes")], &[f64::NAN]),
-        fmi2Error
+        inst.set_real("fmi2SetReal", &[vr("subject.age")], &[55.0]),
+        Status::Ok
+    );
+    assert_eq!(
+        inst.set_real("fmi2SetReal", &[vr("activation.scalenes")], &[f64::NAN]),
+        Status::Error
     );
     let msg = log.borrow().last().unwrap().clone();
-    assert_eq!((msg.0, msg.1.as_str()), (fmi2Error, "logStatusError"));
+    assert_eq!((msg.0, msg.1.as_str()), (Status::Error, "logStatusError"));
     assert!(
         msg.2.contains("activation.scalenes") && msg.2.contains("[0, 1]"),
         "{}",
         msg.2
     );
-    assert_eq!(inst.setup_experiment(Some(1e-7), 0.5, Some(10.0)), fmi2OK);
+    assert_eq!(
+        inst.setup_experiment("fmi2SetupExperiment", Some(1e-7), 0.5, Some(10.0)),
+        Status::Ok
+    );
     assert_eq!(
         inst.config().solver.rtol,
         1e-7,
         "the master's tolerance becomes solver.rtol"
     );
-    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
     assert_eq!(inst.phase(), Phase::StepComplete);
     assert_eq!(inst.time(), 0.5);
-    assert_eq!(inst.set_real(&[vr("subject.age")], &[40.0]), fmi2Error);
+    assert_eq!(
+        inst.set_real("fmi2SetReal", &[vr("subject.age")], &[40.0]),
+        Status::Error
+    );
     assert_eq!(inst.config().subject.age, 55.0);
-    assert_eq!(inst.do_step(0.5, 20.0), fmi2Error, "beyond stopTime");
-    assert_eq!(inst.do_step(0.4, 0.1), fmi2Error, "wrong current time");
+    assert_eq!(
+        inst.do_step("fmi2DoStep", 0.5, 20.0),
+        Status::Error,
+        "beyond stopTime"
+    );
+    assert_eq!(
+        inst.do_step("fmi2DoStep", 0.4, 0.1),
+        Status::Error,
+        "wrong current time"
+    );
     let state = inst.get_fmu_state();
-    assert_eq!(inst.reset(), fmi2OK);
+    assert_eq!(inst.reset(), Status::Ok);
     assert_eq!(
         (inst.phase(), inst.time(), inst.config().subject.age),
         (Phase::Instantiated, 0.0, 30.0)
     );
-    assert_eq!(inst.set_fmu_state(&state), fmi2OK);
+    assert_eq!(inst.set_fmu_state("fmi2SetFMUstate", &state), Status::Ok);
     assert_eq!(
         (inst.phase(), inst.time(), inst.config().subject.age),
         (Phase::StepComplete, 0.5, 55.0)
     );
     // Debug logging: events are off with loggingOn = false, on after fmi2SetDebugLogging.
     let n = log.borrow().len();
-    assert_eq!(inst.set_debug_logging(true, &["logEvents"]), fmi2OK);
+    assert_eq!(
+        inst.set_debug_logging("fmi2SetDebugLogging", true, &["logEvents"]),
+        Status::Ok
+    );
     inst.reset();
     assert!(
         log.borrow()[n..]
@@ -244,12 +268,13 @@ fn state_machine_and_messages() {
 fn fmu_state_bytes_round_trip_and_refuse_garbage() {
     let (mut inst, _) = recording_instance();
     inst.set_real(
+        "fmi2SetReal",
         &[table().by_name("drive.ribs.amplitude").unwrap().vr],
         &[0.3],
     );
-    inst.setup_experiment(None, 0.0, None);
+    inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None);
     inst.enter_initialization_mode();
-    inst.exit_initialization_mode();
+    inst.exit_initialization_mode("fmi2ExitInitializationMode");
     let state = inst.get_fmu_state();
     let bytes = state.to_bytes();
     assert_eq!(FmuState::from_bytes(&bytes).unwrap(), state);
@@ -277,7 +302,7 @@ fn fmu_state_bytes_round_trip_and_refuse_garbage() {
     assert!(FmuState::from_bytes(&noise).is_err());
 }
 
-/// An initialised instance refuses a state saved with other fixed parameters (fmi2Error, a
+/// An initialised instance refuses a state saved with other fixed parameters (Status::Error, a
 /// log line naming them, nothing changed), as the C ABI's `bt_restore` refuses a snapshot of
 /// another model; after fmi2Reset, when fixed parameters may be set again, it takes it.
 #[test]
@@ -287,23 +312,32 @@ fn fmu_state_of_other_fixed_parameters_is_refused_once_initialised() {
     let start = |stature: f64| {
         let (mut inst, log) = recording_instance();
         assert_eq!(
-            inst.set_integer(&[vr("scene.level_of_detail")], &[0]),
-            fmi2OK
+            inst.set_integer("fmi2SetInteger", &[vr("scene.level_of_detail")], &[0]),
+            Status::Ok
         );
-        assert_eq!(inst.set_real(&[vr("subject.stature")], &[stature]), fmi2OK);
-        inst.setup_experiment(None, 0.0, None);
-        assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-        assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+        assert_eq!(
+            inst.set_real("fmi2SetReal", &[vr("subject.stature")], &[stature]),
+            Status::Ok
+        );
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        assert_eq!(
+            inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+            Status::Ok
+        );
         (inst, log)
     };
     let (mut a, _) = start(1.75);
-    assert_eq!(a.do_step(0.0, 0.1), fmi2OK);
+    assert_eq!(a.do_step("fmi2DoStep", 0.0, 0.1), Status::Ok);
     let state_a = a.get_fmu_state();
     let (mut b, log) = start(1.9);
-    assert_eq!(b.do_step(0.0, 0.2), fmi2OK);
+    assert_eq!(b.do_step("fmi2DoStep", 0.0, 0.2), Status::Ok);
     let lung = |i: &mut Instance| {
         let mut v = [0.0];
-        assert_eq!(i.get_real(&[vr("volume.lung")], &mut v), fmi2OK);
+        assert_eq!(
+            i.get_real("fmi2GetReal", &[vr("volume.lung")], &mut v),
+            Status::Ok
+        );
         v[0]
     };
     let before = lung(&mut b);
@@ -311,9 +345,9 @@ fn fmu_state_of_other_fixed_parameters_is_refused_once_initialised() {
         state_a.clone(),
         FmuState::from_bytes(&state_a.to_bytes()).unwrap(),
     ] {
-        assert_eq!(b.set_fmu_state(&state), fmi2Error);
+        assert_eq!(b.set_fmu_state("fmi2SetFMUstate", &state), Status::Error);
         let msg = log.borrow().last().unwrap().clone();
-        assert_eq!(msg.0, fmi2Error);
+        assert_eq!(msg.0, Status::Error);
         assert!(
             msg.2.contains("fmi2SetFMUstate")
                 && msg
@@ -332,16 +366,19 @@ fn fmu_state_of_other_fixed_parameters_is_refused_once_initialised() {
     // Its own states and those of an instance with the same fixed parameters but another
     // drive are taken.
     let own = b.get_fmu_state();
-    assert_eq!(b.do_step(0.2, 0.1), fmi2OK);
-    assert_eq!(b.set_fmu_state(&own), fmi2OK);
+    assert_eq!(b.do_step("fmi2DoStep", 0.2, 0.1), Status::Ok);
+    assert_eq!(b.set_fmu_state("fmi2SetFMUstate", &own), Status::Ok);
     assert_eq!((b.time(), lung(&mut b)), (0.2, before));
     let (mut c, _) = start(1.9);
-    assert_eq!(c.set_real(&[vr("drive.ribs.amplitude")], &[0.3]), fmi2OK);
-    assert_eq!(c.set_fmu_state(&own), fmi2OK);
+    assert_eq!(
+        c.set_real("fmi2SetReal", &[vr("drive.ribs.amplitude")], &[0.3]),
+        Status::Ok
+    );
+    assert_eq!(c.set_fmu_state("fmi2SetFMUstate", &own), Status::Ok);
     assert_eq!((c.time(), lung(&mut c)), (0.2, before));
     // After fmi2Reset the fixed parameters are open again: the state's are taken.
-    assert_eq!(b.reset(), fmi2OK);
-    assert_eq!(b.set_fmu_state(&state_a), fmi2OK);
+    assert_eq!(b.reset(), Status::Ok);
+    assert_eq!(b.set_fmu_state("fmi2SetFMUstate", &state_a), Status::Ok);
     assert_eq!(
         (b.phase(), b.time(), b.config().subject.stature),
         (Phase::StepComplete, 0.1, 1.75)
@@ -360,34 +397,49 @@ fn initialisation_starts_at_the_inputs_equilibrium() {
     let start = |inst: &mut Instance, diaphragm: f64| {
         for family in ["ribs", "diaphragm", "abdominals"] {
             let name = format!("drive.{family}.amplitude");
-            assert_eq!(inst.set_real(&[vr(&name)], &[0.0]), fmi2OK);
+            assert_eq!(
+                inst.set_real("fmi2SetReal", &[vr(&name)], &[0.0]),
+                Status::Ok
+            );
         }
-        assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-        assert_eq!(inst.enter_initialization_mode(), fmi2OK);
         assert_eq!(
-            inst.set_real(&[vr("activation.diaphragm")], &[diaphragm]),
-            fmi2OK
+            inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+            Status::Ok
         );
-        assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        assert_eq!(
+            inst.set_real("fmi2SetReal", &[vr("activation.diaphragm")], &[diaphragm]),
+            Status::Ok
+        );
+        assert_eq!(
+            inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+            Status::Ok
+        );
         let mut v = [0.0];
-        assert_eq!(inst.get_real(&[vr("volume.lung")], &mut v), fmi2OK);
+        assert_eq!(
+            inst.get_real("fmi2GetReal", &[vr("volume.lung")], &mut v),
+            Status::Ok
+        );
         v[0]
     };
     let (mut inst, _log) = recording_instance();
     let rest = start(&mut inst, 0.0);
-    assert_eq!(inst.reset(), fmi2OK);
+    assert_eq!(inst.reset(), Status::Ok);
     let held = start(&mut inst, 0.3);
     let inspired = held - rest;
     assert!(inspired > 0.1, "the diaphragm inspired {inspired} L");
-    assert_eq!(inst.do_step(0.0, 4.0), fmi2OK);
+    assert_eq!(inst.do_step("fmi2DoStep", 0.0, 4.0), Status::Ok);
     let mut v = [0.0];
-    assert_eq!(inst.get_real(&[vr("volume.lung")], &mut v), fmi2OK);
+    assert_eq!(
+        inst.get_real("fmi2GetReal", &[vr("volume.lung")], &mut v),
+        Status::Ok
+    );
     assert!(
         (v[0] - held).abs() < 0.01 * inspired,
         "lung volume {held} L at the start, {} L 4 s later",
         v[0]
     );
-    assert_eq!(inst.reset(), fmi2OK);
+    assert_eq!(inst.reset(), Status::Ok);
     assert_eq!(start(&mut inst, 0.3), held);
 }
 
@@ -399,17 +451,29 @@ fn a_drive_parameter_changed_after_initialisation_acts_as_a_step() {
     let t = table();
     let vr = |n: &str| t.by_name(n).unwrap().vr;
     let (mut inst, _log) = recording_instance();
-    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
-    let mut before = [0.0];
-    assert_eq!(inst.get_real(&[vr("volume.lung")], &mut before), fmi2OK);
     assert_eq!(
-        inst.set_real(&[vr("drive.diaphragm.amplitude")], &[0.6]),
-        fmi2OK
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
+    let mut before = [0.0];
+    assert_eq!(
+        inst.get_real("fmi2GetReal", &[vr("volume.lung")], &mut before),
+        Status::Ok
+    );
+    assert_eq!(
+        inst.set_real("fmi2SetReal", &[vr("drive.diaphragm.amplitude")], &[0.6]),
+        Status::Ok
     );
     let mut after = [0.0];
-    assert_eq!(inst.get_real(&[vr("volume.lung")], &mut after), fmi2OK);
+    assert_eq!(
+        inst.get_real("fmi2GetReal", &[vr("volume.lung")], &mut after),
+        Status::Ok
+    );
     assert_eq!(
         after[0], before[0],
         "the state moved when the drive changed"

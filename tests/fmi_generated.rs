@@ -199,7 +199,7 @@ fn the_c_library_reads_grid_markers_beyond_the_fmus_outputs() {
 #[test]
 fn the_generic_fmu_refuses_a_grid_beyond_its_marker_outputs() {
     use breathing_torso::fmi::instance::Instance;
-    use breathing_torso::fmi::types::fmi2Status::fmi2OK;
+    use breathing_torso::fmi::{FMI2, Status};
     use std::sync::{Arc, Mutex};
     let log = Arc::new(Mutex::new(Vec::<String>::new()));
     let t = table();
@@ -208,21 +208,31 @@ fn the_generic_fmu_refuses_a_grid_beyond_its_marker_outputs() {
         let sink_log = log.clone();
         let sink: breathing_torso::fmi::instance::LogSink =
             Box::new(move |_s, _c: &str, m: &str| sink_log.lock().unwrap().push(m.to_string()));
-        let mut inst = Instance::new("grid", None, Some(sink), false);
+        let mut inst = Instance::new(&FMI2, "grid", None, Some(sink), false);
         assert_eq!(
-            inst.set_integer(&[vr("scene.level_of_detail")], &[0]),
-            fmi2OK
+            inst.set_integer("fmi2SetInteger", &[vr("scene.level_of_detail")], &[0]),
+            Status::Ok
         );
         assert_eq!(
-            inst.set_integer(&[vr("grid.rows"), vr("grid.cols")], &[rows, cols]),
-            fmi2OK
+            inst.set_integer(
+                "fmi2SetInteger",
+                &[vr("grid.rows"), vr("grid.cols")],
+                &[rows, cols]
+            ),
+            Status::Ok
         );
-        assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-        assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-        (inst.exit_initialization_mode(), inst)
+        assert_eq!(
+            inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+            Status::Ok
+        );
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        (
+            inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+            inst,
+        )
     };
     let (status, _) = run(16, 4);
-    assert_ne!(status, fmi2OK);
+    assert_ne!(status, Status::Ok);
     let msg = log.lock().unwrap().join("\n");
     assert!(
         msg.contains("grid.rows x grid.cols")
@@ -232,11 +242,15 @@ fn the_generic_fmu_refuses_a_grid_beyond_its_marker_outputs() {
         "{msg}"
     );
     let (status, mut inst) = run(5, 6);
-    assert_eq!(status, fmi2OK);
+    assert_eq!(status, Status::Ok);
     let mut v = [0.0; 2];
     assert_eq!(
-        inst.get_real(&[vr("marker[30].z"), vr("marker[31].x")], &mut v),
-        fmi2OK
+        inst.get_real(
+            "fmi2GetReal",
+            &[vr("marker[30].z"), vr("marker[31].x")],
+            &mut v
+        ),
+        Status::Ok
     );
     assert!(v[0] != 0.0 && v[1] == 0.0, "{v:?}");
 }

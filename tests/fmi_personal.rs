@@ -11,6 +11,7 @@ use breathing_torso::fmi::personal::{PARAMETERS, table_in};
 use breathing_torso::fmi::ssv;
 use breathing_torso::fmi::types::fmi2Status::{fmi2Error, fmi2OK};
 use breathing_torso::fmi::variables::{Value, table};
+use breathing_torso::fmi::{FMI2, Status};
 use quick_xml::Reader;
 use quick_xml::events::Event;
 use std::collections::HashMap;
@@ -284,32 +285,38 @@ fn lung_and_marker(inst: &mut Instance, steps: usize) -> Vec<[f64; 2]> {
         t.by_name("volume.lung").unwrap().vr,
         t.by_name("marker[1].x").unwrap().vr,
     ];
-    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+    assert_eq!(
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
     let h = 0.05;
     let mut out = Vec::new();
     for k in 0..steps {
-        assert_eq!(inst.do_step(k as f64 * h, h), fmi2OK);
+        assert_eq!(inst.do_step("fmi2DoStep", k as f64 * h, h), Status::Ok);
         let mut v = [0.0; 2];
-        assert_eq!(inst.get_real(&vrs, &mut v), fmi2OK);
+        assert_eq!(inst.get_real("fmi2GetReal", &vrs, &mut v), Status::Ok);
         out.push(v);
     }
     out
 }
 
 fn generic_with(set: &[(String, Value)]) -> Instance {
-    let mut inst = Instance::new("generic", None, None, false);
+    let mut inst = Instance::new(&FMI2, "generic", None, None, false);
     let t = table();
     for (name, value) in set {
         let vr = [t.by_name(name).unwrap().vr];
         let status = match value {
-            Value::Real(x) => inst.set_real(&vr, &[*x]),
-            Value::Integer(i) => inst.set_integer(&vr, &[*i]),
-            Value::Boolean(b) => inst.set_boolean(&vr, &[i32::from(*b)]),
-            Value::String(s) => inst.set_string(&vr, std::slice::from_ref(s)),
+            Value::Real(x) => inst.set_real("fmi2SetReal", &vr, &[*x]),
+            Value::Integer(i) => inst.set_integer("fmi2SetInteger", &vr, &[*i]),
+            Value::Boolean(b) => inst.set_boolean("fmi2SetBoolean", &vr, &[i32::from(*b)]),
+            Value::String(s) => inst.set_string("fmi2SetString", &vr, std::slice::from_ref(s)),
         };
-        assert_eq!(status, fmi2OK, "{name}");
+        assert_eq!(status, Status::Ok, "{name}");
     }
     inst
 }
@@ -326,6 +333,7 @@ fn the_personalised_fmu_runs_as_the_generic_one_with_the_ssv_applied() {
         "the library computes the description's GUID"
     );
     let mut personal = Instance::with_table(
+        &FMI2,
         "personal",
         Some(resources.clone()),
         None,
@@ -371,10 +379,17 @@ fn the_personalised_fmu_runs_as_the_generic_one_with_the_ssv_applied() {
     let _ = std::fs::remove_dir_all(&broken);
     std::fs::create_dir_all(broken.join("subject")).unwrap();
     std::fs::copy(resources.join(PARAMETERS), broken.join(PARAMETERS)).unwrap();
-    let e = Instance::with_table("broken", Some(broken.clone()), None, false, personal_table)
-        .err()
-        .unwrap()
-        .to_string();
+    let e = Instance::with_table(
+        &FMI2,
+        "broken",
+        Some(broken.clone()),
+        None,
+        false,
+        personal_table,
+    )
+    .err()
+    .unwrap()
+    .to_string();
     assert!(
         e.contains("slp.reference") && e.contains("subject/result_reference.csv"),
         "{e}"
@@ -456,6 +471,7 @@ fn a_subject_on_another_grid_has_that_grids_markers() {
     assert_eq!(vars["grid.cols"].1["max"], "3");
     // The grid cannot be set to another size in that FMU.
     let mut inst = Instance::with_table(
+        &FMI2,
         "grid",
         None,
         None,
@@ -465,7 +481,7 @@ fn a_subject_on_another_grid_has_that_grids_markers() {
     .unwrap();
     assert_eq!(inst.config().scene.grid_rows, 4);
     let vr = [t.by_name("grid.rows").unwrap().vr];
-    assert_ne!(inst.set_integer(&vr, &[10]), fmi2OK);
+    assert_ne!(inst.set_integer("fmi2SetInteger", &vr, &[10]), Status::Ok);
     // Values outside a parameter's range, of the wrong type or for a non-parameter are refused.
     for (name, v) in [
         ("subject.age", Value::Real(500.0)),

@@ -8,9 +8,9 @@
 
 use breathing_torso::fmi::instance::Instance;
 use breathing_torso::fmi::table;
-use breathing_torso::fmi::types::fmi2Status::fmi2OK;
 use breathing_torso::fmi::variables::{Causality, Role, ScalarType, VR_AIRWAY_OPENING, Variable};
 use breathing_torso::fmi::xml::model_description;
+use breathing_torso::fmi::{FMI2, Status};
 
 fn outputs() -> Vec<&'static Variable> {
     table()
@@ -36,12 +36,22 @@ fn read_outputs(inst: &mut Instance) -> Vec<u64> {
         .map(|v| match v.ty {
             ScalarType::Real => {
                 let mut x = [f64::NAN];
-                assert_eq!(inst.get_real(&[v.vr], &mut x), fmi2OK, "{}", v.name);
+                assert_eq!(
+                    inst.get_real("fmi2GetReal", &[v.vr], &mut x),
+                    Status::Ok,
+                    "{}",
+                    v.name
+                );
                 x[0].to_bits()
             }
             ScalarType::Integer => {
                 let mut x = [0];
-                assert_eq!(inst.get_integer(&[v.vr], &mut x), fmi2OK, "{}", v.name);
+                assert_eq!(
+                    inst.get_integer("fmi2GetInteger", &[v.vr], &mut x),
+                    Status::Ok,
+                    "{}",
+                    v.name
+                );
                 x[0] as u64
             }
             _ => unreachable!("{} has no readable output type", v.name),
@@ -142,37 +152,43 @@ fn setting_every_input_without_a_step_changes_no_output() {
     assert_eq!(inputs.len(), 9);
     let zeros = vec![0.0; inputs.len()];
 
-    let mut inst = Instance::new("feedthrough", None, None, false);
+    let mut inst = Instance::new(&FMI2, "feedthrough", None, None, false);
     // Breathing, so that velocities and activations are not zero when the inputs change.
     let drive = [
         (vr("drive.ribs.amplitude"), 0.12),
         (vr("drive.diaphragm.amplitude"), 0.3),
     ];
     for (r, x) in drive {
-        assert_eq!(inst.set_real(&[r], &[x]), fmi2OK);
+        assert_eq!(inst.set_real("fmi2SetReal", &[r], &[x]), Status::Ok);
     }
-    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
+    assert_eq!(
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
 
     // In initialization mode.
     let before = read_outputs(&mut inst);
-    assert_eq!(inst.set_real(&inputs, &ones), fmi2OK);
+    assert_eq!(inst.set_real("fmi2SetReal", &inputs, &ones), Status::Ok);
     let after = read_outputs(&mut inst);
     assert_eq!(false_claims(&before, &after), Vec::<String>::new());
-    assert_eq!(inst.set_real(&inputs, &zeros), fmi2OK);
-    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+    assert_eq!(inst.set_real("fmi2SetReal", &inputs, &zeros), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
 
     // After breathing steps, at several communication points.
     let h = 0.05;
     let mut t = 0.0;
     for _ in 0..3 {
         for _ in 0..4 {
-            assert_eq!(inst.do_step(t, h), fmi2OK);
+            assert_eq!(inst.do_step("fmi2DoStep", t, h), Status::Ok);
             t += h;
         }
         let state = inst.get_fmu_state();
         let before = read_outputs(&mut inst);
-        assert_eq!(inst.set_real(&inputs, &ones), fmi2OK);
+        assert_eq!(inst.set_real("fmi2SetReal", &inputs, &ones), Status::Ok);
         let after = read_outputs(&mut inst);
         assert_eq!(
             false_claims(&before, &after),
@@ -186,28 +202,34 @@ fn setting_every_input_without_a_step_changes_no_output() {
             assert!((moved - 1.0).abs() < 1e-9, "{name} moved by {moved} Pa");
         }
         // The inputs do act, through the state: the next step differs from one without them.
-        assert_eq!(inst.do_step(t, h), fmi2OK);
+        assert_eq!(inst.do_step("fmi2DoStep", t, h), Status::Ok);
         let driven = read_outputs(&mut inst);
-        assert_eq!(inst.set_fmu_state(&state), fmi2OK);
-        assert_eq!(inst.do_step(t, h), fmi2OK);
+        assert_eq!(inst.set_fmu_state("fmi2SetFMUstate", &state), Status::Ok);
+        assert_eq!(inst.do_step("fmi2DoStep", t, h), Status::Ok);
         let held = read_outputs(&mut inst);
         let lung = outputs()
             .iter()
             .position(|v| v.name == "volume.lung")
             .unwrap();
         assert_ne!(driven[lung], held[lung], "the inputs reach the state");
-        assert_eq!(inst.set_fmu_state(&state), fmi2OK);
+        assert_eq!(inst.set_fmu_state("fmi2SetFMUstate", &state), Status::Ok);
     }
 
     // A fresh read after the inputs changed (no value computed before) agrees too.
-    let mut fresh = Instance::new("fresh", None, None, false);
-    assert_eq!(fresh.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(fresh.enter_initialization_mode(), fmi2OK);
-    assert_eq!(fresh.set_real(&inputs, &ones), fmi2OK);
+    let mut fresh = Instance::new(&FMI2, "fresh", None, None, false);
+    assert_eq!(
+        fresh.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(fresh.enter_initialization_mode(), Status::Ok);
+    assert_eq!(fresh.set_real("fmi2SetReal", &inputs, &ones), Status::Ok);
     let with_inputs = read_outputs(&mut fresh);
-    let mut plain = Instance::new("plain", None, None, false);
-    assert_eq!(plain.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(plain.enter_initialization_mode(), fmi2OK);
+    let mut plain = Instance::new(&FMI2, "plain", None, None, false);
+    assert_eq!(
+        plain.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(plain.enter_initialization_mode(), Status::Ok);
     let without = read_outputs(&mut plain);
     assert_eq!(false_claims(&with_inputs, &without), Vec::<String>::new());
 }

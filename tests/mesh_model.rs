@@ -12,7 +12,7 @@ use breathing_torso::anatomy::{Anatomy, Subject, SubjectMesh};
 use breathing_torso::capi::*;
 use breathing_torso::fmi::instance::{FmuState, Instance, LogSink};
 use breathing_torso::fmi::table;
-use breathing_torso::fmi::types::fmi2Status::{self, *};
+use breathing_torso::fmi::{FMI2, Status};
 use breathing_torso::mesh::{PrepareOptions, TriMesh, io, pipeline};
 use breathing_torso::model::run::{BreathSummary, run, summarise};
 use breathing_torso::model::{Config, Drive};
@@ -404,13 +404,13 @@ fn bad_directories_are_refused_with_the_file_and_the_reason() {
     assert!(message(e).contains("subject.mesh_dir"));
 }
 
-type Log = Rc<RefCell<Vec<(fmi2Status, String)>>>;
+type Log = Rc<RefCell<Vec<(Status, String)>>>;
 
 fn instance() -> (Instance, Log) {
     let log = Rc::new(RefCell::new(Vec::new()));
     let sink_log = log.clone();
     let sink: LogSink = Box::new(move |s, _c, m| sink_log.borrow_mut().push((s, m.to_string())));
-    (Instance::new("t", None, Some(sink), false), log)
+    (Instance::new(&FMI2, "t", None, Some(sink), false), log)
 }
 
 #[test]
@@ -422,13 +422,16 @@ fn fmu_sets_the_mesh_directory_and_refuses_a_bad_one_without_losing_the_instance
     let lod = t.by_name("scene.level_of_detail").unwrap().vr;
     let lung = t.by_name("volume.lung").unwrap().vr;
     let (mut inst, log) = instance();
-    assert_eq!(inst.set_integer(&[lod], &[LOD as i32]), fmi2OK);
+    assert_eq!(
+        inst.set_integer("fmi2SetInteger", &[lod], &[LOD as i32]),
+        Status::Ok
+    );
     // A bad directory: error naming the variable and the path; the instance carries on.
     let bad = std::env::temp_dir().join("torso_mesh_model_missing_fmu");
     let bad = bad.display().to_string();
     assert_eq!(
-        inst.set_string(&[var.vr], std::slice::from_ref(&bad)),
-        fmi2Error
+        inst.set_string("fmi2SetString", &[var.vr], std::slice::from_ref(&bad)),
+        Status::Error
     );
     let last = log.borrow().last().unwrap().1.clone();
     assert!(
@@ -439,24 +442,33 @@ fn fmu_sets_the_mesh_directory_and_refuses_a_bad_one_without_losing_the_instance
     // A good one.
     let good = prepared_dir().display().to_string();
     assert_eq!(
-        inst.set_string(&[var.vr], std::slice::from_ref(&good)),
-        fmi2OK
+        inst.set_string("fmi2SetString", &[var.vr], std::slice::from_ref(&good)),
+        Status::Ok
     );
     let mut got = [std::ptr::null(); 1];
-    let status = inst.get_string(&[var.vr], &mut got);
-    assert_eq!(status, fmi2OK);
+    let status = inst.get_string("fmi2GetString", &[var.vr], &mut got);
+    assert_eq!(status, Status::Ok);
     assert_eq!(unsafe { CStr::from_ptr(got[0]) }.to_str().unwrap(), good);
-    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
-    assert_eq!(inst.do_step(0.0, 0.5), fmi2OK);
+    assert_eq!(
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
+    assert_eq!(inst.do_step("fmi2DoStep", 0.0, 0.5), Status::Ok);
     let mut v = [0.0];
-    assert_eq!(inst.get_real(&[lung], &mut v), fmi2OK);
+    assert_eq!(inst.get_real("fmi2GetReal", &[lung], &mut v), Status::Ok);
     let frc = Subject::default().frc_ecsc();
     assert!((v[0] - frc).abs() <= 0.3 * frc, "lung {} L", v[0]);
     // After initialisation the directory is fixed.
-    assert_eq!(inst.set_string(&[var.vr], &[String::new()]), fmi2Error);
-    assert_eq!(inst.do_step(0.5, 0.5), fmi2OK);
+    assert_eq!(
+        inst.set_string("fmi2SetString", &[var.vr], &[String::new()]),
+        Status::Error
+    );
+    assert_eq!(inst.do_step("fmi2DoStep", 0.5, 0.5), Status::Ok);
 }
 
 /// The prepared subject mesh copied into `resources/subject_mesh` of a new scratch folder
@@ -490,35 +502,47 @@ fn a_relative_mesh_directory_moves_with_the_fmus_resources() {
     let steps = |inst: &mut Instance, k0: usize, k1: usize| -> Vec<f64> {
         (k0..k1)
             .map(|k| {
-                assert_eq!(inst.do_step(k as f64 * 0.1, 0.1), fmi2OK);
+                assert_eq!(inst.do_step("fmi2DoStep", k as f64 * 0.1, 0.1), Status::Ok);
                 let mut v = [0.0];
-                assert_eq!(inst.get_real(&[lung], &mut v), fmi2OK);
+                assert_eq!(inst.get_real("fmi2GetReal", &[lung], &mut v), Status::Ok);
                 v[0]
             })
             .collect()
     };
-    let mut a = Instance::new("a", Some(a_res.clone()), None, false);
-    assert_eq!(a.set_integer(&[lod], &[LOD as i32]), fmi2OK);
+    let mut a = Instance::new(&FMI2, "a", Some(a_res.clone()), None, false);
+    assert_eq!(
+        a.set_integer("fmi2SetInteger", &[lod], &[LOD as i32]),
+        Status::Ok
+    );
     let given = "subject_mesh".to_string();
-    assert_eq!(a.set_string(&[var], std::slice::from_ref(&given)), fmi2OK);
+    assert_eq!(
+        a.set_string("fmi2SetString", &[var], std::slice::from_ref(&given)),
+        Status::Ok
+    );
     let mut got = [std::ptr::null(); 1];
-    assert_eq!(a.get_string(&[var], &mut got), fmi2OK);
+    assert_eq!(a.get_string("fmi2GetString", &[var], &mut got), Status::Ok);
     assert_eq!(unsafe { CStr::from_ptr(got[0]) }.to_str().unwrap(), given);
-    assert_eq!(a.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(a.enter_initialization_mode(), fmi2OK);
-    assert_eq!(a.exit_initialization_mode(), fmi2OK);
+    assert_eq!(
+        a.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(a.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        a.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
     steps(&mut a, 0, 3);
     let bytes = a.get_fmu_state().to_bytes();
     let expected = steps(&mut a, 3, 8);
     drop(a);
     std::fs::remove_dir_all(a_res.parent().unwrap()).unwrap();
     let state = FmuState::from_bytes(&bytes).unwrap();
-    let mut b = Instance::new("b", Some(b_res), None, false);
-    assert_eq!(b.set_fmu_state(&state), fmi2OK);
+    let mut b = Instance::new(&FMI2, "b", Some(b_res), None, false);
+    assert_eq!(b.set_fmu_state("fmi2SetFMUstate", &state), Status::Ok);
     assert_eq!(steps(&mut b, 3, 8), expected);
     // Without resources the relative folder is nowhere: refused, naming the parameter.
     let (mut c, log) = instance();
-    assert_eq!(c.set_fmu_state(&state), fmi2Error);
+    assert_eq!(c.set_fmu_state("fmi2SetFMUstate", &state), Status::Error);
     let last = log.borrow().last().unwrap().1.clone();
     assert!(
         last.contains("subject.mesh_dir") && last.contains("subject_mesh"),
@@ -619,27 +643,34 @@ fn a_fit_on_a_subject_mesh_carries_the_mesh_in_the_fmus_resources() {
     assert!(resources.join("subject/mesh/skin.obj").is_file());
     let t = table_in(Some(&resources)).unwrap();
     assert_ne!(t.guid(), table().guid());
-    let mut inst = Instance::with_table("mesh", Some(resources.clone()), None, false, t).unwrap();
+    let mut inst =
+        Instance::with_table(&FMI2, "mesh", Some(resources.clone()), None, false, t).unwrap();
     // Kept as given (relative to resources/), found there when the model is built.
     assert_eq!(
         inst.config().subject_mesh_dir,
         Some(PathBuf::from("subject/mesh"))
     );
-    assert_eq!(inst.setup_experiment(None, 0.0, None), fmi2OK);
-    assert_eq!(inst.enter_initialization_mode(), fmi2OK);
-    assert_eq!(inst.exit_initialization_mode(), fmi2OK);
+    assert_eq!(
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
     // The same relative folder in the generic FMU's resources.
     let var = table().by_name("subject.mesh_dir").unwrap().vr;
-    let mut generic = Instance::new("g", Some(resources.clone()), None, false);
+    let mut generic = Instance::new(&FMI2, "g", Some(resources.clone()), None, false);
     assert_eq!(
-        generic.set_string(&[var], &["subject/mesh".to_string()]),
-        fmi2OK
+        generic.set_string("fmi2SetString", &[var], &["subject/mesh".to_string()]),
+        Status::Ok
     );
     // Without resources, the relative folder is not there: an error naming the parameter.
     let (mut bare, log) = instance();
     assert_eq!(
-        bare.set_string(&[var], &["subject/mesh".to_string()]),
-        fmi2Error
+        bare.set_string("fmi2SetString", &[var], &["subject/mesh".to_string()]),
+        Status::Error
     );
     let last = log.borrow().last().unwrap().1.clone();
     assert!(

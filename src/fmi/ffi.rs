@@ -1,143 +1,29 @@
 //! The 34 functions of FMI 2.0 (common and co-simulation), exported unmangled from the cdylib.
 //!
-//! Each body runs inside `catch_unwind` (a panic becomes `fmi2Error`, is logged, and moves the
-//! instance to its error state; nothing unwinds into the master), checks its pointers for
-//! null, checks the instance's state against the function's mask ([`super::instance::mask`])
-//! and forwards to the safe [`Instance`]. Strings received are copied; the logger is always
-//! called with the format `"%s"`.
+//! Each is a thin translation: it runs behind the shared guard ([`super::guard`]: a panic
+//! becomes `fmi2Error`, is logged, and moves the instance to its error state; nothing unwinds
+//! into the master; the instance's state is checked against the function's mask,
+//! [`super::instance::mask`]), reads its C arguments, forwards to the version-neutral
+//! [`Instance`] with its own name, and spells the neutral [`Status`] as `fmi2Status`. Strings
+//! received are copied; the logger is always called with the format `"%s"`.
 
 #![allow(non_snake_case)]
+// The FMI status-kind constants keep the standard's spelling, also in match patterns.
+#![allow(non_upper_case_globals)]
 
-use super::instance::{FmuState, Instance, LogSink, mask};
+use super::guard::{
+    self, null_argument, show, show_strings, slice, slice_mut, string, with_instance,
+};
+use super::instance::{Instance, LogSink, Phase, mask};
+use super::status::{FMI2, Status};
 use super::types::*;
 use super::uri::file_uri_to_path;
 use super::variables::table;
-use std::ffi::{CStr, CString};
+use std::ffi::CString;
 use std::os::raw::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use fmi2Status::{fmi2Error, fmi2OK};
-
-/// Runs `body` on the instance behind `c` if `function` is allowed in its state; panics are
-/// caught and reported. Every call is first logged under `logCalls` (when that category is
-/// on) as `function(args)`, the arguments formatted by `args` only then, also when the call
-/// is then refused.
-///
-/// # Safety
-/// `c` must be null or a pointer returned by [`fmi2Instantiate`] (or by
-/// `fmi3InstantiateCoSimulation`, which creates the same [`Instance`]) and not yet freed.
-pub(super) unsafe fn with_instance(
-    c: fmi2Component,
-    function: &str,
-    mask: u8,
-    args: impl FnOnce() -> String,
-    body: impl FnOnce(&mut Instance) -> fmi2Status,
-) -> fmi2Status {
-    if c.is_null() {
-        return fmi2Error;
-    }
-    // SAFETY: the caller passes an instance created by fmi2Instantiate.
-    let inst = unsafe { &mut *(c as *mut Instance) };
-    let result = catch_unwind(AssertUnwindSafe(|| {
-        inst.trace(|| format!("{function}({})", args()));
-        if inst.allowed(function, mask) {
-            body(inst)
-        } else {
-            fmi2Error
-        }
-    }));
-    match result {
-        Ok(status) => status,
-        Err(payload) => {
-            let message = format!(
-                "{function}: internal error: {}",
-                crate::error::panic_message(payload.as_ref())
-            );
-            let _ = catch_unwind(AssertUnwindSafe(|| inst.fail(&message)));
-            fmi2Error
-        }
-    }
-}
-
-/// A slice from a C array; `None` when the pointer is null and `n > 0`.
-///
-/// # Safety
-/// A non-null `p` must point to `n` valid elements.
-pub(super) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    if n == 0 {
-        Some(&[])
-    } else if p.is_null() {
-        None
-    } else {
-        // SAFETY: non-null, n elements, as the FMI standard requires of the caller.
-        Some(unsafe { std::slice::from_raw_parts(p, n) })
-    }
-}
-
-/// A mutable slice from a C array; `None` when the pointer is null and `n > 0`.
-///
-/// # Safety
-/// A non-null `p` must point to `n` valid, writable elements.
-pub(super) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    if n == 0 {
-        Some(&mut [])
-    } else if p.is_null() {
-        None
-    } else {
-        // SAFETY: as for `slice`, and writable.
-        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
-    }
-}
-
-/// A Rust string copied from a C string; `None` for null or non-UTF-8.
-///
-/// # Safety
-/// A non-null `p` must point to a NUL-terminated string.
-pub(super) unsafe fn string(p: *const c_char) -> Option<String> {
-    if p.is_null() {
-        return None;
-    }
-    // SAFETY: NUL-terminated by the caller's contract.
-    unsafe { CStr::from_ptr(p) }
-        .to_str()
-        .ok()
-        .map(str::to_string)
-}
-
-/// `[a, b, ...]` of a C array for `logCalls`, or `NULL`.
-///
-/// # Safety
-/// As for [`slice`].
-pub(super) unsafe fn show<T: std::fmt::Debug>(p: *const T, n: usize) -> String {
-    match unsafe { slice(p, n) } {
-        Some(values) => format!("{values:?}"),
-        None => "NULL".into(),
-    }
-}
-
-/// A C string array for `logCalls`: each string quoted, or `NULL`.
-///
-/// # Safety
-/// As for [`slice`] and [`string`].
-pub(super) unsafe fn show_strings(p: *const fmi2String, n: usize) -> String {
-    match unsafe { slice(p, n) } {
-        Some(ptrs) => {
-            let shown: Vec<String> = ptrs
-                .iter()
-                .map(|&s| match unsafe { string(s) } {
-                    Some(s) => format!("{s:?}"),
-                    None => "NULL".into(),
-                })
-                .collect();
-            format!("[{}]", shown.join(", "))
-        }
-        None => "NULL".into(),
-    }
-}
-
-pub(super) fn null_argument(inst: &mut Instance, function: &str, argument: &str) -> fmi2Status {
-    inst.error(&format!("{function}: argument {argument} must not be NULL"))
-}
+use fmi2Status::fmi2Error;
 
 // ---------------------------------------------------------------------------------------------
 // Inquire platform and version; logging
@@ -165,6 +51,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     nCategories: usize,
     categories: *const fmi2String,
 ) -> fmi2Status {
+    const F: &str = "fmi2SetDebugLogging";
     unsafe {
         let args = || {
             format!(
@@ -172,29 +59,9 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
                 show_strings(categories, nCategories)
             )
         };
-        with_instance(
-            c,
-            "fmi2SetDebugLogging",
-            mask::SET_DEBUG_LOGGING,
-            args,
-            |inst| {
-                let Some(ptrs) = slice(categories, nCategories) else {
-                    return null_argument(inst, "fmi2SetDebugLogging", "categories[]");
-                };
-                let mut names = Vec::with_capacity(ptrs.len());
-                for &p in ptrs {
-                    match string(p) {
-                        Some(s) => names.push(s),
-                        None => {
-                            return inst
-                                .error("fmi2SetDebugLogging: a category is NULL or not UTF-8");
-                        }
-                    }
-                }
-                let refs: Vec<&str> = names.iter().map(String::as_str).collect();
-                inst.set_debug_logging(loggingOn != fmi2False, &refs)
-            },
-        )
+        with_instance(c, F, mask::SET_DEBUG_LOGGING, args, |inst| {
+            guard::set_debug_logging(inst, F, loggingOn != fmi2False, categories, nCategories)
+        })
     }
 }
 
@@ -233,7 +100,7 @@ fn make_sink(functions: &fmi2CallbackFunctions, name: &str) -> Option<LogSink> {
     let env = functions.componentEnvironment;
     let name = CString::new(name.replace('\0', "")).unwrap_or_default();
     Some(Box::new(
-        move |status: fmi2Status, category: &str, message: &str| {
+        move |status: Status, category: &str, message: &str| {
             let category = CString::new(category).unwrap_or_default();
             let message = CString::new(message.replace('\0', "")).unwrap_or_default();
             // SAFETY: the master's logger, called with the "%s" format and one string argument.
@@ -241,7 +108,7 @@ fn make_sink(functions: &fmi2CallbackFunctions, name: &str) -> Option<LogSink> {
                 logger(
                     env,
                     name.as_ptr(),
-                    status,
+                    status.into(),
                     category.as_ptr(),
                     c"%s".as_ptr(),
                     message.as_ptr(),
@@ -319,9 +186,9 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let sink = make_sink(&*functions, &name);
         let logging = loggingOn != fmi2False;
         let mut inst = if std::ptr::eq(fmu_table, table()) {
-            Instance::new(&name, resources, sink, logging)
+            Instance::new(&FMI2, &name, resources, sink, logging)
         } else {
-            match Instance::with_table(&name, resources, sink, logging, fmu_table) {
+            match Instance::with_table(&FMI2, &name, resources, sink, logging, fmu_table) {
                 Ok(inst) => inst,
                 Err(e) => return fail(&notes, e.to_string()),
             }
@@ -337,7 +204,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
         // (a warning belongs to a call that returns fmi2Warning); a relative `slp.reference`
         // that needed the resources is refused later with an error saying so.
         for w in notes {
-            inst.log(fmi2OK, super::instance::Category::Events, &w);
+            inst.log(Status::Ok, super::instance::Category::Events, &w);
         }
         Box::into_raw(Box::new(inst)) as fmi2Component
     }));
@@ -376,14 +243,6 @@ fn guid_mismatch(
     format!("GUID {given} does not match: {source}")
 }
 
-/// Frees every FMU state still held by `inst`.
-pub(super) fn free_states(inst: &mut Instance) {
-    for addr in inst.fmu_states.drain() {
-        // SAFETY: every address in the set came from Box::into_raw of an FmuState.
-        drop(unsafe { Box::from_raw(addr as *mut FmuState) });
-    }
-}
-
 /// `fmi2FreeInstance`: releases the instance and the FMU states it still holds.
 ///
 /// # Safety
@@ -397,7 +256,7 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
         // SAFETY: created by Box::into_raw in fmi2Instantiate.
         let mut inst = unsafe { Box::from_raw(c as *mut Instance) };
         inst.trace(|| "fmi2FreeInstance()".into());
-        free_states(&mut inst);
+        guard::free_states(&mut inst);
     }));
 }
 
@@ -431,7 +290,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
             |inst| {
                 let tol = (toleranceDefined != fmi2False).then_some(tolerance);
                 let stop = (stopTimeDefined != fmi2False).then_some(stopTime);
-                inst.setup_experiment(tol, startTime, stop)
+                inst.setup_experiment("fmi2SetupExperiment", tol, startTime, stop)
             },
         )
     }
@@ -466,7 +325,7 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
             "fmi2ExitInitializationMode",
             mask::EXIT_INITIALIZATION_MODE,
             String::new,
-            Instance::exit_initialization_mode,
+            |inst| inst.exit_initialization_mode("fmi2ExitInitializationMode"),
         )
     }
 }
@@ -510,7 +369,7 @@ unsafe fn get_values<T>(
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *mut T,
-    get: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> fmi2Status,
+    get: impl FnOnce(&mut Instance, &str, &[u32], &mut [T]) -> Status,
 ) -> fmi2Status {
     unsafe {
         let args = || format!("vr={}, nvr={nvr}", show(vr, nvr));
@@ -521,7 +380,7 @@ unsafe fn get_values<T>(
             let Some(out) = slice_mut(value, nvr) else {
                 return null_argument(inst, function, "value[]");
             };
-            get(inst, vrs, out)
+            get(inst, function, vrs, out)
         })
     }
 }
@@ -593,7 +452,7 @@ unsafe fn set_values<T: std::fmt::Debug>(
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *const T,
-    set: impl FnOnce(&mut Instance, &[u32], &[T]) -> fmi2Status,
+    set: impl FnOnce(&mut Instance, &str, &[u32], &[T]) -> Status,
 ) -> fmi2Status {
     unsafe {
         let args = || {
@@ -610,7 +469,7 @@ unsafe fn set_values<T: std::fmt::Debug>(
             let Some(values) = slice(value, nvr) else {
                 return null_argument(inst, function, "value[]");
             };
-            set(inst, vrs, values)
+            set(inst, function, vrs, values)
         })
     }
 }
@@ -691,48 +550,13 @@ pub unsafe extern "C" fn fmi2SetString(
                     None => return inst.error("fmi2SetString: a value is NULL or not UTF-8"),
                 }
             }
-            inst.set_string(vrs, &values)
+            inst.set_string("fmi2SetString", vrs, &values)
         })
     }
 }
 
 // ---------------------------------------------------------------------------------------------
 // FMU state
-
-/// Whether `p` is an FMU state handed out by this instance and not freed.
-pub(super) fn known(inst: &Instance, p: fmi2FMUstate) -> bool {
-    !p.is_null() && inst.fmu_states.contains(&(p as usize))
-}
-
-/// Stores `state` at `*slot`: in place if `*slot` is a live state of this instance, newly
-/// allocated if it is NULL.
-///
-/// # Safety
-/// `slot` must be non-null and writable.
-pub(super) unsafe fn store_state(
-    inst: &mut Instance,
-    function: &str,
-    slot: *mut fmi2FMUstate,
-    state: FmuState,
-) -> fmi2Status {
-    // SAFETY: slot checked non-null by the caller.
-    let current = unsafe { *slot };
-    if current.is_null() {
-        let p = Box::into_raw(Box::new(state));
-        inst.fmu_states.insert(p as usize);
-        // SAFETY: writable slot.
-        unsafe { *slot = p as fmi2FMUstate };
-        fmi2OK
-    } else if known(inst, current) {
-        // SAFETY: a live FmuState of this instance.
-        unsafe { *(current as *mut FmuState) = state };
-        fmi2OK
-    } else {
-        inst.error(&format!(
-            "{function}: *FMUstate is neither NULL nor a state of this instance"
-        ))
-    }
-}
 
 /// `fmi2GetFMUstate`.
 ///
@@ -743,14 +567,11 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
+    const F: &str = "fmi2GetFMUstate";
     unsafe {
         let args = || format!("FMUstate={FMUstate:?}");
-        with_instance(c, "fmi2GetFMUstate", mask::GET_FMU_STATE, args, |inst| {
-            if FMUstate.is_null() {
-                return null_argument(inst, "fmi2GetFMUstate", "FMUstate");
-            }
-            let state = inst.get_fmu_state();
-            store_state(inst, "fmi2GetFMUstate", FMUstate, state)
+        with_instance(c, F, mask::GET_FMU_STATE, args, |inst| {
+            guard::get_state(inst, F, "FMUstate", FMUstate)
         })
     }
 }
@@ -761,15 +582,11 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 /// FMI 2.0 calling conventions.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
+    const F: &str = "fmi2SetFMUstate";
     unsafe {
         let args = || format!("FMUstate={FMUstate:?}");
-        with_instance(c, "fmi2SetFMUstate", mask::SET_FMU_STATE, args, |inst| {
-            if !known(inst, FMUstate) {
-                return inst.error("fmi2SetFMUstate: FMUstate is not a state of this instance");
-            }
-            // SAFETY: a live FmuState of this instance; cloned so the instance may change freely.
-            let state = (*(FMUstate as *const FmuState)).clone();
-            inst.set_fmu_state(&state)
+        with_instance(c, F, mask::SET_FMU_STATE, args, |inst| {
+            guard::set_state(inst, F, "FMUstate", FMUstate)
         })
     }
 }
@@ -783,30 +600,12 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
+    const F: &str = "fmi2FreeFMUstate";
     unsafe {
         let args = || format!("FMUstate={FMUstate:?}");
-        with_instance(
-            c,
-            "fmi2FreeFMUstate",
-            mask::FMU_STATE_MEMORY,
-            args,
-            |inst| {
-                if FMUstate.is_null() {
-                    return null_argument(inst, "fmi2FreeFMUstate", "FMUstate");
-                }
-                let p = *FMUstate;
-                if p.is_null() {
-                    return fmi2OK;
-                }
-                if !inst.fmu_states.remove(&(p as usize)) {
-                    return inst
-                        .error("fmi2FreeFMUstate: *FMUstate is not a state of this instance");
-                }
-                drop(Box::from_raw(p as *mut FmuState));
-                *FMUstate = std::ptr::null_mut();
-                fmi2OK
-            },
-        )
+        with_instance(c, F, mask::FMU_STATE_MEMORY, args, |inst| {
+            guard::free_state(inst, F, "FMUstate", FMUstate)
+        })
     }
 }
 
@@ -820,25 +619,12 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     FMUstate: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
+    const F: &str = "fmi2SerializedFMUstateSize";
     unsafe {
-        with_instance(
-            c,
-            "fmi2SerializedFMUstateSize",
-            mask::FMU_STATE_MEMORY,
-            || format!("FMUstate={FMUstate:?}"),
-            |inst| {
-                if size.is_null() {
-                    return null_argument(inst, "fmi2SerializedFMUstateSize", "size");
-                }
-                if !known(inst, FMUstate) {
-                    return inst.error(
-                        "fmi2SerializedFMUstateSize: FMUstate is not a state of this instance",
-                    );
-                }
-                *size = (*(FMUstate as *const FmuState)).to_bytes().len();
-                fmi2OK
-            },
-        )
+        let args = || format!("FMUstate={FMUstate:?}");
+        with_instance(c, F, mask::FMU_STATE_MEMORY, args, |inst| {
+            guard::serialized_size(inst, F, "FMUstate", FMUstate, size)
+        })
     }
 }
 
@@ -853,32 +639,13 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serializedState: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
+    const F: &str = "fmi2SerializeFMUstate";
     unsafe {
         let args = || format!("FMUstate={FMUstate:?}, size={size}");
-        with_instance(
-            c,
-            "fmi2SerializeFMUstate",
-            mask::FMU_STATE_MEMORY,
-            args,
-            |inst| {
-                if !known(inst, FMUstate) {
-                    return inst
-                        .error("fmi2SerializeFMUstate: FMUstate is not a state of this instance");
-                }
-                let bytes = (*(FMUstate as *const FmuState)).to_bytes();
-                if size < bytes.len() {
-                    return inst.error(&format!(
-                        "fmi2SerializeFMUstate: buffer of {size} bytes, {} needed",
-                        bytes.len()
-                    ));
-                }
-                let Some(out) = slice_mut(serializedState as *mut u8, bytes.len()) else {
-                    return null_argument(inst, "fmi2SerializeFMUstate", "serializedState");
-                };
-                out.copy_from_slice(&bytes);
-                fmi2OK
-            },
-        )
+        with_instance(c, F, mask::FMU_STATE_MEMORY, args, |inst| {
+            let out = serializedState as *mut u8;
+            guard::serialize(inst, F, "FMUstate", FMUstate, out, size)
+        })
     }
 }
 
@@ -893,25 +660,13 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
+    const F: &str = "fmi2DeSerializeFMUstate";
     unsafe {
-        with_instance(
-            c,
-            "fmi2DeSerializeFMUstate",
-            mask::FMU_STATE_MEMORY,
-            || format!("size={size}"),
-            |inst| {
-                if FMUstate.is_null() {
-                    return null_argument(inst, "fmi2DeSerializeFMUstate", "FMUstate");
-                }
-                let Some(bytes) = slice(serializedState as *const u8, size) else {
-                    return null_argument(inst, "fmi2DeSerializeFMUstate", "serializedState");
-                };
-                match FmuState::from_bytes_for(bytes, inst.table()) {
-                    Ok(state) => store_state(inst, "fmi2DeSerializeFMUstate", FMUstate, state),
-                    Err(e) => inst.error(&format!("fmi2DeSerializeFMUstate: {e}")),
-                }
-            },
-        )
+        let args = || format!("size={size}");
+        with_instance(c, F, mask::FMU_STATE_MEMORY, args, |inst| {
+            let bytes = serializedState as *const u8;
+            guard::deserialize(inst, F, "FMUstate", bytes, size, FMUstate)
+        })
     }
 }
 
@@ -1025,7 +780,11 @@ pub unsafe extern "C" fn fmi2DoStep(
             )
         };
         with_instance(c, "fmi2DoStep", mask::DO_STEP, args, |inst| {
-            inst.do_step(currentCommunicationPoint, communicationStepSize)
+            inst.do_step(
+                "fmi2DoStep",
+                currentCommunicationPoint,
+                communicationStepSize,
+            )
         })
     }
 }
@@ -1038,12 +797,13 @@ pub unsafe extern "C" fn fmi2DoStep(
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     unsafe {
         with_instance(c, "fmi2CancelStep", mask::CANCEL_STEP, String::new, |_| {
-            fmi2OK
+            Status::Ok
         })
     }
 }
 
-/// Shared body of the status getters.
+/// Shared body of the status getters: `get` answers the value of a status kind, or the
+/// reason it has none.
 ///
 /// # Safety
 /// FMI 2.0 calling conventions.
@@ -1052,7 +812,7 @@ unsafe fn status_value<T>(
     function: &str,
     kind: fmi2StatusKind,
     value: *mut T,
-    get: impl FnOnce(&mut Instance) -> Result<T, fmi2Status>,
+    get: impl FnOnce(&mut Instance) -> Result<T, String>,
 ) -> fmi2Status {
     unsafe {
         let args = || format!("s={kind}");
@@ -1063,9 +823,9 @@ unsafe fn status_value<T>(
             match get(inst) {
                 Ok(v) => {
                     *value = v;
-                    fmi2OK
+                    Status::Ok
                 }
-                Err(status) => status,
+                Err(why) => inst.error(&format!("{function}: {why}")),
             }
         })
     }
@@ -1081,7 +841,13 @@ pub unsafe extern "C" fn fmi2GetStatus(
     s: fmi2StatusKind,
     value: *mut fmi2Status,
 ) -> fmi2Status {
-    unsafe { status_value(c, "fmi2GetStatus", s, value, |inst| inst.get_status(s)) }
+    unsafe {
+        status_value(c, "fmi2GetStatus", s, value, |inst| match s {
+            fmi2DoStepStatus => Ok(inst.last_step_status().into()),
+            fmi2PendingStatus => Err("no asynchronous step is ever pending".into()),
+            k => Err(format!("status kind {k} has no fmi2Status value")),
+        })
+    }
 }
 
 /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime`.
@@ -1095,13 +861,15 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     unsafe {
-        status_value(c, "fmi2GetRealStatus", s, value, |inst| {
-            inst.get_real_status(s)
+        status_value(c, "fmi2GetRealStatus", s, value, |inst| match s {
+            fmi2LastSuccessfulTime => Ok(inst.last_successful_time()),
+            k => Err(format!("status kind {k} has no Real value")),
         })
     }
 }
 
-/// `fmi2GetBooleanStatus`: `fmi2Terminated` (true after a discarded step).
+/// `fmi2GetBooleanStatus`: `fmi2Terminated`, true after a discarded step (the model cannot
+/// go on from there without `fmi2SetFMUstate` or `fmi2Reset`).
 ///
 /// # Safety
 /// FMI 2.0 calling conventions.
@@ -1112,9 +880,10 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     unsafe {
-        status_value(c, "fmi2GetBooleanStatus", s, value, |inst| {
-            inst.get_boolean_status(s)
-                .map(|b| if b { fmi2True } else { fmi2False })
+        status_value(c, "fmi2GetBooleanStatus", s, value, |inst| match s {
+            fmi2Terminated if inst.phase() == Phase::StepFailed => Ok(fmi2True),
+            fmi2Terminated => Ok(fmi2False),
+            k => Err(format!("status kind {k} has no Boolean value")),
         })
     }
 }

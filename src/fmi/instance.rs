@@ -1,22 +1,21 @@
-//! One FMU instance: the explicit state machine of FMI 2.0 co-simulation, the per-function
-//! masks of the states each function may be called in, value access through the variable
-//! table, the communication step and the FMU state. Everything here is safe Rust; the
-//! exported C functions in [`super::ffi`] only check pointers, catch panics and forward.
+//! One FMU instance, the same for FMI 2.0 and FMI 3.0: the explicit co-simulation state
+//! machine, the per-function masks of the states each function may be called in, value
+//! access through the variable table, the communication step and the FMU state. Everything
+//! here is safe Rust and version-neutral: calls answer a [`Status`], and each takes the name
+//! of the exported function it serves, which its log messages start with; the functions it
+//! mentions otherwise are named in the caller's version ([`Api`]). The exported C functions
+//! ([`super::ffi`], [`super::fmi3::ffi`]) only check pointers, catch panics, translate and
+//! forward. The function names in the documentation below are FMI 2.0's.
 //!
 //! Status policy: a rejected call (illegal call sequence, unknown value reference, a value
-//! out of range or not finite, a fixed parameter after initialization) returns `fmi2Error`
-//! with a log message naming the function and the variable, and leaves the instance exactly
-//! as it was. A numerical failure inside `fmi2DoStep` returns `fmi2Discard`, keeps the model
-//! at its last successful time and moves to [`Phase::StepFailed`]. Any other internal failure
-//! moves to [`Phase::Error`], from which only `fmi2SetFMUstate`, `fmi2Reset` and
-//! `fmi2FreeInstance` lead out.
+//! out of range or not finite, a fixed parameter after initialization) returns
+//! [`Status::Error`] with a log message naming the function and the variable, and leaves the
+//! instance exactly as it was. A numerical failure or an unphysiological state inside
+//! `fmi2DoStep` returns [`Status::Discard`], keeps the model at its last successful time and
+//! moves to [`Phase::StepFailed`]. Any other internal failure moves to [`Phase::Error`], from
+//! which only `fmi2SetFMUstate`, `fmi2Reset` and `fmi2FreeInstance` lead out.
 
-// The FMI status-kind constants keep the standard's spelling, also in match patterns.
-#![allow(non_upper_case_globals)]
-
-use super::types::{
-    fmi2DoStepStatus, fmi2LastSuccessfulTime, fmi2PendingStatus, fmi2Status, fmi2Terminated,
-};
+use super::status::{Api, Status};
 use super::variables::{
     Causality, Input, LOG_CATEGORIES, Parameter, Role, ScalarType, Table, Value, Variable,
     read_output, start_config, table,
@@ -25,10 +24,7 @@ use crate::model::{Checkpoint, Config, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
-use std::os::raw::c_int;
 use std::path::{Path, PathBuf};
-
-use fmi2Status::{fmi2Discard, fmi2Error, fmi2OK, fmi2Warning};
 
 /// The states of an instance (FMI 2.0 co-simulation state machine). `StepInProgress` and
 /// `StepCanceled` are never entered: steps are synchronous.
@@ -148,7 +144,7 @@ impl Category {
 }
 
 /// The receiver of log messages: (status, category name, message).
-pub type LogSink = Box<dyn FnMut(fmi2Status, &str, &str)>;
+pub type LogSink = Box<dyn FnMut(Status, &str, &str)>;
 
 /// Categories enabled when the master instantiates with `loggingOn = fmi2False`: the messages
 /// of every call that returns a status other than `fmi2OK` (warnings, discarded steps,
@@ -169,6 +165,8 @@ use crate::model::bounds::{CHECKED_VOLUMES, physiology_violation};
 /// An FMU instance.
 pub struct Instance {
     name: String,
+    /// The names of the functions of the interface that created the instance, for messages.
+    api: &'static Api,
     /// The variables of the FMU this instance belongs to: the generic table or a personalised
     /// one ([`Table::personalised`]).
     table: &'static Table,
@@ -201,7 +199,7 @@ pub struct Instance {
     tolerance: Option<f64>,
     time: f64,
     last_successful_time: f64,
-    last_step_status: fmi2Status,
+    last_step_status: Status,
     strings: Vec<CString>,
     /// Thorax, abdomen and trunk volumes [L] of the rest state of the built model, with the
     /// model's fingerprint (the reference of [`cavity_bounds`]).
@@ -393,12 +391,21 @@ impl Instance {
     /// enables every log category (otherwise only the messages of calls that return a status
     /// other than `fmi2OK`).
     pub fn new(
+        api: &'static Api,
         name: &str,
         resources: Option<PathBuf>,
         sink: Option<LogSink>,
         logging_on: bool,
     ) -> Instance {
-        Instance::fresh(name, resources, sink, logging_on, table(), start_config())
+        Instance::fresh(
+            api,
+            name,
+            resources,
+            sink,
+            logging_on,
+            table(),
+            start_config(),
+        )
     }
 
     /// A fresh instance of the FMU whose variables are `table` (a personalised FMU's): its
@@ -406,13 +413,22 @@ impl Instance {
     /// `subject.mesh_dir` being looked up in `resources` first. An error names the parameter
     /// whose start value cannot be used (e.g. a file missing from the FMU's resources/).
     pub fn with_table(
+        api: &'static Api,
         name: &str,
         resources: Option<PathBuf>,
         sink: Option<LogSink>,
         logging_on: bool,
         table: &'static Table,
     ) -> Result<Instance> {
-        let mut inst = Instance::fresh(name, resources, sink, logging_on, table, start_config());
+        let mut inst = Instance::fresh(
+            api,
+            name,
+            resources,
+            sink,
+            logging_on,
+            table,
+            start_config(),
+        );
         // Resolved to check that every start value can be used (files present, mesh readable),
         // then kept as given.
         let mut start = table.start_config_with(&mut |p, value| inst.resolve_path(p, value))?;
@@ -434,6 +450,7 @@ impl Instance {
     }
 
     fn fresh(
+        api: &'static Api,
         name: &str,
         resources: Option<PathBuf>,
         sink: Option<LogSink>,
@@ -443,6 +460,7 @@ impl Instance {
     ) -> Instance {
         Instance {
             name: name.to_string(),
+            api,
             table,
             resources,
             sink,
@@ -466,7 +484,7 @@ impl Instance {
             tolerance: None,
             time: 0.0,
             last_successful_time: 0.0,
-            last_step_status: fmi2OK,
+            last_step_status: Status::Ok,
             strings: Vec::new(),
             rest_volumes: None,
             fmu_states: Default::default(),
@@ -494,7 +512,7 @@ impl Instance {
     }
 
     /// Sends a message to the logger if its category is enabled.
-    pub fn log(&mut self, status: fmi2Status, category: Category, message: &str) {
+    pub fn log(&mut self, status: Status, category: Category, message: &str) {
         if self.categories & (1 << category as u32) != 0
             && let Some(sink) = self.sink.as_mut()
         {
@@ -503,22 +521,22 @@ impl Instance {
     }
 
     /// Records an internal failure: the instance moves to [`Phase::Error`].
-    pub fn fail(&mut self, message: &str) -> fmi2Status {
+    pub fn fail(&mut self, message: &str) -> Status {
         self.phase = Phase::Error;
         self.error(message)
     }
 
-    /// Logs an error and returns `fmi2Error`.
-    pub fn error(&mut self, message: &str) -> fmi2Status {
-        self.log(fmi2Error, Category::Error, message);
-        fmi2Error
+    /// Logs an error and returns [`Status::Error`].
+    pub fn error(&mut self, message: &str) -> Status {
+        self.log(Status::Error, Category::Error, message);
+        Status::Error
     }
 
     /// Logs a call when `logCalls` is enabled; `args` is only formatted then.
     pub fn trace(&mut self, args: impl FnOnce() -> String) {
         if self.categories & (1 << Category::Calls as u32) != 0 {
             let message = args();
-            self.log(fmi2OK, Category::Calls, &message);
+            self.log(Status::Ok, Category::Calls, &message);
         }
     }
 
@@ -537,7 +555,7 @@ impl Instance {
 
     /// `fmi2SetDebugLogging`: no categories sets all of them; unknown names are an error (and
     /// change nothing).
-    pub fn set_debug_logging(&mut self, on: bool, names: &[&str]) -> fmi2Status {
+    pub fn set_debug_logging(&mut self, function: &str, on: bool, names: &[&str]) -> Status {
         let mut bits = 0u32;
         for name in names {
             match LOG_CATEGORIES.iter().position(|(c, _)| c == name) {
@@ -545,7 +563,7 @@ impl Instance {
                 None => {
                     let known: Vec<&str> = LOG_CATEGORIES.iter().map(|c| c.0).collect();
                     return self.error(&format!(
-                        "fmi2SetDebugLogging: unknown log category \"{name}\" (known: {})",
+                        "{function}: unknown log category \"{name}\" (known: {})",
                         known.join(", ")
                     ));
                 }
@@ -559,30 +577,29 @@ impl Instance {
         } else {
             self.categories &= !bits;
         }
-        fmi2OK
+        Status::Ok
     }
 
     /// `fmi2SetupExperiment`. A defined tolerance becomes `solver.rtol` unless `solver.rtol`
     /// was set explicitly; one outside the solver's range is ignored with a warning.
     pub fn setup_experiment(
         &mut self,
+        function: &str,
         tolerance: Option<f64>,
         start: f64,
         stop: Option<f64>,
-    ) -> fmi2Status {
+    ) -> Status {
         if !start.is_finite() {
-            return self.error(&format!(
-                "fmi2SetupExperiment: startTime = {start} is not finite"
-            ));
+            return self.error(&format!("{function}: startTime = {start} is not finite"));
         }
         if let Some(stop) = stop
             && !(stop.is_finite() && stop >= start)
         {
             return self.error(&format!(
-                "fmi2SetupExperiment: stopTime = {stop} must be finite and >= startTime = {start}"
+                "{function}: stopTime = {stop} must be finite and >= startTime = {start}"
             ));
         }
-        let mut status = fmi2OK;
+        let mut status = Status::Ok;
         if let Some(tol) = tolerance {
             let rtol = self.table.by_name("solver.rtol").map(|v| v.check(tol));
             match rtol {
@@ -593,11 +610,11 @@ impl Instance {
                 }
                 Some(Err(e)) => {
                     self.log(
-                        fmi2Warning,
+                        Status::Warning,
                         Category::Warning,
-                        &format!("fmi2SetupExperiment: tolerance ignored: {e}"),
+                        &format!("{function}: tolerance ignored: {e}"),
                     );
-                    status = fmi2Warning;
+                    status = Status::Warning;
                 }
                 _ => {}
             }
@@ -610,18 +627,18 @@ impl Instance {
     }
 
     /// `fmi2EnterInitializationMode`.
-    pub fn enter_initialization_mode(&mut self) -> fmi2Status {
+    pub fn enter_initialization_mode(&mut self) -> Status {
         self.phase = Phase::InitializationMode;
-        self.log(fmi2OK, Category::Events, "entered initialization mode");
-        fmi2OK
+        self.log(Status::Ok, Category::Events, "entered initialization mode");
+        Status::Ok
     }
 
     /// `fmi2ExitInitializationMode`: builds the model (the configuration's final check); a
     /// bad configuration is an error naming the variable, and the instance stays in
     /// initialization mode so that the master may correct it.
-    pub fn exit_initialization_mode(&mut self) -> fmi2Status {
+    pub fn exit_initialization_mode(&mut self, function: &str) -> Status {
         let start = match self.ensure_torso() {
-            Err(e) => return self.error(&format!("fmi2ExitInitializationMode: {e}")),
+            Err(e) => return self.error(&format!("{function}: {e}")),
             // the start state: the static equilibrium of the inputs set during initialisation
             // and the drive's start (cached per compiled model and activations)
             Ok(torso) => {
@@ -633,24 +650,24 @@ impl Instance {
         };
         if !start.0.converged {
             let message = format!(
-                "fmi2ExitInitializationMode: the start state's solve did not settle: relative imbalance {:.1e} after {} Newton iterations and {:.0} s of relaxation (tolerance solver.rtol {:.0e}); the run starts there",
+                "{function}: the start state's solve did not settle: relative imbalance {:.1e} after {} Newton iterations and {:.0} s of relaxation (tolerance solver.rtol {:.0e}); the run starts there",
                 start.0.relative_residual(),
                 start.0.newton_iterations,
                 start.0.relaxation_time,
                 start.1
             );
-            self.log(fmi2OK, Category::Events, &message);
+            self.log(Status::Ok, Category::Events, &message);
         }
         self.phase = Phase::StepComplete;
         self.last_successful_time = self.time;
-        self.log(fmi2OK, Category::Events, "initialization done");
-        fmi2OK
+        self.log(Status::Ok, Category::Events, "initialization done");
+        Status::Ok
     }
 
     /// `fmi2Terminate`.
-    pub fn terminate(&mut self) -> fmi2Status {
+    pub fn terminate(&mut self) -> Status {
         self.phase = Phase::Terminated;
-        fmi2OK
+        Status::Ok
     }
 
     /// `fmi2Reset`: back to the freshly instantiated state (start values, time, model, solver
@@ -658,13 +675,14 @@ impl Instance {
     /// is kept aside with the snapshot of its fresh state, so that an initialisation with the
     /// same fixed parameters restores that snapshot rather than rebuilding the model and its
     /// skin weights (see [`Instance::exit_initialization_mode`]).
-    pub fn reset(&mut self) -> fmi2Status {
+    pub fn reset(&mut self) -> Status {
         let fmu_states = std::mem::take(&mut self.fmu_states);
         let spare = match (self.torso.take(), self.fresh.take()) {
             (Some(torso), Some(fresh)) => Some((torso, fresh)),
             _ => self.spare.take(),
         };
         let instance = Instance::fresh(
+            self.api,
             &self.name,
             self.resources.take(),
             self.sink.take(),
@@ -679,8 +697,8 @@ impl Instance {
             spare,
             ..instance
         };
-        self.log(fmi2OK, Category::Events, "reset");
-        fmi2OK
+        self.log(Status::Ok, Category::Events, "reset");
+        Status::Ok
     }
 
     /// The path a String parameter's value stands for: a relative `slp.reference` (a file) or
@@ -705,9 +723,10 @@ impl Instance {
         if !exists(&candidate) {
             let where_ = match (&self.resources, path.is_relative()) {
                 (Some(r), _) => format!(" (also looked in {})", r.display()),
-                (None, true) => {
-                    " (not looked for in the FMU's resources/: fmi2Instantiate was given no usable resource location)".to_string()
-                }
+                (None, true) => format!(
+                    " (not looked for in the FMU's resources/: {} was given no usable resource location)",
+                    self.api.instantiate
+                ),
                 (None, false) => String::new(),
             };
             return Err(Error::invalid(name, value, format!("{what}{where_}")));
@@ -796,7 +815,7 @@ impl Instance {
         function: &str,
         vr: u32,
         ty: ScalarType,
-    ) -> std::result::Result<&'static Variable, fmi2Status> {
+    ) -> std::result::Result<&'static Variable, Status> {
         match self.table.by_vr(vr) {
             Some(v) if v.ty == ty => Ok(v),
             Some(v) => Err(self.error(&format!(
@@ -814,7 +833,7 @@ impl Instance {
         function: &str,
         vr: u32,
         ty: ScalarType,
-    ) -> std::result::Result<Value, fmi2Status> {
+    ) -> std::result::Result<Value, Status> {
         let var = self.variable(function, vr, ty)?;
         let value = match var.role {
             Role::Time => Ok(Value::Real(self.time)),
@@ -832,55 +851,56 @@ impl Instance {
     }
 
     /// `fmi2GetReal`.
-    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> fmi2Status {
+    pub fn get_real(&mut self, function: &str, vrs: &[u32], out: &mut [f64]) -> Status {
         for (vr, o) in vrs.iter().zip(out.iter_mut()) {
-            match self.get_value("fmi2GetReal", *vr, ScalarType::Real) {
+            match self.get_value(function, *vr, ScalarType::Real) {
                 Ok(Value::Real(x)) => *o = x,
-                Ok(_) => return self.error("fmi2GetReal: internal type mismatch"),
+                Ok(_) => return self.error(&format!("{function}: internal type mismatch")),
                 Err(s) => return s,
             }
         }
-        fmi2OK
+        Status::Ok
     }
 
     /// `fmi2GetInteger`.
-    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> fmi2Status {
+    pub fn get_integer(&mut self, function: &str, vrs: &[u32], out: &mut [i32]) -> Status {
         for (vr, o) in vrs.iter().zip(out.iter_mut()) {
-            match self.get_value("fmi2GetInteger", *vr, ScalarType::Integer) {
+            match self.get_value(function, *vr, ScalarType::Integer) {
                 Ok(Value::Integer(x)) => *o = x,
-                Ok(_) => return self.error("fmi2GetInteger: internal type mismatch"),
+                Ok(_) => return self.error(&format!("{function}: internal type mismatch")),
                 Err(s) => return s,
             }
         }
-        fmi2OK
+        Status::Ok
     }
 
     /// `fmi2GetBoolean` (`fmi2Boolean` values: 1 true, 0 false).
-    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> fmi2Status {
+    pub fn get_boolean(&mut self, function: &str, vrs: &[u32], out: &mut [i32]) -> Status {
         for (vr, o) in vrs.iter().zip(out.iter_mut()) {
-            match self.get_value("fmi2GetBoolean", *vr, ScalarType::Boolean) {
+            match self.get_value(function, *vr, ScalarType::Boolean) {
                 Ok(Value::Boolean(x)) => *o = i32::from(x),
-                Ok(_) => return self.error("fmi2GetBoolean: internal type mismatch"),
+                Ok(_) => return self.error(&format!("{function}: internal type mismatch")),
                 Err(s) => return s,
             }
         }
-        fmi2OK
+        Status::Ok
     }
 
     /// `fmi2GetString`: the returned pointers stay valid until the next call on this instance
     /// that returns strings.
     pub fn get_string(
         &mut self,
+        function: &str,
         vrs: &[u32],
         out: &mut [*const std::os::raw::c_char],
-    ) -> fmi2Status {
+    ) -> Status {
         let mut strings = Vec::with_capacity(vrs.len());
         for vr in vrs {
-            match self.get_value("fmi2GetString", *vr, ScalarType::String) {
+            match self.get_value(function, *vr, ScalarType::String) {
                 Ok(Value::String(s)) => {
                     strings.push(CString::new(s.replace('\0', "")).unwrap_or_default())
                 }
-                Ok(_) => return self.error("fmi2GetString: internal type mismatch"),
+                Ok(_) => return self.error(&format!("{function}: internal type mismatch")),
                 Err(s) => return s,
             }
         }
@@ -888,7 +908,7 @@ impl Instance {
         for (o, s) in out.iter_mut().zip(&self.strings) {
             *o = s.as_ptr();
         }
-        fmi2OK
+        Status::Ok
     }
 
     /// Checks one assignment and turns it into a [`Change`]; nothing is modified yet.
@@ -898,7 +918,7 @@ impl Instance {
         vr: u32,
         ty: ScalarType,
         value: Value,
-    ) -> std::result::Result<Change, fmi2Status> {
+    ) -> std::result::Result<Change, Status> {
         let var = self.variable(function, vr, ty)?;
         let numeric = match &value {
             Value::Real(x) => Some(*x),
@@ -917,8 +937,8 @@ impl Instance {
                     matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
                 if !p.is_tunable() && !before_run {
                     return Err(self.error(&format!(
-                        "{function}: `{}` is a fixed parameter: it cannot change after fmi2ExitInitializationMode",
-                        var.name
+                        "{function}: `{}` is a fixed parameter: it cannot change after {}",
+                        var.name, self.api.exit_initialization_mode
                     )));
                 }
                 // A path is resolved now, so that a missing file is refused when set, and
@@ -950,7 +970,7 @@ impl Instance {
 
     /// Applies checked changes all together: the configuration and the inputs are updated on
     /// copies, validated, then committed, so that a failure changes nothing.
-    fn commit(&mut self, function: &str, changes: Vec<Change>) -> fmi2Status {
+    fn commit(&mut self, function: &str, changes: Vec<Change>) -> Status {
         let mut config = self.config.clone();
         let mut inputs = self.inputs;
         let mut rtol_explicit = self.rtol_explicit;
@@ -999,7 +1019,7 @@ impl Instance {
         self.config = config;
         self.inputs = inputs;
         self.rtol_explicit = rtol_explicit;
-        fmi2OK
+        Status::Ok
     }
 
     fn set_values<T: Copy>(
@@ -1009,7 +1029,7 @@ impl Instance {
         vrs: &[u32],
         values: &[T],
         wrap: impl Fn(T) -> Value,
-    ) -> fmi2Status {
+    ) -> Status {
         let mut changes = Vec::with_capacity(vrs.len());
         for (vr, v) in vrs.iter().zip(values) {
             match self.check_set(function, *vr, ty, wrap(*v)) {
@@ -1021,57 +1041,46 @@ impl Instance {
     }
 
     /// `fmi2SetReal`.
-    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> fmi2Status {
-        self.set_values("fmi2SetReal", ScalarType::Real, vrs, values, Value::Real)
+    pub fn set_real(&mut self, function: &str, vrs: &[u32], values: &[f64]) -> Status {
+        self.set_values(function, ScalarType::Real, vrs, values, Value::Real)
     }
 
     /// `fmi2SetInteger`.
-    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> fmi2Status {
-        self.set_values(
-            "fmi2SetInteger",
-            ScalarType::Integer,
-            vrs,
-            values,
-            Value::Integer,
-        )
+    pub fn set_integer(&mut self, function: &str, vrs: &[u32], values: &[i32]) -> Status {
+        self.set_values(function, ScalarType::Integer, vrs, values, Value::Integer)
     }
 
     /// `fmi2SetBoolean` (any non-zero `fmi2Boolean` is true).
-    pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> fmi2Status {
-        self.set_values("fmi2SetBoolean", ScalarType::Boolean, vrs, values, |v| {
+    pub fn set_boolean(&mut self, function: &str, vrs: &[u32], values: &[i32]) -> Status {
+        self.set_values(function, ScalarType::Boolean, vrs, values, |v| {
             Value::Boolean(v != 0)
         })
     }
 
     /// `fmi2SetString` (the strings are copied).
-    pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> fmi2Status {
+    pub fn set_string(&mut self, function: &str, vrs: &[u32], values: &[String]) -> Status {
         let mut changes = Vec::with_capacity(vrs.len());
         for (vr, v) in vrs.iter().zip(values) {
-            match self.check_set(
-                "fmi2SetString",
-                *vr,
-                ScalarType::String,
-                Value::String(v.clone()),
-            ) {
+            match self.check_set(function, *vr, ScalarType::String, Value::String(v.clone())) {
                 Ok(c) => changes.push(c),
                 Err(s) => return s,
             }
         }
-        self.commit("fmi2SetString", changes)
+        self.commit(function, changes)
     }
 
     /// `fmi2DoStep`: integrates from `t` to exactly `t + h` with the inputs held.
-    pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
+    pub fn do_step(&mut self, function: &str, t: f64, h: f64) -> Status {
         if !(h.is_finite() && h > 0.0) {
             return self.error(&format!(
-                "fmi2DoStep: communicationStepSize = {h} must be finite and > 0"
+                "{function}: communicationStepSize = {h} must be finite and > 0"
             ));
         }
         let tolerance = TIME_TOLERANCE * self.time.abs().max(t.abs()).max(h);
         if !t.is_finite() || (t - self.time).abs() > tolerance {
             let now = self.time;
             return self.error(&format!(
-                "fmi2DoStep: currentCommunicationPoint = {t} is not the instance's current time {now} (tolerance {tolerance:e})"
+                "{function}: currentCommunicationPoint = {t} is not the instance's current time {now} (tolerance {tolerance:e})"
             ));
         }
         let target = t + h;
@@ -1079,7 +1088,7 @@ impl Instance {
             && target > stop + TIME_TOLERANCE * stop.abs().max(h)
         {
             return self.error(&format!(
-                "fmi2DoStep: t + h = {target} is beyond stopTime = {stop}"
+                "{function}: t + h = {target} is beyond stopTime = {stop}"
             ));
         }
         let start = self.start_time;
@@ -1087,7 +1096,7 @@ impl Instance {
             Ok(r) => r,
             Err(e) => {
                 self.phase = Phase::Error;
-                return self.error(&format!("fmi2DoStep: {e}"));
+                return self.error(&format!("{function}: {e}"));
             }
         };
         let mut step_start = std::mem::take(&mut self.step_start);
@@ -1095,7 +1104,7 @@ impl Instance {
             Ok(t) => t,
             Err(e) => {
                 self.phase = Phase::Error;
-                return self.error(&format!("fmi2DoStep: {e}"));
+                return self.error(&format!("{function}: {e}"));
             }
         };
         torso.checkpoint(&mut step_start);
@@ -1114,12 +1123,12 @@ impl Instance {
         self.step_start = step_start;
         if stiff && !self.stiffness_logged {
             self.stiffness_logged = true;
-            // A hint, not a warning: the step succeeded and returns fmi2OK.
+            // A hint, not a warning: the step succeeded and returns Status::Ok.
             self.log(
-                fmi2OK,
+                Status::Ok,
                 Category::Events,
                 &format!(
-                    "fmi2DoStep: the explicit solver detected stiffness near t = {target}; a stiff \
+                    "{function}: the explicit solver detected stiffness near t = {target}; a stiff \
                      method is available (parameter solver.method = {}, Rosenbrock-W with a sparse \
                      Jacobian), worth trying on stiff scenes (stiff cartilage, high bulk modulus)",
                     crate::solver::Method::Rosenbrock.code()
@@ -1130,37 +1139,43 @@ impl Instance {
             Ok(None) => {
                 self.time = target;
                 self.last_successful_time = target;
-                self.last_step_status = fmi2OK;
-                fmi2OK
+                self.last_step_status = Status::Ok;
+                Status::Ok
             }
             Ok(Some(violation)) => {
                 if let Some(Err(e)) = restored {
                     self.phase = Phase::Error;
-                    return self.error(&format!("fmi2DoStep: {e}"));
+                    return self.error(&format!("{function}: {e}"));
                 }
-                self.discard(t, target, t, &format!("at t = {target}: {violation}"))
+                self.discard(
+                    function,
+                    t,
+                    target,
+                    t,
+                    &format!("at t = {target}: {violation}"),
+                )
             }
             Err(Error::Numerical { time, reason }) => {
-                self.discard(t, target, start + time, &reason)
+                self.discard(function, t, target, start + time, &reason)
             }
             Err(e) => {
                 self.phase = Phase::Error;
-                self.error(&format!("fmi2DoStep: {e}"))
+                self.error(&format!("{function}: {e}"))
             }
         }
     }
 
-    /// Ends a step with `fmi2Discard`: the model stays at `at`, the reason is logged.
-    fn discard(&mut self, t: f64, target: f64, at: f64, reason: &str) -> fmi2Status {
+    /// Ends a step with [`Status::Discard`]: the model stays at `at`, the reason is logged.
+    fn discard(&mut self, function: &str, t: f64, target: f64, at: f64, reason: &str) -> Status {
         self.time = at;
         self.last_successful_time = at;
-        self.last_step_status = fmi2Discard;
+        self.last_step_status = Status::Discard;
         self.phase = Phase::StepFailed;
         let message = format!(
-            "fmi2DoStep: step from {t} to {target} discarded: {reason}; the model stays at its last successful time {at}"
+            "{function}: step from {t} to {target} discarded: {reason}; the model stays at its last successful time {at}"
         );
-        self.log(fmi2Discard, Category::Discard, &message);
-        fmi2Discard
+        self.log(Status::Discard, Category::Discard, &message);
+        Status::Discard
     }
 
     /// The cavity volumes of the rest state of the model to be built (or built), computed
@@ -1184,38 +1199,16 @@ impl Instance {
         Ok(v)
     }
 
-    /// `fmi2GetStatus`: `fmi2DoStepStatus` answers the last step's status.
-    pub fn get_status(&mut self, kind: c_int) -> std::result::Result<fmi2Status, fmi2Status> {
-        match kind {
-            fmi2DoStepStatus => Ok(self.last_step_status),
-            fmi2PendingStatus => {
-                Err(self.error("fmi2GetStatus: no asynchronous step is ever pending"))
-            }
-            k => Err(self.error(&format!(
-                "fmi2GetStatus: status kind {k} has no fmi2Status value"
-            ))),
-        }
+    /// The status of the last communication step: [`Status::Discard`] after a discarded
+    /// step, else [`Status::Ok`] (FMI 2.0's `fmi2DoStepStatus`).
+    pub fn last_step_status(&self) -> Status {
+        self.last_step_status
     }
 
-    /// `fmi2GetRealStatus`: `fmi2LastSuccessfulTime`.
-    pub fn get_real_status(&mut self, kind: c_int) -> std::result::Result<f64, fmi2Status> {
-        match kind {
-            fmi2LastSuccessfulTime => Ok(self.last_successful_time),
-            k => Err(self.error(&format!(
-                "fmi2GetRealStatus: status kind {k} has no Real value"
-            ))),
-        }
-    }
-
-    /// `fmi2GetBooleanStatus`: `fmi2Terminated` is true after a discarded step (the model
-    /// cannot go on from there without `fmi2SetFMUstate` or `fmi2Reset`).
-    pub fn get_boolean_status(&mut self, kind: c_int) -> std::result::Result<bool, fmi2Status> {
-        match kind {
-            fmi2Terminated => Ok(self.phase == Phase::StepFailed),
-            k => Err(self.error(&format!(
-                "fmi2GetBooleanStatus: status kind {k} has no Boolean value"
-            ))),
-        }
+    /// The time the model last reached successfully [s] (FMI 2.0's
+    /// `fmi2LastSuccessfulTime`).
+    pub fn last_successful_time(&self) -> f64 {
+        self.last_successful_time
     }
 
     /// A saved state of the whole instance.
@@ -1232,29 +1225,30 @@ impl Instance {
                 tolerance: self.tolerance,
                 time: self.time,
                 last_successful_time: self.last_successful_time,
-                last_step_discarded: self.last_step_status == fmi2Discard,
+                last_step_discarded: self.last_step_status == Status::Discard,
                 has_snapshot: self.torso.is_some(),
             },
             snapshot: self.torso.as_ref().map(Torso::snapshot),
         }
     }
 
-    /// Restores a saved state. Once initialised, an instance refuses (`fmi2Error`, nothing
+    /// Restores a saved state. Once initialised, an instance refuses ([`Status::Error`], nothing
     /// changes) a state saved with other fixed parameters, as it refuses setting them: the
     /// model is the one its parameters built. Before `fmi2ExitInitializationMode`, when fixed
     /// parameters may still be set, the state's are taken and the model is rebuilt when they
     /// differ. A state holds `slp.reference` and `subject.mesh_dir` as they were given, so a
     /// state saved by an instance unpacked in one folder applies in an instance unpacked in
     /// another: a relative path names the file in this instance's resources.
-    pub fn set_fmu_state(&mut self, state: &FmuState) -> fmi2Status {
+    pub fn set_fmu_state(&mut self, function: &str, state: &FmuState) -> Status {
         let s = &state.saved;
         let initialised = !matches!(self.phase, Phase::Instantiated | Phase::InitializationMode);
         if initialised && !same_fixed_config(&self.config, &s.config) {
             let differences = fixed_differences(self.table, &self.config, &s.config);
+            let (exit, reset) = (self.api.exit_initialization_mode, self.api.reset);
             return self.error(&format!(
-                "fmi2SetFMUstate: the state was saved by an instance with other fixed parameters \
+                "{function}: the state was saved by an instance with other fixed parameters \
                  ({differences}); fixed parameters cannot change after \
-                 fmi2ExitInitializationMode (fmi2Reset first, or instantiate with the state's \
+                 {exit} ({reset} first, or instantiate with the state's \
                  parameters): the state was not applied"
             ));
         }
@@ -1265,7 +1259,7 @@ impl Instance {
                 // The state's paths are resolved against this instance's resources.
                 let resolved = match self.resolved(&s.config) {
                     Ok(c) => c,
-                    Err(e) => return self.error(&format!("fmi2SetFMUstate: {e}")),
+                    Err(e) => return self.error(&format!("{function}: {e}")),
                 };
                 let reuse =
                     matches!(&self.torso, Some(t) if same_fixed_config(t.config(), &resolved));
@@ -1278,7 +1272,7 @@ impl Instance {
                                 rebuilt_fresh = Some(t.snapshot());
                                 t
                             }
-                            Err(e) => return self.error(&format!("fmi2SetFMUstate: {e}")),
+                            Err(e) => return self.error(&format!("{function}: {e}")),
                         }
                     }
                 };
@@ -1287,7 +1281,7 @@ impl Instance {
                     if reuse {
                         self.torso = Some(torso);
                     }
-                    return self.error(&format!("fmi2SetFMUstate: {e}"));
+                    return self.error(&format!("{function}: {e}"));
                 }
                 Some(torso)
             }
@@ -1307,10 +1301,10 @@ impl Instance {
         self.time = s.time;
         self.last_successful_time = s.last_successful_time;
         self.last_step_status = if s.last_step_discarded {
-            fmi2Discard
+            Status::Discard
         } else {
-            fmi2OK
+            Status::Ok
         };
-        fmi2OK
+        Status::Ok
     }
 }

@@ -65,21 +65,6 @@ pub enum fmi3Status {
     fmi3Fatal = 4,
 }
 
-impl From<crate::fmi::types::fmi2Status> for fmi3Status {
-    /// The FMI 2.0 status of the shared instance layer, as FMI 3.0 spells it (`fmi2Pending`,
-    /// never returned by this FMU, becomes `fmi3Error`).
-    fn from(s: crate::fmi::types::fmi2Status) -> fmi3Status {
-        use crate::fmi::types::fmi2Status as S;
-        match s {
-            S::fmi2OK => fmi3Status::fmi3OK,
-            S::fmi2Warning => fmi3Status::fmi3Warning,
-            S::fmi2Discard => fmi3Status::fmi3Discard,
-            S::fmi2Error | S::fmi2Pending => fmi3Status::fmi3Error,
-            S::fmi2Fatal => fmi3Status::fmi3Fatal,
-        }
-    }
-}
-
 /// `fmi3DependencyKind`, written by `fmi3GetVariableDependencies` (which this FMU does not
 /// provide: its dependencies are in `<ModelStructure>`); taken as an `int`.
 pub type fmi3DependencyKind = std::os::raw::c_int;
