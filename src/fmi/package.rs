@@ -327,44 +327,17 @@ pub fn build_fmu_with(
         ));
     }
     let libraries = read_binaries(binaries, &|platform| Some(platform.to_string()))?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    let file = fs::File::create(out).map_err(|e| Error::io(out, e))?;
-    let zip_err = |e: zip::result::ZipError| Error::io(out, std::io::Error::other(e.to_string()));
-    let io_err = |e: std::io::Error| Error::io(out, e);
-    let options = SimpleFileOptions::default()
-        .compression_method(CompressionMethod::Deflated)
-        .last_modified_time(DateTime::default())
-        .unix_permissions(0o644);
-    let mut zip = ZipWriter::new(file);
-    let mut entries = Vec::new();
-    let add = |zip: &mut ZipWriter<fs::File>,
-               entries: &mut Vec<String>,
-               name: String,
-               data: &[u8],
-               mode: u32|
-     -> Result<()> {
-        zip.start_file(name.as_str(), options.unix_permissions(mode))
-            .map_err(zip_err)?;
-        zip.write_all(data).map_err(io_err)?;
-        entries.push(name);
-        Ok(())
-    };
-    add(
-        &mut zip,
-        &mut entries,
-        "modelDescription.xml".into(),
+    let mut zip = Archive::create(out)?;
+    zip.add(
+        "modelDescription.xml",
         model_description_for(table).as_bytes(),
         0o644,
     )?;
     for (name, lib) in &libraries {
-        add(&mut zip, &mut entries, name.clone(), lib, 0o755)?;
+        zip.add(name, lib, 0o755)?;
     }
-    add(
-        &mut zip,
-        &mut entries,
-        "documentation/index.html".into(),
+    zip.add(
+        "documentation/index.html",
         documentation_html_for(table).as_bytes(),
         0o644,
     )?;
@@ -372,40 +345,103 @@ pub fn build_fmu_with(
         .iter()
         .filter(|(n, _)| n.starts_with("documentation/"))
     {
-        add(&mut zip, &mut entries, name.clone(), data, 0o644)?;
+        zip.add(name, data, 0o644)?;
     }
-    zip.add_directory("resources/", options).map_err(zip_err)?;
-    entries.push("resources/".into());
-    if let Some(dir) = resources {
-        let mut files = Vec::new();
-        collect_files(dir, dir, &mut files)?;
-        files.sort();
-        for (rel, path) in files {
-            let data = fs::read(&path).map_err(|e| Error::io(&path, e))?;
-            add(
-                &mut zip,
-                &mut entries,
-                format!("resources/{rel}"),
-                &data,
-                0o644,
-            )?;
-        }
-    }
+    zip.add_resources(resources)?;
     for (name, data) in extra.iter().filter(|(n, _)| n.starts_with("resources/")) {
-        if entries.contains(name) {
+        if zip.contains(name) {
             return Err(Error::State(format!(
                 "{name} is given twice (the --resources folder has a file of that name)"
             )));
         }
-        add(&mut zip, &mut entries, name.clone(), data, 0o644)?;
+        zip.add(name, data, 0o644)?;
     }
-    zip.finish().map_err(zip_err)?;
-    let bytes = fs::metadata(out).map_err(|e| Error::io(out, e))?.len();
-    Ok(Packaged {
-        path: out.to_path_buf(),
-        entries,
-        bytes,
-    })
+    zip.finish()
+}
+
+/// An FMU archive being written, the same way for both FMI versions: entries in the order
+/// they are added, deflated, with a fixed timestamp (so that the same inputs give the same
+/// archive) and the given Unix mode.
+pub(crate) struct Archive {
+    zip: ZipWriter<fs::File>,
+    out: PathBuf,
+    options: SimpleFileOptions,
+    entries: Vec<String>,
+}
+
+impl Archive {
+    /// Creates `out` (and its folder).
+    pub(crate) fn create(out: &Path) -> Result<Archive> {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        let file = fs::File::create(out).map_err(|e| Error::io(out, e))?;
+        Ok(Archive {
+            zip: ZipWriter::new(file),
+            out: out.to_path_buf(),
+            options: SimpleFileOptions::default()
+                .compression_method(CompressionMethod::Deflated)
+                .last_modified_time(DateTime::default())
+                .unix_permissions(0o644),
+            entries: Vec::new(),
+        })
+    }
+
+    fn zip_err(&self, e: zip::result::ZipError) -> Error {
+        Error::io(&self.out, std::io::Error::other(e.to_string()))
+    }
+
+    /// Adds the file `name` with `data` and Unix mode `mode`.
+    pub(crate) fn add(&mut self, name: &str, data: &[u8], mode: u32) -> Result<()> {
+        let options = self.options.unix_permissions(mode);
+        self.zip
+            .start_file(name, options)
+            .map_err(|e| self.zip_err(e))?;
+        self.zip
+            .write_all(data)
+            .map_err(|e| Error::io(&self.out, e))?;
+        self.entries.push(name.to_string());
+        Ok(())
+    }
+
+    /// Adds the folder `resources/`, then the files of `dir`, if any, under it (recursively,
+    /// in the order of their relative paths).
+    pub(crate) fn add_resources(&mut self, dir: Option<&Path>) -> Result<()> {
+        self.zip
+            .add_directory("resources/", self.options)
+            .map_err(|e| self.zip_err(e))?;
+        self.entries.push("resources/".into());
+        if let Some(dir) = dir {
+            let mut files = Vec::new();
+            collect_files(dir, dir, &mut files)?;
+            files.sort();
+            for (rel, path) in files {
+                let data = fs::read(&path).map_err(|e| Error::io(&path, e))?;
+                self.add(&format!("resources/{rel}"), &data, 0o644)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether an entry `name` was added.
+    pub(crate) fn contains(&self, name: &str) -> bool {
+        self.entries.iter().any(|e| e == name)
+    }
+
+    /// Finishes the archive: its path, entries and size.
+    pub(crate) fn finish(self) -> Result<Packaged> {
+        let Archive {
+            zip, out, entries, ..
+        } = self;
+        zip.finish()
+            .map_err(|e| Error::io(&out, std::io::Error::other(e.to_string())))?;
+        let bytes = fs::metadata(&out).map_err(|e| Error::io(&out, e))?.len();
+        Ok(Packaged {
+            path: out,
+            entries,
+            bytes,
+        })
+    }
 }
 
 /// Files under `dir`, as (path relative to `root` with forward slashes, full path).

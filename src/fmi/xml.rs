@@ -249,16 +249,13 @@ pub(crate) fn xml_document(body: impl FnOnce(&mut Writer<Vec<u8>>) -> io::Result
 /// table or a personalised one, [`super::variables::Table::personalised`]).
 pub fn model_description_for(t: &Table) -> String {
     let version = env!("CARGO_PKG_VERSION");
-    let tool = format!("breathing-torso {version}");
+    let tool = generation_tool();
     xml_document(|w| {
         w.create_element("fmiModelDescription")
             .with_attribute(("fmiVersion", "2.0"))
             .with_attribute(("modelName", MODEL_IDENTIFIER))
             .with_attribute(("guid", t.guid()))
-            .with_attribute((
-                "description",
-                "Physically based breathing human torso (Maldonado 2011): muscle activations in, volumes, pressures and marker positions out",
-            ))
+            .with_attribute(("description", DESCRIPTION))
             .with_attribute(("version", version))
             .with_attribute(("generationTool", tool.as_str()))
             .with_attribute(("variableNamingConvention", "structured"))
@@ -273,32 +270,54 @@ pub fn model_description_for(t: &Table) -> String {
                 }
                 cs.write_empty()?;
                 write_units(w)?;
-                w.create_element("LogCategories").write_inner_content(|w| {
-                    for (name, description) in LOG_CATEGORIES {
-                        w.create_element("Category")
-                            .with_attribute(("name", *name))
-                            .with_attribute(("description", *description))
-                            .write_empty()?;
-                    }
-                    Ok(())
-                })?;
-                w.create_element("DefaultExperiment")
-                    .with_attribute(("startTime", "0"))
-                    .with_attribute(("stopTime", "10"))
-                    .with_attribute(("tolerance", "1e-6"))
-                    .with_attribute(("stepSize", "0.02"))
-                    .write_empty()?;
-                w.create_element("ModelVariables").write_inner_content(|w| {
-                    for v in t.variables() {
-                        write_variable(w, v)?;
-                    }
-                    Ok(())
-                })?;
+                write_log_categories(w)?;
+                write_default_experiment(w)?;
+                w.create_element("ModelVariables")
+                    .write_inner_content(|w| {
+                        for v in t.variables() {
+                            write_variable(w, v)?;
+                        }
+                        Ok(())
+                    })?;
                 write_structure(w, t)?;
                 Ok(())
             })?;
         Ok(())
     })
+}
+
+/// The model's `description` attribute, the same in both versions' model descriptions.
+pub const DESCRIPTION: &str = "Physically based breathing human torso (Maldonado 2011): muscle activations in, volumes, pressures and marker positions out";
+
+/// The `generationTool` attribute: this crate and its version.
+pub(super) fn generation_tool() -> String {
+    format!("breathing-torso {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// `<LogCategories>`, the same in FMI 2.0 and FMI 3.0.
+pub(super) fn write_log_categories(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("LogCategories").write_inner_content(|w| {
+        for (name, description) in LOG_CATEGORIES {
+            w.create_element("Category")
+                .with_attribute(("name", *name))
+                .with_attribute(("description", *description))
+                .write_empty()?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// `<DefaultExperiment>`, the same in FMI 2.0 and FMI 3.0: 10 s from 0 in 20 ms steps,
+/// tolerance 1e-6.
+pub(super) fn write_default_experiment(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("DefaultExperiment")
+        .with_attribute(("startTime", "0"))
+        .with_attribute(("stopTime", "10"))
+        .with_attribute(("tolerance", "1e-6"))
+        .with_attribute(("stepSize", "0.02"))
+        .write_empty()?;
+    Ok(())
 }
 
 fn escape_html(s: &str) -> String {

@@ -2,17 +2,13 @@
 //! (FMI 3.0), one shared library per platform as
 //! `binaries/<platform tuple>/BreathingTorso.<ext>` (the same library as the FMI 2.0 FMU's,
 //! which exports both interfaces), `terminalsAndIcons/terminalsAndIcons.xml` and
-//! `resources/`. Entries are written in a fixed order with a fixed timestamp, and each
-//! library is checked to be a binary of its platform's format, as for the FMI 2.0 FMU.
+//! `resources/`. The archive is written by the FMI 2.0 packager's [`Archive`] (a fixed order
+//! and timestamp) from libraries checked by the same [`read_binaries`].
 
 use super::xml::{TERMINALS_PATH, model_description, terminals_and_icons};
-use crate::fmi::package::{Binary, Packaged, collect_files, read_binaries};
-use crate::{Error, Result};
-use std::fs;
-use std::io::Write;
+use crate::Result;
+use crate::fmi::package::{Archive, Binary, Packaged, read_binaries};
 use std::path::Path;
-use zip::write::SimpleFileOptions;
-use zip::{CompressionMethod, DateTime, ZipWriter};
 
 /// FMI 3.0 platform tuple of an FMI 2.0 platform folder (`linux64` -> `x86_64-linux`).
 /// `darwin64` is taken as Intel (`x86_64-darwin`).
@@ -37,70 +33,16 @@ pub fn build_fmu3_for(
     let libraries = read_binaries(binaries, &|platform| {
         platform_tuple(platform).map(str::to_string)
     })?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    let file = fs::File::create(out).map_err(|e| Error::io(out, e))?;
-    let zip_err = |e: zip::result::ZipError| Error::io(out, std::io::Error::other(e.to_string()));
-    let options = SimpleFileOptions::default()
-        .compression_method(CompressionMethod::Deflated)
-        .last_modified_time(DateTime::default())
-        .unix_permissions(0o644);
-    let mut zip = ZipWriter::new(file);
-    let mut entries = Vec::new();
-    let add = |zip: &mut ZipWriter<fs::File>,
-               entries: &mut Vec<String>,
-               name: String,
-               data: &[u8],
-               mode: u32|
-     -> Result<()> {
-        zip.start_file(name.as_str(), options.unix_permissions(mode))
-            .map_err(zip_err)?;
-        zip.write_all(data).map_err(|e| Error::io(out, e))?;
-        entries.push(name);
-        Ok(())
-    };
-    let description = model_description();
-    add(
-        &mut zip,
-        &mut entries,
-        "modelDescription.xml".into(),
-        description.as_bytes(),
+    let mut zip = Archive::create(out)?;
+    zip.add(
+        "modelDescription.xml",
+        model_description().as_bytes(),
         0o644,
     )?;
     for (name, lib) in &libraries {
-        add(&mut zip, &mut entries, name.clone(), lib, 0o755)?;
+        zip.add(name, lib, 0o755)?;
     }
-    let terminals = terminals_and_icons();
-    add(
-        &mut zip,
-        &mut entries,
-        TERMINALS_PATH.into(),
-        terminals.as_bytes(),
-        0o644,
-    )?;
-    zip.add_directory("resources/", options).map_err(zip_err)?;
-    entries.push("resources/".into());
-    if let Some(dir) = resources {
-        let mut files = Vec::new();
-        collect_files(dir, dir, &mut files)?;
-        files.sort();
-        for (rel, path) in files {
-            let data = fs::read(&path).map_err(|e| Error::io(&path, e))?;
-            add(
-                &mut zip,
-                &mut entries,
-                format!("resources/{rel}"),
-                &data,
-                0o644,
-            )?;
-        }
-    }
-    zip.finish().map_err(zip_err)?;
-    let bytes = fs::metadata(out).map_err(|e| Error::io(out, e))?.len();
-    Ok(Packaged {
-        path: out.to_path_buf(),
-        entries,
-        bytes,
-    })
+    zip.add(TERMINALS_PATH, terminals_and_icons().as_bytes(), 0o644)?;
+    zip.add_resources(resources)?;
+    zip.finish()
 }

@@ -7,10 +7,11 @@
 use super::view::{
     MARKER_ARRAY, MARKER_DIMENSIONS, Type3, Variable3, enumerations, type_of, variables,
 };
-use crate::fmi::variables::{
-    Causality, Initial, LOG_CATEGORIES, MODEL_IDENTIFIER, Role, Start, Variable, table,
+use crate::fmi::variables::{Causality, Initial, MODEL_IDENTIFIER, Role, Start, Variable, table};
+use crate::fmi::xml::{
+    DESCRIPTION, bound, causality, generation_tool, initial, num, variability,
+    write_default_experiment, write_log_categories, write_units, xml_document,
 };
-use crate::fmi::xml::{bound, causality, initial, num, variability, write_units};
 use crate::model::Quantity;
 use quick_xml::Writer;
 use std::io;
@@ -209,16 +210,13 @@ fn write_structure(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
 pub fn model_description() -> String {
     let t = table();
     let version = env!("CARGO_PKG_VERSION");
-    let tool = format!("breathing-torso {version}");
-    super::super::xml::xml_document(|w| {
+    let tool = generation_tool();
+    xml_document(|w| {
         w.create_element("fmiModelDescription")
             .with_attribute(("fmiVersion", "3.0"))
             .with_attribute(("modelName", MODEL_IDENTIFIER))
             .with_attribute(("instantiationToken", t.guid()))
-            .with_attribute((
-                "description",
-                "Physically based breathing human torso (Maldonado 2011): muscle activations in, volumes, pressures and marker positions out",
-            ))
+            .with_attribute(("description", DESCRIPTION))
             .with_attribute(("version", version))
             .with_attribute(("generationTool", tool.as_str()))
             .with_attribute(("variableNamingConvention", "structured"))
@@ -233,27 +231,15 @@ pub fn model_description() -> String {
                 cs.write_empty()?;
                 write_units(w)?;
                 write_type_definitions(w)?;
-                w.create_element("LogCategories").write_inner_content(|w| {
-                    for (name, description) in LOG_CATEGORIES {
-                        w.create_element("Category")
-                            .with_attribute(("name", *name))
-                            .with_attribute(("description", *description))
-                            .write_empty()?;
-                    }
-                    Ok(())
-                })?;
-                w.create_element("DefaultExperiment")
-                    .with_attribute(("startTime", "0"))
-                    .with_attribute(("stopTime", "10"))
-                    .with_attribute(("tolerance", "1e-6"))
-                    .with_attribute(("stepSize", "0.02"))
-                    .write_empty()?;
-                w.create_element("ModelVariables").write_inner_content(|w| {
-                    for v in variables() {
-                        write_variable(w, v)?;
-                    }
-                    Ok(())
-                })?;
+                write_log_categories(w)?;
+                write_default_experiment(w)?;
+                w.create_element("ModelVariables")
+                    .write_inner_content(|w| {
+                        for v in variables() {
+                            write_variable(w, v)?;
+                        }
+                        Ok(())
+                    })?;
                 write_structure(w)?;
                 Ok(())
             })?;
@@ -285,7 +271,7 @@ pub fn bus_members() -> (Vec<&'static Variable>, Vec<&'static Variable>) {
 /// connect by member name).
 pub fn terminals_and_icons() -> String {
     let (activations, volumes) = bus_members();
-    super::super::xml::xml_document(|w| {
+    xml_document(|w| {
         w.create_element("fmiTerminalsAndIcons")
             .with_attribute(("fmiVersion", "3.0"))
             .write_inner_content(|w| {
