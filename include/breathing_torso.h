@@ -373,8 +373,11 @@ int bt_set_drive(struct BtTorso *h, const struct BtDrive *drive);
 int bt_get_drive(struct BtTorso *h, struct BtDrive *drive);
 
 /**
- * Integrates to time `t` [s] with the inputs held. On `BT_ERR_NUMERICAL` the model stays at
- * its last good time (`bt_time`). `stats` may be NULL.
+ * Integrates to time `t` [s] with the inputs held, checking the state it ends in against the
+ * physiological bounds as the FMU does (the thorax, abdomen and trunk volumes against their
+ * rest values, `docs/fmi.md`). `BT_ERR_NUMERICAL` when the solver failed (the model stays at
+ * its last good time, `bt_time`) or the step ended outside the bounds (the model is back
+ * where the step started); `bt_last_error` says which. `stats` may be NULL.
  *
  * # Safety
  * `h` must be NULL or a live handle; `stats` NULL or writable.

@@ -24,6 +24,21 @@ pub enum Error {
         /// What went wrong.
         reason: String,
     },
+    /// A step ended in a state outside the physiological bounds
+    /// ([`crate::model::bounds::cavity_bounds`]); the model went back to where the step
+    /// started (`time`), as after a rollback.
+    #[error("at t = {at} s: {reason}; the model stays at t = {time} s")]
+    Unphysiological {
+        /// Where the model stays: the start of the step [s].
+        time: f64,
+        /// The end of the step, where the state left the bounds [s].
+        at: f64,
+        /// Which volume left its bounds, by how much.
+        reason: String,
+        /// Whether the solver's stiffness test had fired by the end of the step (the
+        /// rollback resets it with the rest of the solver's memory).
+        stiffness_detected: bool,
+    },
     /// A file could not be parsed; names the file, line and column (1-based).
     #[error("{path}:{line}:{column}: {message}")]
     Parse {

@@ -10,7 +10,7 @@ pub mod stress;
 
 use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};
 use crate::dynamics::{Layout, RIBS};
-use crate::model::{Config, Drive, Quantity, Torso, Wave};
+use crate::model::{AdvanceOptions, Config, Drive, Quantity, Torso, Wave};
 use crate::solver::{Ode, SecondOrder, SemiImplicitEuler};
 use crate::stats::rng::Pcg64;
 use crate::{Error, Result};
@@ -447,8 +447,9 @@ pub enum SceneOutcome {
     },
 }
 
-/// Simulates `config` for `seconds`, checking every output frame (at `rate` Hz) that the
-/// state is finite, the lung volume within [`LUNG_BOUNDS`] and the thorax, abdomen and trunk
+/// Simulates `config` for `seconds`, stepping with the facade's physiological check (the
+/// FMU's: a step it rolls back ends the run out of bounds) and checking every output frame
+/// (at `rate` Hz) that the state is finite, the lung volume within [`LUNG_BOUNDS`] and the thorax, abdomen and trunk
 /// volumes within the subject's bounds ([`RELATIVE_VOLUME_BOUNDS`], the thorax's widened to its
 /// residual volume and total lung capacity) of their values at the start.
 /// Errors other than [`Error::Numerical`] are returned as errors.
@@ -474,8 +475,17 @@ pub fn stress_torso(torso: &mut Torso, seconds: f64, rate: f64) -> Result<SceneO
     let bounds = crate::model::bounds::cavity_bounds(&torso.config().subject);
     for i in 0..=frames {
         if i > 0 {
-            match torso.advance_to(t0 + i as f64 / rate) {
+            let options = AdvanceOptions {
+                check_physiology: true,
+            };
+            match torso.advance_to_with(t0 + i as f64 / rate, options) {
                 Ok(_) => {}
+                Err(Error::Unphysiological { at, reason, .. }) => {
+                    return Ok(SceneOutcome::OutOfBounds {
+                        time: at,
+                        what: reason,
+                    });
+                }
                 Err(Error::Numerical { time, reason }) => {
                     return Ok(SceneOutcome::Numerical(format!("t = {time} s: {reason}")));
                 }

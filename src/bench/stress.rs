@@ -11,7 +11,7 @@
 //! beyond).
 
 use super::{LUNG_BOUNDS, SceneOutcome, set_all_activations};
-use crate::model::{Config, Quantity, Torso};
+use crate::model::{AdvanceOptions, Config, Quantity, Torso};
 use crate::stats::rng::Pcg64;
 use crate::{Error, Result};
 use serde::Serialize;
@@ -115,10 +115,20 @@ impl Monitor {
         Ok(None)
     }
 
-    /// Advances `torso` to `t` and checks; a solver failure or a violation ends the run.
+    /// Advances `torso` to `t` with the facade's physiological check (the one the FMU and
+    /// the C ABI step with: a step it rolls back ends the run out of bounds, as the FMU would
+    /// discard it), then checks against the start; a solver failure or a violation ends the
+    /// run.
     pub fn advance(&mut self, torso: &mut Torso, t: f64) -> Result<Option<SceneOutcome>> {
-        match torso.advance_to(t) {
+        let options = AdvanceOptions {
+            check_physiology: true,
+        };
+        match torso.advance_to_with(t, options) {
             Ok(_) => self.check(torso),
+            Err(Error::Unphysiological { at, reason, .. }) => Ok(Some(SceneOutcome::OutOfBounds {
+                time: at,
+                what: reason,
+            })),
             Err(Error::Numerical { time, reason }) => Ok(Some(SceneOutcome::Numerical(format!(
                 "t = {time} s: {reason}"
             )))),

@@ -15,8 +15,8 @@
 #![allow(non_camel_case_types)]
 
 use crate::anatomy::{MuscleGroup, Posture, Sex};
-use crate::fmi::variables::{Role, read_output, table};
-use crate::model::{Config, Drive, Scene, Snapshot, SolverConfig, Torso, Wave};
+use crate::fmi::variables::{Role, table};
+use crate::model::{AdvanceOptions, Config, Drive, Scene, Snapshot, SolverConfig, Torso, Wave};
 use crate::solver::Method;
 use crate::{Error, Result};
 use std::cell::RefCell;
@@ -176,7 +176,7 @@ fn c_message(s: &str) -> CString {
 fn code_of(e: &Error) -> c_int {
     match e {
         Error::InvalidParameter { .. } => BT_ERR_INVALID,
-        Error::Numerical { .. } => BT_ERR_NUMERICAL,
+        Error::Numerical { .. } | Error::Unphysiological { .. } => BT_ERR_NUMERICAL,
         Error::Parse { .. } => BT_ERR_PARSE,
         Error::Io { .. } => BT_ERR_IO,
         Error::State(_) => BT_ERR_STATE,
@@ -670,8 +670,11 @@ pub unsafe extern "C" fn bt_get_drive(h: *mut BtTorso, drive: *mut BtDrive) -> c
     }
 }
 
-/// Integrates to time `t` [s] with the inputs held. On `BT_ERR_NUMERICAL` the model stays at
-/// its last good time (`bt_time`). `stats` may be NULL.
+/// Integrates to time `t` [s] with the inputs held, checking the state it ends in against the
+/// physiological bounds as the FMU does (the thorax, abdomen and trunk volumes against their
+/// rest values, `docs/fmi.md`). `BT_ERR_NUMERICAL` when the solver failed (the model stays at
+/// its last good time, `bt_time`) or the step ended outside the bounds (the model is back
+/// where the step started); `bt_last_error` says which. `stats` may be NULL.
 ///
 /// # Safety
 /// `h` must be NULL or a live handle; `stats` NULL or writable.
@@ -683,7 +686,10 @@ pub unsafe extern "C" fn bt_advance_to(
 ) -> c_int {
     unsafe {
         with_handle(h, |b| {
-            let s = b.torso.advance_to(t)?;
+            let options = AdvanceOptions {
+                check_physiology: true,
+            };
+            let s = b.torso.advance_to_with(t, options)?;
             if !stats.is_null() {
                 *stats = BtAdvanceStats {
                     steps: s.steps,
@@ -717,7 +723,7 @@ fn read_variable(b: &mut BtTorso, var: &crate::fmi::variables::Variable) -> Resu
                 Err(Error::invalid(&var.name, "(string)", "a numeric variable"))
             }
         },
-        Role::Output(q) => read_output(&mut b.torso, &var.name, q),
+        Role::Output(q) => b.torso.read_output(&var.name, q),
     }
 }
 
@@ -752,11 +758,8 @@ fn read_extra_marker(b: &mut BtTorso, (index, axis): (u16, u8)) -> Result<f64> {
         index + 1,
         ["x", "y", "z"][usize::from(axis)]
     );
-    read_output(
-        &mut b.torso,
-        &name,
-        crate::model::Quantity::Marker { index, axis },
-    )
+    b.torso
+        .read_output(&name, crate::model::Quantity::Marker { index, axis })
 }
 
 /// Reads any numeric FMI variable by value reference (`BT_VR_*` constants): outputs, inputs,
@@ -860,11 +863,8 @@ pub unsafe extern "C" fn bt_read_markers(
                     index: (i / 3) as u16,
                     axis: (i % 3) as u8,
                 };
-                *o = read_output(
-                    &mut b.torso,
-                    &format!("marker[{}].{}", i / 3 + 1, ["x", "y", "z"][i % 3]),
-                    q,
-                )?;
+                let name = format!("marker[{}].{}", i / 3 + 1, ["x", "y", "z"][i % 3]);
+                *o = b.torso.read_output(&name, q)?;
             }
             Ok(())
         })

@@ -18,9 +18,9 @@
 use super::status::{Api, Status};
 use super::variables::{
     Causality, Input, LOG_CATEGORIES, Parameter, Role, ScalarType, Table, Value, Variable,
-    read_output, start_config, table,
+    start_config, table,
 };
-use crate::model::{Checkpoint, Config, Snapshot, Torso};
+use crate::model::{AdvanceOptions, Config, Snapshot, Torso};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -160,8 +160,6 @@ const ALL_CATEGORIES: u32 = (1 << 6) - 1;
 /// instance's time.
 pub const TIME_TOLERANCE: f64 = 1e-9;
 
-use crate::model::bounds::{CHECKED_VOLUMES, physiology_violation};
-
 /// An FMU instance.
 pub struct Instance {
     name: String,
@@ -201,14 +199,8 @@ pub struct Instance {
     last_successful_time: f64,
     last_step_status: Status,
     strings: Vec<CString>,
-    /// Thorax, abdomen and trunk volumes [L] of the rest state of the built model, with the
-    /// model's fingerprint (the reference of [`cavity_bounds`]).
-    rest_volumes: Option<(u64, [f64; 3])>,
     /// Whether the explicit solver's stiffness flag has been logged.
     stiffness_logged: bool,
-    /// The model's state before the current `fmi2DoStep`, to roll back to on a discard
-    /// (buffers reused from step to step).
-    step_start: Checkpoint,
     /// Addresses of the FMU states handed out and not yet freed (managed by the C layer).
     pub(crate) fmu_states: std::collections::HashSet<usize>,
 }
@@ -474,7 +466,6 @@ impl Instance {
             start,
             rtol_explicit: false,
             stiffness_logged: false,
-            step_start: Checkpoint::default(),
             inputs: [0.0; Input::COUNT],
             torso: None,
             fresh: None,
@@ -486,7 +477,6 @@ impl Instance {
             last_successful_time: 0.0,
             last_step_status: Status::Ok,
             strings: Vec::new(),
-            rest_volumes: None,
             fmu_states: Default::default(),
         }
     }
@@ -841,7 +831,7 @@ impl Instance {
             Role::Parameter(p) => Ok(p.get(&self.config)),
             Role::Output(q) => self
                 .ensure_torso()
-                .and_then(|t| read_output(t, &var.name, q))
+                .and_then(|t| t.read_output(&var.name, q))
                 .map(|x| match var.ty {
                     ScalarType::Integer => Value::Integer(x.min(i32::MAX as f64) as i32),
                     _ => Value::Real(x),
@@ -1092,14 +1082,6 @@ impl Instance {
             ));
         }
         let start = self.start_time;
-        let rest = match self.rest_volumes() {
-            Ok(r) => r,
-            Err(e) => {
-                self.phase = Phase::Error;
-                return self.error(&format!("{function}: {e}"));
-            }
-        };
-        let mut step_start = std::mem::take(&mut self.step_start);
         let torso = match self.ensure_torso() {
             Ok(t) => t,
             Err(e) => {
@@ -1107,20 +1089,21 @@ impl Instance {
                 return self.error(&format!("{function}: {e}"));
             }
         };
-        torso.checkpoint(&mut step_start);
         // `t` may lie up to the tolerance before the instance's time, and a tiny step may then
         // end before the model's time: the model stays where it is (it cannot step back), the
-        // instance's time becomes `t + h`.
+        // instance's time becomes `t + h`. A step that leaves the physiological bounds is
+        // rolled back by the model and discarded here.
         let model_target = (target - start).max(torso.time());
-        let advanced = torso
-            .advance_to(model_target)
-            .and_then(|_| physiology_violation(torso, &rest));
-        let stiff = torso.stiffness_detected();
-        let restored = match &advanced {
-            Ok(Some(_)) => Some(torso.rollback(&step_start)),
-            _ => None,
+        let options = AdvanceOptions {
+            check_physiology: true,
         };
-        self.step_start = step_start;
+        let advanced = torso.advance_to_with(model_target, options);
+        let stiff = match &advanced {
+            Err(Error::Unphysiological {
+                stiffness_detected, ..
+            }) => *stiffness_detected,
+            _ => torso.stiffness_detected(),
+        };
         if stiff && !self.stiffness_logged {
             self.stiffness_logged = true;
             // A hint, not a warning: the step succeeded and returns Status::Ok.
@@ -1136,25 +1119,19 @@ impl Instance {
             );
         }
         match advanced {
-            Ok(None) => {
+            Ok(_) => {
                 self.time = target;
                 self.last_successful_time = target;
                 self.last_step_status = Status::Ok;
                 Status::Ok
             }
-            Ok(Some(violation)) => {
-                if let Some(Err(e)) = restored {
-                    self.phase = Phase::Error;
-                    return self.error(&format!("{function}: {e}"));
-                }
-                self.discard(
-                    function,
-                    t,
-                    target,
-                    t,
-                    &format!("at t = {target}: {violation}"),
-                )
-            }
+            Err(Error::Unphysiological { reason, .. }) => self.discard(
+                function,
+                t,
+                target,
+                t,
+                &format!("at t = {target}: {reason}"),
+            ),
             Err(Error::Numerical { time, reason }) => {
                 self.discard(function, t, target, start + time, &reason)
             }
@@ -1176,27 +1153,6 @@ impl Instance {
         );
         self.log(Status::Discard, Category::Discard, &message);
         Status::Discard
-    }
-
-    /// The cavity volumes of the rest state of the model to be built (or built), computed
-    /// once per compiled model.
-    fn rest_volumes(&mut self) -> Result<[f64; 3]> {
-        let torso = self.ensure_torso()?;
-        let fingerprint = torso.compiled().fingerprint;
-        if let Some((f, v)) = self.rest_volumes
-            && f == fingerprint
-        {
-            return Ok(v);
-        }
-        let torso = self.ensure_torso()?;
-        let mut rest =
-            Torso::with_compiled_at_rest(torso.config().clone(), torso.compiled().clone())?;
-        let mut v = [0.0; 3];
-        for (x, (q, _)) in v.iter_mut().zip(CHECKED_VOLUMES) {
-            *x = rest.read(q)?;
-        }
-        self.rest_volumes = Some((fingerprint, v));
-        Ok(v)
     }
 
     /// The status of the last communication step: [`Status::Discard`] after a discarded

@@ -1451,31 +1451,3 @@ fn format_guid(h: u128) -> String {
         &x[20..32]
     )
 }
-
-/// Reads an output quantity off `torso`, the way the FMU and the C ABI both report it:
-/// markers beyond the marker count (the grid's `rows x cols`, or a marker set's size) read 0, solver statistics come from the integrator's
-/// counters, everything else from [`Torso::read`]. What the model cannot provide, and any
-/// non-finite value, is an error naming `name`.
-pub fn read_output(torso: &mut Torso, name: &str, q: Quantity) -> Result<f64> {
-    if let Quantity::Marker { index, .. } = q
-        && usize::from(index) >= torso.marker_count()
-    {
-        return Ok(0.0);
-    }
-    let stats = torso.solver_stats();
-    let value = match q {
-        Quantity::SolverSteps => stats.steps as f64,
-        Quantity::SolverRejectedSteps => stats.rejected as f64,
-        Quantity::SolverRhsEvaluations => stats.rhs_evaluations as f64,
-        q => torso
-            .read(q)
-            .map_err(|e| Error::State(format!("cannot read `{name}`: {e}")))?,
-    };
-    if !value.is_finite() {
-        return Err(Error::Numerical {
-            time: torso.time(),
-            reason: format!("`{name}` is not finite ({value})"),
-        });
-    }
-    Ok(value)
-}

@@ -1,11 +1,15 @@
 //! Which states count as physiological: the bounds of the thorax, abdomen and trunk volumes
-//! relative to their rest values, beyond which a state has left the body's range. The FMU
-//! discards a step that ends there (`fmi2Discard`, the instance stays at its last good time)
-//! and the stress benchmarks count such a run a blow-up; both read the bounds here. The
-//! dynamics keep only the pressure-volume law itself ([`crate::dynamics::pleural`]), whose
-//! residual-volume and total-lung-capacity ratios the thorax's bounds follow.
+//! relative to their rest values, beyond which a state has left the body's range, and the
+//! facade's check of a state against them ([`Torso::physiology_violation`], with the rest
+//! volumes computed once per compiled model, [`Compiled::rest_volumes`]). A step made with
+//! [`super::AdvanceOptions::check_physiology`] that ends there is rolled back: the FMU
+//! discards it (`fmi2Discard`, the instance stays at its last good time), the C ABI's
+//! `bt_advance_to` and `torso simulate` fail with [`crate::Error::Unphysiological`], and the
+//! stress benchmarks count such a run a blow-up. The dynamics keep only the pressure-volume
+//! law itself ([`crate::dynamics::pleural`]), whose residual-volume and total-lung-capacity
+//! ratios the thorax's bounds follow.
 
-use super::{Quantity, Torso};
+use super::{Compiled, Quantity, Torso};
 use crate::Result;
 use crate::anatomy::Subject;
 use crate::dynamics::pleural::capacity_ratios;
@@ -52,23 +56,49 @@ pub const CHECKED_VOLUMES: [(Quantity, &str); 3] = [
     (Quantity::TrunkVolume, "volume.trunk"),
 ];
 
-/// Why the state of `torso` is unphysical: a non-finite state variable, or a cavity volume
-/// outside its [`cavity_bounds`] x `rest`; `None` when it is within bounds.
-pub fn physiology_violation(torso: &mut Torso, rest: &[f64; 3]) -> Result<Option<String>> {
-    let bounds = cavity_bounds(&torso.config().subject);
-    if let Some(i) = torso.state().iter().position(|v| !v.is_finite()) {
-        return Ok(Some(format!("state variable {i} is not finite")));
+impl Compiled {
+    /// The [`CHECKED_VOLUMES`] of the rest state (muscles relaxed, zero airway-opening
+    /// pressure) [L], the reference of [`cavity_bounds`]; computed on the first call, then
+    /// kept.
+    pub fn rest_volumes(&self) -> [f64; 3] {
+        *self.rest_volumes.get_or_init(|| {
+            let model = &self.model;
+            let mut data = crate::dynamics::Data::new(model);
+            let y = crate::dynamics::rest_state(model);
+            crate::dynamics::kinematics::positions_and_velocities(
+                model,
+                &mut data,
+                &crate::dynamics::Layout::new(model),
+                &y,
+            );
+            let o = crate::observe::observe(model, &self.compartments, &data.pos, &data.vel, 0.0);
+            let litres = 1e3;
+            [o.thorax * litres, o.abdomen * litres, o.trunk * litres]
+        })
     }
-    for (((q, name), r), (lo, hi)) in CHECKED_VOLUMES.into_iter().zip(rest).zip(bounds) {
-        let v = torso.read(q)?;
-        let ratio = v / r;
-        if !(ratio.is_finite() && (lo..=hi).contains(&ratio)) {
-            return Ok(Some(format!(
-                "{name} = {v:.4} L is {ratio:.3} x its rest value {r:.4} L, outside the physiological bounds [{lo:.3}, {hi:.3}] x rest (the subject's residual volume to total lung capacity, with room)"
-            )));
+}
+
+impl Torso {
+    /// Why the current state is unphysical: a non-finite state variable, or a cavity volume
+    /// outside its [`cavity_bounds`] x its rest value ([`Compiled::rest_volumes`]); `None`
+    /// when it is within bounds.
+    pub fn physiology_violation(&mut self) -> Result<Option<String>> {
+        let bounds = cavity_bounds(&self.config().subject);
+        if let Some(i) = self.state().iter().position(|v| !v.is_finite()) {
+            return Ok(Some(format!("state variable {i} is not finite")));
         }
+        let rest = self.compiled().rest_volumes();
+        for (((q, name), r), (lo, hi)) in CHECKED_VOLUMES.into_iter().zip(rest).zip(bounds) {
+            let v = self.read(q)?;
+            let ratio = v / r;
+            if !(ratio.is_finite() && (lo..=hi).contains(&ratio)) {
+                return Ok(Some(format!(
+                    "{name} = {v:.4} L is {ratio:.3} x its rest value {r:.4} L, outside the physiological bounds [{lo:.3}, {hi:.3}] x rest (the subject's residual volume to total lung capacity, with room)"
+                )));
+            }
+        }
+        Ok(None)
     }
-    Ok(None)
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@
 pub mod bounds;
 mod config;
 pub mod drive;
+pub mod output;
 mod quantity;
 pub mod run;
 mod snapshot;
@@ -26,4 +27,4 @@ pub(crate) use drive::check;
 pub use drive::{Breath, Breaths, Drive, Wave};
 pub use quantity::Quantity;
 pub use snapshot::{Checkpoint, Snapshot};
-pub use torso::{AIRWAY_OPENING_RANGE, AdvanceStats, Compiled, Sample, Torso};
+pub use torso::{AIRWAY_OPENING_RANGE, AdvanceOptions, AdvanceStats, Compiled, Sample, Torso};

@@ -1,7 +1,7 @@
 //! Running a torso over time at a fixed output rate, and summarising the breathing it shows
 //! (tidal volume, end-expiratory volume, compartment shares, dome excursion).
 
-use super::{Quantity, Torso};
+use super::{AdvanceOptions, Quantity, Torso};
 use crate::Result;
 use crate::anatomy::MuscleGroup;
 use serde::Serialize;
@@ -59,14 +59,19 @@ pub fn frame(torso: &mut Torso) -> Result<Frame> {
 }
 
 /// Advances `torso` by `duration` seconds, recording a frame every 1/`rate` seconds (the
-/// first at the current time).
+/// first at the current time). Steps are checked against the physiological bounds as the
+/// FMU's are ([`super::AdvanceOptions::check_physiology`]): a run that leaves them fails with
+/// [`crate::Error::Unphysiological`].
 pub fn run(torso: &mut Torso, duration: f64, rate: f64) -> Result<Vec<Frame>> {
     let t0 = torso.time();
     let n = (duration * rate).round() as usize;
+    let options = AdvanceOptions {
+        check_physiology: true,
+    };
     let mut frames = Vec::with_capacity(n + 1);
     frames.push(frame(torso)?);
     for i in 1..=n {
-        torso.advance_to(t0 + i as f64 / rate)?;
+        torso.advance_to_with(t0 + i as f64 / rate, options)?;
         frames.push(frame(torso)?);
     }
     Ok(frames)

@@ -43,6 +43,15 @@ pub struct AdvanceStats {
     pub rhs_evaluations: u64,
 }
 
+/// Options of [`Torso::advance_to_with`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AdvanceOptions {
+    /// Check the state the step ends in against the physiological bounds
+    /// ([`Torso::physiology_violation`]); a step that leaves them is rolled back and fails
+    /// with [`Error::Unphysiological`]. The FMU, the C ABI and `torso simulate` step with it.
+    pub check_physiology: bool,
+}
+
 /// The compiled, immutable part of a torso, shareable between instances and threads.
 #[derive(Debug)]
 pub struct Compiled {
@@ -62,6 +71,9 @@ pub struct Compiled {
     /// The static equilibria solved so far, per applied activations (airway-opening pressure
     /// included), most recent last; at most [`EQUILIBRIUM_CACHE`] are kept.
     pub equilibria: Mutex<Vec<(Activations, Arc<Equilibrium>)>>,
+    /// Thorax, abdomen and trunk volumes of the rest state [L], computed when first needed
+    /// ([`Compiled::rest_volumes`]).
+    pub rest_volumes: std::sync::OnceLock<[f64; 3]>,
 }
 
 /// How many static equilibria a compiled model keeps (a fit varying the drive solves a new
@@ -98,6 +110,7 @@ impl Compiled {
             model,
             markers: MarkerCache::default(),
             equilibria: Mutex::new(Vec::new()),
+            rest_volumes: std::sync::OnceLock::new(),
         }
     }
 
@@ -245,6 +258,9 @@ pub struct Torso {
     /// Whether the state is still the start state (built or reset, started at equilibrium,
     /// not advanced since): a new drive then moves the start to its equilibrium.
     at_start: bool,
+    /// The state before the current [`Torso::advance_to_with`] step, to roll back to (buffers
+    /// reused from step to step).
+    step_start: Checkpoint,
 }
 
 fn solver_options(config: &Config) -> Options {
@@ -309,6 +325,7 @@ impl Torso {
             config,
             compiled,
             at_start: false,
+            step_start: Checkpoint::default(),
         })
     }
 
@@ -508,6 +525,33 @@ impl Torso {
             rejected: after.rejected - before.rejected,
             rhs_evaluations: after.rhs_evaluations - before.rhs_evaluations,
         })
+    }
+
+    /// [`Torso::advance_to`] with `options`: with [`AdvanceOptions::check_physiology`], a step
+    /// that ends outside the physiological bounds is rolled back to where it started and
+    /// fails with [`Error::Unphysiological`] (a solver failure stays an
+    /// [`Error::Numerical`], the model at its last good time).
+    pub fn advance_to_with(&mut self, t: f64, options: AdvanceOptions) -> Result<AdvanceStats> {
+        if !options.check_physiology {
+            return self.advance_to(t);
+        }
+        let mut start = std::mem::take(&mut self.step_start);
+        self.checkpoint(&mut start);
+        let result = self.advance_to(t).and_then(|stats| {
+            let Some(reason) = self.physiology_violation()? else {
+                return Ok(stats);
+            };
+            let stiffness_detected = self.stiffness_detected();
+            self.rollback(&start)?;
+            Err(Error::Unphysiological {
+                time: start.time,
+                at: t,
+                reason,
+                stiffness_detected,
+            })
+        });
+        self.step_start = start;
+        result
     }
 
     /// The observation of the current state, computed once per state (lazily).
