@@ -1,5 +1,7 @@
-/* capi_breathe.c: drive the breathing torso from C: quiet breathing for 8 s, lung volume and
- * markers at each frame, then a snapshot replay that must reproduce the run bit for bit.
+/* capi_breathe.c: drive the breathing torso from C: a 45-year-old woman breathing deeper than
+ * the quiet drive (ribs 0.2, diaphragm 0.25 at 0.25 Hz) for 8 s, lung volume and markers at
+ * each frame and the tidal volume, then a snapshot replay that must reproduce the run bit for
+ * bit.
  *
  *   cargo build --release
  *   gcc -std=c11 -Iinclude examples/capi_breathe.c -Ltarget/release -lbreathing_torso -lm \

@@ -291,7 +291,7 @@ pub fn fit_file(
     };
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
-    let bar = Progress::new("fit", options.max_evals, "evaluations");
+    let bar = Progress::new("fit", options.max_evals, "evaluations").up_to();
     let recording = match recording {
         ForFit::Grid(r) => r,
         ForFit::Named(markers) => {
@@ -563,6 +563,13 @@ pub const FIT_NOTES: [&str; 4] = [
      recording's first frame, in (-pi, pi]; delta phase > 0: the diaphragm leads the rib cage",
 ];
 
+/// The mean tidal volume of the fitted model's breaths [L], as the fit's JSON records it.
+fn fitted_tidal_volume(json: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(json).ok()?;
+    let value: serde_json::Value = serde_json::from_str(&text).ok()?;
+    value["breaths_summary"]["mean"]["tidal_volume_l"].as_f64()
+}
+
 /// Runs `torso demo`.
 pub fn demo(args: &DemoArgs) -> Result<()> {
     let start = std::time::Instant::now();
@@ -574,8 +581,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
 
     println!(
         "== 2. simulate the default subject (quiet breathing, 20 s) at level of detail 0 and \
-         rtol 1e-4, the settings of the bundled recording (the README's figures are level of \
-         detail 1: a 0.50 L tidal volume)"
+         rtol 1e-4, the settings of the bundled recording"
     );
     let model = ModelArgs {
         subject: SubjectArgs {
@@ -607,6 +613,13 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         100.0 * s.rib_cage_share,
         sim.display()
     );
+    let (readme, _) = super::simulate::default_summary()?;
+    println!(
+        "`torso simulate` at its defaults (level of detail 1, rtol 1e-6), whose figures the \
+         README quotes, gives a tidal volume of {:.3} L: level 0's coarser diaphragm moves less \
+         air for the same drive (docs/anatomy.md)",
+        readme.tidal_volume
+    );
 
     let recording = match &args.recording {
         Some(r) => r.clone(),
@@ -636,6 +649,15 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
     println!("what these figures mean:");
     for note in FIT_NOTES {
         println!("  {note}");
+    }
+    if let Some(vt) = fitted_tidal_volume(&args.out.join("fit.json")) {
+        println!(
+            "  VT: the tidal volume of the model breathing the fitted drive, {vt:.3} L; step 2's \
+             {:.3} L is the same model breathing the quiet drive, and the two differ by what the \
+             fitted frequency, amplitudes and phases differ from it (the drive the recording \
+             was made with is compared below when its truth file is there)",
+            s.tidal_volume
+        );
     }
     let truth_path = recording.with_extension("truth.json");
     if let Ok(text) = std::fs::read_to_string(&truth_path)
@@ -907,7 +929,7 @@ pub fn sweep(args: &SweepArgs) -> Result<()> {
     prepare_output_dir(&args.out)?;
     let start = std::time::Instant::now();
     // Progress over every case's evaluations; a finished case counts its whole budget.
-    let bar = Progress::new("fit-sweep", cases.len() * max_evals, "evaluations");
+    let bar = Progress::new("fit-sweep", cases.len() * max_evals, "evaluations").up_to();
     let counts = std::sync::Mutex::new(vec![0usize; cases.len()]);
     let finished = std::sync::atomic::AtomicUsize::new(0);
     let show = |counts: &[usize]| {

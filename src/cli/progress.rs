@@ -5,6 +5,9 @@
 //! [`LINE_INTERVAL`] (a ticker thread writes one even when no update comes), and a last
 //! line at 100 %; each line holds the count done over the total, the percentage, the
 //! command's own detail (e.g. the best cost), the elapsed time and the estimated time left.
+//! When the total is a limit the work may stop before (a search's largest number of
+//! evaluations, [`Progress::up_to`]), the lines say so ("10 of at most 120", "ETA at most"),
+//! and the last one gives the count reached and the limit it stopped before.
 
 use std::io::{IsTerminal, Write};
 use std::sync::mpsc::{self, RecvTimeoutError, Sender};
@@ -22,6 +25,10 @@ struct State {
     done: usize,
     total: usize,
     detail: String,
+    /// Whether `total` is a limit the work may stop before ([`Progress::up_to`]).
+    limit: bool,
+    /// The limit the work ended before ([`Progress::finish`] of a limited count).
+    stopped_before: Option<usize>,
     last_line: Option<Instant>,
     last_draw: Option<Instant>,
     drawn: bool,
@@ -71,12 +78,25 @@ impl Shared {
     }
 
     fn eta(&self, st: &State, elapsed: f64) -> String {
+        let at_most = if st.limit { "at most " } else { "" };
         if st.done >= st.total {
             "0 s".into()
         } else if st.done == 0 {
             "?".into()
         } else {
-            format_secs(elapsed * (st.total - st.done) as f64 / st.done as f64)
+            let left = elapsed * (st.total - st.done) as f64 / st.done as f64;
+            format!("{at_most}{}", format_secs(left))
+        }
+    }
+
+    /// The count: `10/120 evaluations`, with a limit `10 of at most 120 evaluations`, and at
+    /// the end of a limited count `59 evaluations, stopped before the limit of 120`.
+    fn count(&self, st: &State) -> String {
+        let (done, total, unit) = (st.done, st.total, &self.unit);
+        match st.stopped_before {
+            Some(limit) => format!("{done} {unit}, stopped before the limit of {limit}"),
+            None if st.limit => format!("{done} of at most {total} {unit}"),
+            None => format!("{done}/{total} {unit}"),
         }
     }
 
@@ -92,11 +112,9 @@ impl Shared {
     fn line(&self, st: &State, end: bool) -> String {
         let elapsed = self.start.elapsed().as_secs_f64();
         format!(
-            "{}: {}/{} {} ({:.0} %){}, elapsed {}, {}\n",
+            "{}: {} ({:.0} %){}, elapsed {}, {}\n",
             self.label,
-            st.done,
-            st.total,
-            self.unit,
+            self.count(st),
             self.percent(st),
             Self::detail(st),
             format_secs(elapsed),
@@ -114,14 +132,12 @@ impl Shared {
         let p = self.percent(st);
         let filled = ((p / 100.0 * BAR_WIDTH as f64).floor() as usize).min(BAR_WIDTH);
         format!(
-            "\r{} [{}{}] {:>3.0} % {}/{} {}{}, {} elapsed, ETA {}\x1b[K",
+            "\r{} [{}{}] {:>3.0} % {}{}, {} elapsed, ETA {}\x1b[K",
             self.label,
             "#".repeat(filled),
             ".".repeat(BAR_WIDTH - filled),
             p,
-            st.done,
-            st.total,
-            self.unit,
+            self.count(st),
             Self::detail(st),
             format_secs(elapsed),
             self.eta(st, elapsed)
@@ -202,6 +218,8 @@ impl Progress {
                 done: 0,
                 total,
                 detail: String::new(),
+                limit: false,
+                stopped_before: None,
                 last_line: None,
                 last_draw: None,
                 drawn: false,
@@ -268,6 +286,16 @@ impl Progress {
         }
     }
 
+    /// Marks the total as a limit the work may stop before (a search's largest number of
+    /// evaluations): the count reads "10 of at most 120", the estimate "at most", and the
+    /// last line the count reached and the limit.
+    pub fn up_to(self) -> Progress {
+        if let Ok(mut st) = self.shared.state.lock() {
+            st.limit = true;
+        }
+        self
+    }
+
     /// Changes the total (e.g. when the work turns out shorter).
     pub fn set_total(&self, total: usize) {
         if let Ok(mut st) = self.shared.state.lock() {
@@ -290,6 +318,9 @@ impl Progress {
             return;
         };
         if st.done < st.total {
+            if st.limit {
+                st.stopped_before = Some(st.total);
+            }
             st.total = st.done;
         }
         st.detail = detail.into();
@@ -366,6 +397,37 @@ mod tests {
         assert!(
             last.starts_with("fit: 60/60 evaluations (100 %), best cost 0.700 mm")
                 && last.ends_with("done"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn a_limited_count_says_it_is_a_limit_and_where_it_stopped() {
+        let sink = Sink::default();
+        let p = Progress::to_writer(
+            "fit",
+            120,
+            "evaluations",
+            false,
+            Duration::from_secs(60),
+            Box::new(sink.clone()),
+        )
+        .up_to();
+        p.update(10, "best cost 0.900 mm");
+        p.update(59, "best cost 0.800 mm");
+        p.finish("best cost 0.700 mm");
+        let text = sink.text();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(
+            lines[0].starts_with("fit: 10 of at most 120 evaluations (8 %), best cost 0.900 mm")
+                && lines[0].contains("ETA at most "),
+            "{text}"
+        );
+        let last = lines.last().unwrap();
+        assert!(
+            last.starts_with(
+                "fit: 59 evaluations, stopped before the limit of 120 (100 %), best cost 0.700 mm"
+            ) && last.ends_with("done"),
             "{text}"
         );
     }

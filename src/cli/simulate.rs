@@ -79,6 +79,7 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
     let wall = start.elapsed().as_secs_f64();
     write_csv(&args.out, &frames)?;
     let period = 1.0 / drive.frequency;
+    let from = summary_start(args.duration, period);
     let stats = torso.solver_stats();
     println!(
         "subject: {:?}, {} y, {} m, {} kg, {:?}",
@@ -92,8 +93,6 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
             args.duration, drive.frequency,
         );
     } else {
-        // the last two breaths, or the last one of a run shorter than two
-        let from = (args.duration - 2.0 * period).max(period.min(args.duration - period));
         print_summary(&summarise(&frames, from), subject.frc_ecsc());
     }
     println!(
@@ -110,6 +109,37 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
 }
 
 /// The drive in one readable line: frequency, then each family's amplitude and phase.
+/// Where the printed summary starts in a run of `duration` seconds with breaths of `period`:
+/// the last two breaths, or the last one of a run shorter than two.
+fn summary_start(duration: f64, period: f64) -> f64 {
+    (duration - 2.0 * period).max(period.min(duration - period))
+}
+
+/// The breathing summary `torso simulate --duration 20` prints with every other option at
+/// its default (the default subject at level of detail 1, the quiet drive, rtol 1e-6): the
+/// figures the README quotes, computed as that command computes them, with the subject's
+/// ECSC FRC. `torso demo` prints them beside its level-0 run.
+pub fn default_summary() -> Result<(crate::model::run::BreathSummary, f64)> {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Defaults {
+        #[command(flatten)]
+        args: SimulateArgs,
+    }
+    let args = Defaults::try_parse_from(["simulate", "--duration", "20"])
+        .map_err(|e| Error::State(format!("the default simulate options: {e}")))?
+        .args;
+    let drive = args.drive.drive()?;
+    let config = args
+        .subject
+        .config(&args.solver.with_alias(&args.method), drive)?;
+    let frc = config.subject.frc_ecsc();
+    let mut torso = Torso::new(config)?;
+    let frames = run(&mut torso, args.duration, args.rate)?;
+    let from = summary_start(args.duration, 1.0 / drive.frequency);
+    Ok((summarise(&frames, from), frc))
+}
+
 pub fn describe_drive(d: &Drive) -> String {
     let waves = [
         ("ribs", d.ribs),

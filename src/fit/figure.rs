@@ -1,6 +1,8 @@
 //! The figure of a fit (`<stem>_report.png` and its SVG twin), stacked panels 1400 px wide:
 //! the fitted lung volume over time with the breath onsets; the volumes displaced by the
-//! rib cage and by the abdomen (when the per-breath report was made); three markers of the
+//! rib cage and by the abdomen since the first frame (when the per-breath report was made;
+//! the first frame lies anywhere in a breath, so the curves start at zero rather than at the
+//! first frame's distance from the rest state); three markers of the
 //! midline recorded vs fitted (their ventral displacement); and a front view of the marker
 //! set ([`front_view`]), each marker coloured by its RMS residual over the frames where it
 //! was tracked, with a colour bar (viridis anchors, Smith & van der Walt 2015, matplotlib's
@@ -12,7 +14,7 @@
 use super::Fit;
 use super::clinical::BreathReport;
 use crate::stats::plot::{
-    BLUE, DARK, Mark, ORANGE, Panel, RED, Trace, draw_panel, ensure_font, rgb,
+    BLUE, DARK, Mark, ORANGE, Panel, RED, Trace, draw_panel, ensure_font, rgb, tick_label,
 };
 use crate::{Error, Result};
 use plotters::coord::Shift;
@@ -148,6 +150,12 @@ impl OwnedPanel {
     }
 }
 
+/// `v` less its first value.
+fn since_first(v: &[f64]) -> Vec<f64> {
+    let first = v.first().copied().unwrap_or_default();
+    v.iter().map(|x| x - first).collect()
+}
+
 /// The time-series panels (module doc).
 fn time_panels(fit: &Fit, report: Option<&BreathReport>) -> Vec<OwnedPanel> {
     let mut lung = vec![(
@@ -201,19 +209,19 @@ fn time_panels(fit: &Fit, report: Option<&BreathReport>) -> Vec<OwnedPanel> {
                 100.0 * get("rib_cage_share"),
                 get("phase_angle_deg")
             ),
-            y_label: "displaced volume [L]".into(),
+            y_label: "displaced volume since the first frame [L]".into(),
             series: vec![
                 (
                     "rib cage".into(),
                     c.times.clone(),
-                    c.rib_cage.clone(),
+                    since_first(&c.rib_cage),
                     ORANGE,
                     Mark::Line,
                 ),
                 (
                     "abdomen".into(),
                     c.times.clone(),
-                    c.abdomen.clone(),
+                    since_first(&c.abdomen),
                     BLUE,
                     Mark::Line,
                 ),
@@ -268,7 +276,6 @@ fn draw_front<DB: DrawingBackend>(
     rms: &[f64],
 ) -> std::result::Result<(), String> {
     let e = |x: &dyn std::fmt::Debug| format!("{x:?}");
-    let (plot, bar) = area.split_horizontally(WIDTH - 260);
     // Markers at their first fitted frame (the model's end-expiratory grid).
     let pts = front_view(fit);
     let (mut u0, mut u1, mut v0, mut v1) = (
@@ -286,12 +293,19 @@ fn draw_front<DB: DrawingBackend>(
     if !(u0.is_finite() && v0.is_finite()) {
         return Ok(());
     }
-    // Equal scales on both axes: pad the shorter extent.
+    // Equal scales on both axes. The plot is as wide as the markers' extent needs at the
+    // panel's height (at least a third of the figure, at most all but the colour bar), and
+    // it and the colour bar are centred, so that the axes do not run on over empty space.
     let (w, h) = ((u1 - u0).max(1e-3), (v1 - v0).max(1e-3));
-    let (pw, ph) = (
-        plot.dim_in_pixel().0 as f64 - 140.0,
-        FRONT_HEIGHT as f64 - 140.0,
-    );
+    let ph = FRONT_HEIGHT as f64 - 140.0;
+    let (bar_width, frame) = (260.0, 140.0);
+    let plot_width =
+        (ph * w / h * 1.15 + frame).clamp(WIDTH as f64 / 3.0, WIDTH as f64 - bar_width);
+    let left = ((WIDTH as f64 - plot_width - bar_width) / 2.0).floor() as u32;
+    let (_, centred) = area.split_horizontally(left);
+    let (plot, rest) = centred.split_horizontally(plot_width as u32);
+    let (bar, _) = rest.split_horizontally(bar_width as u32);
+    let pw = plot_width - frame;
     let scale = (w / pw).max(h / ph) * 1.15;
     let (uc, vc) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
     let (hu, hv) = (0.5 * scale * pw, 0.5 * scale * ph);
@@ -318,8 +332,11 @@ fn draw_front<DB: DrawingBackend>(
         .y_label_area_size(80)
         .build_cartesian_2d((uc - hu)..(uc + hu), (vc - hv)..(vc + hv))
         .map_err(|x| e(&x))?;
+    let (us, vs) = ((uc.abs() + hu), (vc.abs() + hv));
     chart
         .configure_mesh()
+        .x_label_formatter(&|v| tick_label(*v, us))
+        .y_label_formatter(&|v| tick_label(*v, vs))
         .x_desc("lateral -z [m] (subject's right on the left)")
         .y_desc("superior y [m]")
         .label_style(("sans-serif", 18))
@@ -342,7 +359,9 @@ fn draw_front<DB: DrawingBackend>(
     let (x0, y0, y1) = (40i32, 80i32, bh as i32 - 90);
     let steps = 100;
     for k in 0..steps {
-        let ya = y1 - (y1 - y0) * k / steps;
+        // Each band reaches 1 px into the next: abutting rectangles leave hairline gaps
+        // where an SVG renderer antialiases their shared edge.
+        let ya = (y1 - (y1 - y0) * k / steps + 1).min(y1);
         let yb = y1 - (y1 - y0) * (k + 1) / steps;
         let c = rgb(viridis((k as f64 + 0.5) / steps as f64));
         bar.draw(&Rectangle::new([(x0, yb), (x0 + 40, ya)], c.filled()))
@@ -431,6 +450,22 @@ mod tests {
         assert_eq!(viridis(0.5), (33, 145, 140));
         assert_eq!(viridis(f64::NAN), (68, 1, 84));
         assert_eq!(viridis(2.0), (253, 231, 37));
+    }
+
+    #[test]
+    fn a_tick_a_rounding_error_below_zero_reads_zero() {
+        assert_eq!(tick_label(-2.7e-17, 0.2), "0.0");
+        assert_eq!(tick_label(-0.05, 0.2), "-0.05");
+        assert_eq!(tick_label(0.25, 1.0), "0.25");
+    }
+
+    #[test]
+    fn displaced_volumes_start_at_zero() {
+        assert_eq!(
+            since_first(&[-0.16, -0.1, 0.2]),
+            [0.0, -0.1 + 0.16, 0.2 + 0.16]
+        );
+        assert!(since_first(&[]).is_empty());
     }
 
     #[test]

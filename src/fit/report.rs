@@ -339,7 +339,8 @@ pub fn summary(fit: &Fit) -> String {
          drive.ribs.phase          {:+.4} rad\n\
          drive.diaphragm.phase     {:+.4} rad\n\
          delta phase (diaphragm - ribs) {:+.4} rad\n\
-         registration          mean {:.2} mm, rms {:.2} mm, rotation {:.1} deg\n\
+         registration          mean {:.2} mm, rms {:.2} mm, rotation {:.1} deg (the camera's turn \
+         relative to the model's axes; about 180 deg for a camera facing the chest)\n\
          cost                  {:.3} mm (start {:.3} mm)\n\
          evaluations           {} ({}){}{}\n\
          wall time             {:.2} s",
@@ -360,7 +361,8 @@ pub fn summary(fit: &Fit) -> String {
         if fit.converged { ", converged" } else { "" },
         if fit.unused_ahead > 0 {
             format!(
-                "; {} more evaluated ahead on a second thread and not used",
+                "; {} more evaluated ahead on a second thread and not used (the points the \
+                 search was likely to need next, which it did not take; not counted)",
                 fit.unused_ahead
             )
         } else {

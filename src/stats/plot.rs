@@ -153,6 +153,19 @@ fn range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
     ((x0, x1), (y0 - pad, y1 + 2.5 * pad))
 }
 
+/// A tick label as plotters writes it (1 to 5 decimals), with a value within `1e-9 x scale`
+/// of zero written as zero: a tick computed as a sum of steps can land a rounding error
+/// below zero, which would read "-0.0".
+pub fn tick_label(v: f64, scale: f64) -> String {
+    let v = if v.abs() <= 1e-9 * scale { 0.0 } else { v };
+    plotters::data::float::FloatPrettyPrinter {
+        allow_scientific: false,
+        min_decimal: 1,
+        max_decimal: 5,
+    }
+    .print(v)
+}
+
 /// Draws one panel into `area` (errors as text).
 pub fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
@@ -166,8 +179,11 @@ pub fn draw_panel<DB: DrawingBackend>(
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| format!("{e:?}"))?;
+    let (xs, ys) = (x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
     chart
         .configure_mesh()
+        .x_label_formatter(&|v| tick_label(*v, xs))
+        .y_label_formatter(&|v| tick_label(*v, ys))
         .x_desc(panel.x_label.as_str())
         .y_desc(panel.y_label.as_str())
         .label_style(("sans-serif", 18))
