@@ -1,9 +1,9 @@
-"""python/batch_fit.py on a small study (the README's block, run as written: 4 synthetic 6 s
+"""python/batch_fit.py on a small study (docs/results.md's block, run as written: 4 synthetic 6 s
 recordings at LOD 0, fits bounded to a few evaluations) on a LocalCluster of 2 worker
 processes: the table is complete, a rerun fits nothing, a worker killed mid-run and then the
 driver killed lose no finished fit and the rerun completes the rest once each, a corrupt
 recording is recorded as failed with its error text after three attempts, the report files are
-written, and `--engine fmu` fits one recording. The recordings are made once (the README's)."""
+written, and `--engine fmu` fits one recording. The recordings are made once (the block's)."""
 
 import json
 import os
@@ -43,16 +43,17 @@ def fit(folder, out, *extra, check=True):
 
 
 def readme_commands():
-    """The commands of the README's ```sh block that runs batch_fit.py (continuations joined)."""
-    text = (ROOT / "README.md").read_text()
+    """The commands of docs/results.md's ```sh block that runs batch_fit.py (continuations
+    joined)."""
+    text = (ROOT / "docs" / "results.md").read_text()
     blocks = [b for b in re.findall(r"^```sh\n(.*?)^```$", text, flags=re.S | re.M) if "batch_fit.py" in b]
-    assert len(blocks) == 1, f"README.md: expected one ```sh block running batch_fit.py, found {len(blocks)}"
+    assert len(blocks) == 1, f"docs/results.md: expected one ```sh block running batch_fit.py, found {len(blocks)}"
     return [c.strip() for c in blocks[0].replace("\\\n", " ").splitlines() if c.strip()]
 
 
 @pytest.fixture(scope="module")
 def readme_run():
-    """The README's block, run as written from the repository's root (its out/ folder)."""
+    """docs/results.md's block, run as written from the repository's root (its out/ folder)."""
     if not os.access(TORSO, os.X_OK):
         pytest.fail(f"{TORSO} is missing: build it with `cargo build --release`")
     for d in ("out/study", "out/study-fit"):
@@ -61,14 +62,14 @@ def readme_run():
     for cmd in readme_commands():
         proc = subprocess.run(["bash", "-euo", "pipefail", "-c", cmd], cwd=ROOT, capture_output=True,
                               text=True, timeout=300)
-        assert proc.returncode == 0, f"README command failed: {cmd}\n{proc.stdout}\n{proc.stderr}"
+        assert proc.returncode == 0, f"docs/results.md command failed: {cmd}\n{proc.stdout}\n{proc.stderr}"
         outputs.append(proc.stdout)
     return ROOT / "out" / "study", ROOT / "out" / "study-fit", outputs
 
 
 @pytest.fixture(scope="module")
 def study(readme_run, tmp_path_factory):
-    """A copy of the README's 4 recordings for the tests that break things."""
+    """A copy of the block's 4 recordings for the tests that break things."""
     folder = tmp_path_factory.mktemp("study") / "study"
     shutil.copytree(readme_run[0], folder)
     assert len(list(folder.rglob("*.csv"))) == 4

@@ -44,7 +44,7 @@ pub struct RenderSkinArgs {
     /// Magnification of the marker displacements drawn as arrows.
     #[arg(long, default_value_t = 10.0)]
     pub magnify: f64,
-    /// Output PNG (the README's picture is `--out docs/skin.png`).
+    /// Output PNG (docs/results.md's picture is `--out docs/skin.png`).
     #[arg(long, default_value = "skin.png")]
     pub out: PathBuf,
 }
