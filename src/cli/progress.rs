@@ -90,21 +90,27 @@ impl Shared {
     }
 
     /// The count: `10/120 evaluations`, with a limit `10 of at most 120 evaluations`, and at
-    /// the end of a limited count `59 evaluations, stopped before the limit of 120`.
+    /// the end of a limited count `59 evaluations`.
     fn count(&self, st: &State) -> String {
         let (done, total, unit) = (st.done, st.total, &self.unit);
         match st.stopped_before {
-            Some(limit) => format!("{done} {unit}, stopped before the limit of {limit}"),
+            Some(_) => format!("{done} {unit}"),
             None if st.limit => format!("{done} of at most {total} {unit}"),
             None => format!("{done}/{total} {unit}"),
         }
     }
 
+    /// What follows the percentage: `, stopped before the limit of 120` at the end of a
+    /// limited count that ended early, then the command's detail.
     fn detail(st: &State) -> String {
+        let stopped = st
+            .stopped_before
+            .map(|limit| format!(", stopped before the limit of {limit}"))
+            .unwrap_or_default();
         if st.detail.is_empty() {
-            String::new()
+            stopped
         } else {
-            format!(", {}", st.detail)
+            format!("{stopped}, {}", st.detail)
         }
     }
 
@@ -426,7 +432,7 @@ mod tests {
         let last = lines.last().unwrap();
         assert!(
             last.starts_with(
-                "fit: 59 evaluations, stopped before the limit of 120 (100 %), best cost 0.700 mm"
+                "fit: 59 evaluations (100 %), stopped before the limit of 120, best cost 0.700 mm"
             ) && last.ends_with("done"),
             "{text}"
         );
