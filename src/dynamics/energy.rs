@@ -1,11 +1,11 @@
 //! Mechanical energy of a state, for tests of dissipation: kinetic energy of ribs, sternum and
-//! vertices; elastic energy of elements (muscles count only when stretched, as they only pull;
-//! evaluated at zero activation), vector springs and rib joints; the pressure potentials of the
+//! vertices; elastic energy of elements (muscles and membrane edges count only when
+//! stretched, as they only pull; evaluated at zero activation), vector springs and rib joints; the pressure potentials of the
 //! abdomen, K (V - V0 - V0 ln(V/V0)), and of the lungs, the integral of their recoil
 //! ([`super::pleural::PleuralLaw::energy`], E_L (V - V0)^2 / 2 near rest); gravity; and the
 //! potential of the constant preloads.
 
-use super::model::{Model, PASSIVE, RIBS, path_length, volume};
+use super::model::{Model, RIBS, path_length, volume};
 use super::state::Layout;
 use super::{Data, kinematics};
 use nalgebra::Vector3;
@@ -18,7 +18,7 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     // Kinetic: the generalised velocities (rib rates, sternum velocity and angular
     // velocity, vertex velocities) are contiguous in the state.
     e += model.mass.kinetic_energy(&y[l.theta_dot..]);
-    // Elastic: a muscle's tension is the softplus of its spring force (`forces::tension`),
+    // Elastic: an element's tension is the softplus of its spring force (`forces::tension`),
     // whose potential is the integral of that softplus over the stretch.
     let el = &model.elements;
     let toe = model.params.tension_toe;
@@ -26,11 +26,7 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
         let len = path_length(&data.pos, el.path_of(i));
         let stretch = len - el.rest_length[i];
         let k = el.stiffness[i];
-        if el.group[i] == PASSIVE {
-            e += 0.5 * k * stretch * stretch;
-        } else {
-            e += softplus_integral(k * stretch, toe) / k;
-        }
+        e += softplus_integral(k * stretch, toe) / k;
     }
     let s = &model.springs;
     for i in 0..s.a.len() {

@@ -3,10 +3,13 @@
 //! - Muscle and membrane elements (thesis eq. 2.2): f = c e + gamma e', e = |r| - l(t), with
 //!   l(t) = l0 r(t) (eq. 2.3) and r = 1 - beta_max a g s for muscles (a the side's activation
 //!   of the group, g the element's regional gain, s the tissue's rest length over the path's:
-//!   the smooth dome's arcs over the chords for a diaphragm fibre, else 1). Muscles only pull (Zajac 1989, thesis 2.1):
-//!   their tension is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps
+//!   the smooth dome's arcs over the chords for a diaphragm fibre, else 1). Muscles only pull (Zajac 1989, thesis 2.1),
+//!   and so do the membrane edges of the diaphragm's dome ([`super::model::PASSIVE_SLACK`]): a
+//!   membrane wrinkles rather than carry compression (tension-field theory: Stein &
+//!   Hedgepeth 1961, NASA TN D-813; Mansfield 1969, Proc R Soc A 311:1). The tension of
+//!   either is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps
 //!   ([`super::Params::tension_toe`]) in place of max(0, f), so that the right-hand side is
-//!   smooth where a muscle goes slack. A two-point element also damps its ends' relative
+//!   smooth where an element goes slack. A two-point element also damps its ends' relative
 //!   velocity across it, alpha gamma (v_b - v_a)_perp with alpha
 //!   [`super::Params::transverse_fraction`] (the tilted element of `dynamics::inertia`).
 //! - Zero-length vector springs (cartilage ball joints, wall foundation): F = k d + c d'; the

@@ -25,9 +25,10 @@ mod model;
 mod params;
 pub mod pleural;
 pub mod state;
+pub mod statics;
 
 pub use model::{
-    Carrier, Elements, Model, PASSIVE, PATH_CORE, REST_LUNG_FRACTION, RIBS, VIA, VectorSprings,
+    Carrier, Elements, Model, PASSIVE, PASSIVE_SLACK, PATH_CORE, REST_LUNG_FRACTION, RIBS, VIA, VectorSprings,
     path_length, via_segment_length, volume,
 };
 pub use params::{

@@ -21,8 +21,18 @@ pub const RIBS: usize = 24;
 /// volume 3.385 L at 0.75).
 pub const REST_LUNG_FRACTION: f64 = 0.75;
 
-/// Code of an element's group when it is passive (membrane).
+/// Code of an element's group when it is passive (membrane), and the slot of a membrane edge
+/// of the abdominal wall (a linear spring).
 pub const PASSIVE: u8 = u8::MAX;
+
+/// Slot of a membrane edge of the diaphragm's dome (group [`PASSIVE`]): tension only, like a
+/// muscle, since a membrane wrinkles rather than carry compression (`dynamics::forces`).
+/// With linear edges the dome's flat top went into compression at the end of a quiet
+/// expiration and their negative transverse stiffness -|f| / L made its static equilibrium
+/// a saddle (measured: +0.03 to +0.41 N/m at level 1, `examples/quasi_static`), which the
+/// quasi-static mode could not follow. The abdominal wall's edges stay linear: the wall's
+/// foundation holds its vertices in every direction.
+pub const PASSIVE_SLACK: u8 = u8::MAX - 1;
 
 /// Axial spring-damper elements (muscles and membrane), structure of arrays. Element e runs
 /// along the anchors `path[start[e]..start[e + 1]]`; its length is the path's length.
@@ -416,6 +426,11 @@ impl Model {
                 params.membrane_stiffness
             };
             elements.push(&[a, b], l0, k, rayleigh * k, PASSIVE, 2, 0.0);
+            if dome(u) && dome(v) {
+                if let Some(slot) = elements.slot.last_mut() {
+                    *slot = PASSIVE_SLACK;
+                }
+            }
         }
         // Cartilage joints.
         let mut springs = VectorSprings::default();

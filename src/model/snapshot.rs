@@ -32,6 +32,11 @@ pub struct Snapshot {
     pub drive: super::Drive,
     /// Solver memory and statistics, serialised by the solver.
     pub solver: serde_json::Value,
+    /// The quasi-static mode's memory (lung volume, last equilibrium, where its
+    /// factorisation was taken); `None` in the other modes and in snapshots written before
+    /// the mode existed.
+    #[serde(default)]
+    pub quasi: Option<super::torso::QuasiMemory>,
 }
 
 impl Snapshot {
@@ -74,6 +79,7 @@ pub struct Checkpoint {
     pub(super) airway_opening: f64,
     pub(super) drive: Option<super::Drive>,
     pub(super) solver: Option<Integrator>,
+    pub(super) quasi: Option<super::torso::QuasiMemory>,
 }
 
 impl Checkpoint {

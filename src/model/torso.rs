@@ -14,7 +14,11 @@ use crate::{Error, Result};
 use std::sync::{Arc, Mutex};
 
 mod markers;
+mod quasi;
 mod sampled;
+
+pub use quasi::QuasiMemory;
+use quasi::{Quasi, QuasiSystem};
 
 pub use sampled::Sample;
 
@@ -169,23 +173,18 @@ impl Compiled {
     }
 }
 
-/// The ODE seen by the solver: the model with activations = clamp(input + drive, 0, 1).
-struct System<'a> {
-    model: &'a Model,
-    /// Error weighting of the state ([`Compiled::error_weights`]).
-    weights: &'a (Vec<u32>, Vec<f64>),
-    data: &'a mut Data,
+/// What acts on the model over an integration: inputs, airway-opening pressure, drive and
+/// gains, giving the activations clamp(input + drive, 0, 1) at any time.
+struct Applied<'a> {
     inputs: [f64; 8],
     /// Pressure at the airway opening [Pa].
     airway_opening: f64,
     drive: &'a Drive,
     /// Gain of each group on the right and left sides (overall side gain times group gain).
     gains: ([f64; 8], [f64; 8]),
-    /// Jacobian memory, when the stiff method is in use.
-    jacobian: Option<&'a mut TorsoJacobian>,
 }
 
-impl System<'_> {
+impl Applied<'_> {
     fn activations(&self, t: f64) -> Activations {
         let mut groups = [0.0; 8];
         for g in MuscleGroup::ALL {
@@ -194,6 +193,23 @@ impl System<'_> {
         }
         Activations::per_group(&groups, &self.gains.0, &self.gains.1)
             .with_airway_opening(self.airway_opening)
+    }
+}
+
+/// The ODE seen by the solver: the model with activations = clamp(input + drive, 0, 1).
+struct System<'a> {
+    model: &'a Model,
+    /// Error weighting of the state ([`Compiled::error_weights`]).
+    weights: &'a (Vec<u32>, Vec<f64>),
+    data: &'a mut Data,
+    applied: Applied<'a>,
+    /// Jacobian memory, when the stiff method is in use.
+    jacobian: Option<&'a mut TorsoJacobian>,
+}
+
+impl System<'_> {
+    fn activations(&self, t: f64) -> Activations {
+        self.applied.activations(t)
     }
 }
 
@@ -261,6 +277,8 @@ pub struct Torso {
     /// The state before the current [`Torso::advance_to_with`] step, to roll back to (buffers
     /// reused from step to step).
     step_start: Checkpoint,
+    /// The quasi-static mode's memory ([`Method::QuasiStatic`]; `None` in the others).
+    quasi: Option<Box<Quasi>>,
 }
 
 fn solver_options(config: &Config) -> Options {
@@ -307,7 +325,10 @@ impl Torso {
             ));
         }
         let y = dynamics::rest_state(model);
-        let integrator = Integrator::new(config.solver.method, solver_options(&config), y.len())
+        let quasi = (config.solver.method == Method::QuasiStatic)
+            .then(|| Box::new(Quasi::new(model, &y, 0.0, &Activations::default())));
+        let dim = if quasi.is_some() { 1 } else { y.len() };
+        let integrator = Integrator::new(config.solver.method, solver_options(&config), dim)
             .map_err(|e| Error::invalid("solver", e.to_string(), "valid solver options"))?;
         Ok(Torso {
             data: Data::new(model),
@@ -326,6 +347,7 @@ impl Torso {
             compiled,
             at_start: false,
             step_start: Checkpoint::default(),
+            quasi,
         })
     }
 
@@ -368,6 +390,9 @@ impl Torso {
     /// discard the start-up breath themselves.
     pub fn start_at_rest(&mut self) {
         self.y = dynamics::rest_state(&self.compiled.model);
+        if let Some(q) = self.quasi.as_deref_mut() {
+            q.reset(&self.compiled.model, &self.y, 0.0, &Activations::default());
+        }
         self.integrator.invalidate();
         self.observation = None;
         self.sides = None;
@@ -386,6 +411,13 @@ impl Torso {
         };
         let solved = self.compiled.equilibrium(&act, tolerance, options);
         self.y.copy_from_slice(&solved.state);
+        if let Some(q) = self.quasi.as_deref_mut() {
+            // the airway is open and nothing flows: the pleural pressure balances the recoil
+            let model = &self.compiled.model;
+            let thorax = dynamics::statics::volume_of(model, &self.y);
+            let pleural = act.airway_opening - model.pleural.recoil(thorax);
+            q.reset(model, &self.y, pleural, &act);
+        }
         self.integrator.invalidate();
         self.observation = None;
         self.sides = None;
@@ -482,10 +514,12 @@ impl Torso {
             model: &compiled.model,
             weights: &compiled.error_weights,
             data,
-            inputs: *inputs,
-            airway_opening: *airway_opening,
-            drive: &config.drive,
-            gains: side_gains(config),
+            applied: Applied {
+                inputs: *inputs,
+                airway_opening: *airway_opening,
+                drive: &config.drive,
+                gains: side_gains(config),
+            },
             jacobian: jacobian.as_deref_mut(),
         };
         (system, y, time, integrator)
@@ -502,7 +536,9 @@ impl Torso {
             ));
         }
         let before = self.integrator.stats();
-        if t > self.time {
+        if t > self.time && self.quasi.is_some() {
+            self.advance_quasi_static(t)?;
+        } else if t > self.time {
             let past = self.config.solver.step_past_outputs;
             let (mut system, y, time, integrator) = self.integration_parts();
             let result = if past {
@@ -554,11 +590,92 @@ impl Torso {
         result
     }
 
+    /// [`Torso::advance_to`] in quasi-static mode: the lung volume integrated to `t`, the
+    /// positions left to be solved when read.
+    fn advance_quasi_static(&mut self, t: f64) -> Result<()> {
+        let past = self.config.solver.step_past_outputs;
+        let tolerance = quasi::statics_tolerance(self.config.solver.rtol);
+        let Torso {
+            compiled,
+            data,
+            time,
+            inputs,
+            airway_opening,
+            integrator,
+            config,
+            quasi,
+            ..
+        } = self;
+        let Some(q) = quasi.as_deref_mut() else {
+            return Ok(());
+        };
+        let Quasi {
+            statics,
+            volume,
+            failure,
+            ..
+        } = q;
+        *failure = None;
+        let mut system = QuasiSystem {
+            model: &compiled.model,
+            data,
+            statics,
+            applied: Applied {
+                inputs: *inputs,
+                airway_opening: *airway_opening,
+                drive: &config.drive,
+                gains: side_gains(config),
+            },
+            tolerance,
+            failure,
+        };
+        let result = if past {
+            integrator.integrate_ahead(&mut system, time, volume, t)
+        } else {
+            integrator.integrate(&mut system, time, volume, t)
+        };
+        q.fresh = false;
+        let failure = q.failure.take();
+        self.observation = None;
+        self.sides = None;
+        self.markers.invalidate();
+        self.at_start = false;
+        result.map_err(|e| {
+            let why = match &failure {
+                Some(f) => format!("{e} ({f}; {})", self.describe_scene()),
+                None => e.to_string(),
+            };
+            Error::Numerical {
+                time: self.time,
+                reason: why,
+            }
+        })
+    }
+
+    /// Subject, posture and applied activations, for the messages of failed solves.
+    fn describe_scene(&self) -> String {
+        let s = &self.config.subject;
+        let act: Vec<String> = MuscleGroup::ALL
+            .iter()
+            .map(|g| format!("{} {:.3}", g.name(), self.applied_activation(*g)))
+            .collect();
+        format!(
+            "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa",
+            s.sex,
+            s.stature,
+            s.mass,
+            s.posture,
+            act.join(", "),
+            self.airway_opening
+        )
+    }
+
     /// The observation of the current state, computed once per state (lazily).
     pub fn observation(&mut self) -> Observation {
         if let Some(o) = self.observation {
             return o;
         }
+        self.current_positions();
         let model = &self.compiled.model;
         dynamics::kinematics::positions_and_velocities(
             model,
@@ -573,6 +690,11 @@ impl Torso {
             &self.data.vel,
             self.airway_opening,
         );
+        let o = match self.quasi.as_deref() {
+            // the flow and the pressures are the reduced system's, not the positions'
+            Some(q) => observe::with_flow(model, o, q.flow * 1e-3, q.pleural, self.airway_opening),
+            None => o,
+        };
         self.observation = Some(o);
         o
     }
@@ -584,6 +706,7 @@ impl Torso {
         }
         // The positions of the current state (scratch that an external rhs call may have
         // overwritten since the observation was cached).
+        self.current_positions();
         let model = &self.compiled.model;
         dynamics::kinematics::positions_and_velocities(
             model,
@@ -599,6 +722,15 @@ impl Torso {
     /// Reads a quantity (volumes in litres, pressure in Pa, lengths in m).
     pub fn read(&mut self, quantity: Quantity) -> Result<f64> {
         let litres = 1e3;
+        if let Some(q) = self.quasi.as_deref() {
+            // the integrated state: no positions needed
+            let m = &self.compiled.model;
+            match quantity {
+                Quantity::LungVolume => return Ok(q.volume[0]),
+                Quantity::ThoraxVolume => return Ok(q.volume[0] + m.non_lung_volume * litres),
+                _ => {}
+            }
+        }
         Ok(match quantity {
             Quantity::Time => self.time,
             Quantity::LungVolume => self.observation().lung * litres,
@@ -651,6 +783,11 @@ impl Torso {
         })
     }
 
+    /// Work counts of the static solves in quasi-static mode (`None` in the other modes).
+    pub fn statics_stats(&self) -> Option<dynamics::statics::StaticsStats> {
+        self.quasi.as_deref().map(|q| q.statics.stats)
+    }
+
     /// Cumulative solver statistics.
     pub fn solver_stats(&self) -> Stats {
         self.integrator.stats()
@@ -667,8 +804,11 @@ impl Torso {
         self.y.len()
     }
 
-    /// The current state vector (layout: [`crate::dynamics::Layout`]).
-    pub fn state(&self) -> &[f64] {
+    /// The current state vector (layout: [`crate::dynamics::Layout`]); in quasi-static mode
+    /// the positions of the equilibrium at the current time (solved now if they were not),
+    /// every velocity zero.
+    pub fn state(&mut self) -> &[f64] {
+        self.current_positions();
         &self.y
     }
 
@@ -694,6 +834,16 @@ impl Torso {
         }
         self.time = t;
         self.y.copy_from_slice(y);
+        if self.quasi.is_some() {
+            // the positions start the next solve; the lung volume is the one they hold
+            let act = self.applied(t);
+            let model = &self.compiled.model;
+            let thorax = dynamics::statics::volume_of(model, y);
+            let pleural = act.airway_opening - model.pleural.recoil(thorax);
+            if let Some(q) = self.quasi.as_deref_mut() {
+                q.reset(model, y, pleural, &act);
+            }
+        }
         self.at_start = false;
         self.integrator.invalidate();
         self.observation = None;
@@ -705,6 +855,13 @@ impl Torso {
     /// Evaluates the right-hand side f(t, y) with the current inputs and drive, for external
     /// integrators. `y` and `dydt` must have [`Torso::state_dim`] elements.
     pub fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<()> {
+        if self.quasi.is_some() {
+            return Err(Error::State(
+                "Torso::rhs evaluates the inertial equations of motion; in quasi-static mode \
+                 the only state is the lung volume (solver.method quasi-static)"
+                    .into(),
+            ));
+        }
         let n = self.y.len();
         if y.len() != n || dydt.len() != n {
             return Err(Error::invalid(
@@ -725,10 +882,12 @@ impl Torso {
             model: &compiled.model,
             weights: &compiled.error_weights,
             data,
-            inputs: *inputs,
-            airway_opening: *airway_opening,
-            drive: &config.drive,
-            gains: side_gains(config),
+            applied: Applied {
+                inputs: *inputs,
+                airway_opening: *airway_opening,
+                drive: &config.drive,
+                gains: side_gains(config),
+            },
             jacobian: None,
         };
         system.rhs(t, y, dydt);
@@ -751,6 +910,7 @@ impl Torso {
             airway_opening: self.airway_opening,
             drive: self.config.drive,
             solver: serde_json::to_value(&self.integrator).unwrap_or(serde_json::Value::Null),
+            quasi: self.quasi.as_deref().map(Quasi::memory),
         }
     }
 
@@ -774,10 +934,19 @@ impl Torso {
         }
         let integrator: Integrator = serde_json::from_value(snapshot.solver.clone())
             .map_err(|e| Error::State(format!("snapshot solver memory is malformed: {e}")))?;
-        if integrator.dim() != self.y.len() {
+        let dim = if self.quasi.is_some() { 1 } else { self.y.len() };
+        if integrator.dim() != dim || self.quasi.is_some() != snapshot.quasi.is_some() {
             return Err(Error::State(
-                "snapshot solver memory has the wrong dimension".into(),
+                "snapshot solver memory has the wrong dimension (taken with another solver.method)"
+                    .into(),
             ));
+        }
+        if let (Some(q), Some(memory)) = (self.quasi.as_deref_mut(), &snapshot.quasi) {
+            let mut restored = q.clone();
+            restored
+                .restore(&self.compiled.model, &mut self.data, memory)
+                .map_err(|e| Error::State(format!("snapshot quasi-static memory: {e}")))?;
+            *q = restored;
         }
         if integrator.method() == Method::Rosenbrock && self.jacobian.is_none() {
             self.jacobian = Some(Box::new(TorsoJacobian::full(&self.compiled.model)));
@@ -809,6 +978,7 @@ impl Torso {
             Some(solver) => solver.copy_memory_from(&self.integrator),
             None => checkpoint.solver = Some(self.integrator.memory()),
         }
+        checkpoint.quasi = self.quasi.as_deref().map(Quasi::memory);
     }
 
     /// Goes back to a checkpoint taken from this model: afterwards the model continues bit
@@ -829,6 +999,13 @@ impl Torso {
         }
         if solver.method() == Method::Rosenbrock && self.jacobian.is_none() {
             self.jacobian = Some(Box::new(TorsoJacobian::full(&self.compiled.model)));
+        }
+        if let (Some(q), Some(memory)) = (self.quasi.as_deref_mut(), &checkpoint.quasi) {
+            let mut restored = q.clone();
+            restored
+                .restore(&self.compiled.model, &mut self.data, memory)
+                .map_err(|e| Error::State(format!("checkpoint quasi-static memory: {e}")))?;
+            *q = restored;
         }
         self.integrator.copy_memory_from(solver);
         self.at_start = false;

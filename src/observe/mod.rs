@@ -391,6 +391,26 @@ pub fn costal_margin_height(model: &Model) -> f64 {
     }
 }
 
+/// An observation of an equilibrium of the quasi-static mode
+/// ([`crate::dynamics::statics`]) with the reduced system's airflow `flow` [m^3/s] and
+/// pleural pressure relative to rest `pleural` [Pa] in place of those read off the positions'
+/// velocities (zero at an equilibrium): P_alv = P_ao - R_aw flow, and the pleural pressure
+/// P_pl - P_L(FRC) on the same absolute scale as [`observe`]'s.
+pub fn with_flow(
+    model: &Model,
+    observation: Observation,
+    flow: f64,
+    pleural: f64,
+    airway_opening: f64,
+) -> Observation {
+    Observation {
+        airway_flow: flow,
+        alveolar_pressure: airway_opening - model.airway_resistance * flow,
+        pleural_pressure: pleural - model.params.lung_recoil_at_frc,
+        ..observation
+    }
+}
+
 /// Observes the state whose anchor positions are `pos` and velocities `vel`, with the airway
 /// opening at `airway_opening` [Pa] (0 breathing air).
 pub fn observe(

@@ -114,15 +114,20 @@ pub enum Method {
     /// The stiff method (code 3): ROS34PW2, a linearly implicit Rosenbrock-W method of
     /// order 3(2) (Rang & Angermann 2005) with a sparse Jacobian; for stiff scenes.
     Rosenbrock,
+    /// A model's quasi-static formulation (code 4): the model reduces itself to the few
+    /// states that carry its slow dynamics (the torso: the lung volume, its positions the
+    /// static equilibrium at every instant), which Dormand-Prince 5(4) integrates.
+    QuasiStatic,
 }
 
 impl Method {
     /// All methods, by code.
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 5] = [
         Method::Dopri5,
         Method::BogackiShampine3,
         Method::HighOrder,
         Method::Rosenbrock,
+        Method::QuasiStatic,
     ];
     /// The explicit embedded Runge-Kutta pairs (those with a [`Tableau`]).
     pub const EMBEDDED: [Method; 3] = [Method::Dopri5, Method::BogackiShampine3, Method::HighOrder];
@@ -143,6 +148,7 @@ impl Method {
             Method::BogackiShampine3 => "bs3",
             Method::HighOrder => "high-order",
             Method::Rosenbrock => "rosenbrock",
+            Method::QuasiStatic => "quasi-static",
         }
     }
     /// Method from its short name.

@@ -311,9 +311,27 @@ pub struct BlockLu {
     pivots: Vec<u32>,
     data: Vec<f64>,
     scratch: Vec<f64>,
+    /// Eigenvalues of the symmetric parts of the eliminated diagonal blocks (the pivots
+    /// D_k of a block L D L^T) that were positive, zero and negative, in the last
+    /// factorisation: the inertia of a symmetric matrix by Sylvester's law (Golub & Van Loan,
+    /// Sec. 4.2); counted only when [`BlockLu::count_inertia`] is set.
+    inertia: [usize; 3],
+    count_inertia: bool,
 }
 
 impl BlockLu {
+    /// Whether factorisations count the inertia of the pivot blocks ([`BlockLu::inertia`]).
+    pub fn count_inertia(&mut self, on: bool) {
+        self.count_inertia = on;
+    }
+
+    /// The numbers of positive, zero and negative eigenvalues of the factored matrix's
+    /// symmetric part, read off the pivot blocks of the last factorisation (exact for a
+    /// symmetric matrix, which block elimination without pivoting between blocks keeps
+    /// congruent to its block diagonal of pivots). All zero unless counted.
+    pub fn inertia(&self) -> [usize; 3] {
+        self.inertia
+    }
     /// Symbolic analysis for `pattern` with unknowns grouped by `groups` (any ids; unknowns
     /// with equal ids form one block).
     pub fn new(pattern: &Pattern, groups: &[u32]) -> BlockLu {
@@ -449,18 +467,41 @@ impl BlockLu {
 
     /// Factors I - c S, S given by its values on the analysed pattern.
     pub fn factor(&mut self, values: &[f64], c: f64) -> Result<(), Singular> {
+        self.factor_general(values, 1.0, c)
+    }
+
+    /// Factors d I - c S: with d = 0 and c = -1 the matrix S itself (a Newton iteration's
+    /// Jacobian, whose block diagonal must then be non-singular on its own).
+    pub fn factor_general(&mut self, values: &[f64], d: f64, c: f64) -> Result<(), Singular> {
         self.data.fill(0.0);
         for (&at, &v) in self.scatter.iter().zip(values) {
             self.data[at] -= c * v;
         }
         for &at in &self.diagonal {
-            self.data[at] += 1.0;
+            self.data[at] += d;
         }
+        self.inertia = [0; 3];
         let nb = self.diag_off.len();
         for p in 0..nb {
             let s = self.size(p);
             let d = self.diag_off[p];
             let piv_base = self.dof_start[p];
+            if self.count_inertia {
+                let block = nalgebra::DMatrix::from_fn(s, s, |i, j| {
+                    0.5 * (self.data[d + i * s + j] + self.data[d + j * s + i])
+                });
+                let scale = block.amax();
+                for e in block.symmetric_eigenvalues().iter() {
+                    let k = if *e > 1e-12 * scale {
+                        0
+                    } else if *e < -1e-12 * scale {
+                        2
+                    } else {
+                        1
+                    };
+                    self.inertia[k] += 1;
+                }
+            }
             // dense LU with partial pivoting of the diagonal block
             let norm = self.data[d..d + s * s]
                 .iter()
@@ -708,11 +749,22 @@ impl ShiftedSolver {
         self.lu.factor_entries()
     }
 
+    /// The sparse part's LU, for its inertia ([`BlockLu::count_inertia`]).
+    pub fn lu_mut(&mut self) -> &mut BlockLu {
+        &mut self.lu
+    }
+
     /// Factors I - c J.
     pub fn factor(&mut self, jac: &Jacobian, c: f64) -> Result<(), Singular> {
+        self.factor_general(jac, 1.0, c)
+    }
+
+    /// Factors d I - c J (d = 0, c = -1: J itself, for Newton's method on a static
+    /// equilibrium); [`ShiftedSolver::solve`] then solves (d I - c J) x = b.
+    pub fn factor_general(&mut self, jac: &Jacobian, d: f64, c: f64) -> Result<(), Singular> {
         self.shift = 0.0;
         let n = jac.dim();
-        self.lu.factor(&jac.values, c)?;
+        self.lu.factor_general(&jac.values, d, c)?;
         let r = jac.rank;
         self.rank = r;
         self.w.resize(n * r, 0.0);

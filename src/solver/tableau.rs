@@ -525,10 +525,11 @@ pub static DOP853: Tableau = Tableau {
 };
 
 impl super::Method {
-    /// The Butcher tableau of an explicit pair; `None` for the stiff method.
+    /// The Butcher tableau of an explicit pair; `None` for the stiff method. The
+    /// quasi-static formulation's reduced state is integrated by Dormand-Prince 5(4).
     pub fn tableau(self) -> Option<&'static Tableau> {
         match self {
-            super::Method::Dopri5 => Some(&DOPRI5),
+            super::Method::Dopri5 | super::Method::QuasiStatic => Some(&DOPRI5),
             super::Method::BogackiShampine3 => Some(&BS3),
             super::Method::HighOrder => Some(&DOP853),
             super::Method::Rosenbrock => None,

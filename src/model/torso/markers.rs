@@ -59,6 +59,7 @@ impl Torso {
     /// (`scene.slp_reference`), otherwise in the model frame. Computed once per state: only
     /// the markers' skin points are blended.
     pub fn markers(&mut self) -> Result<&[Point3<f64>]> {
+        self.current_positions();
         let scene = self.marker_scene();
         let compiled = &self.compiled;
         self.markers.positions(
@@ -74,6 +75,7 @@ impl Torso {
     /// The whole deformed skin of the current state in the markers' frame (for export and the
     /// C ABI); triangles: `marker_model()?.skin().triangles`.
     pub fn skin_vertices(&mut self, out: &mut Vec<Point3<f64>>) -> Result<()> {
+        self.current_positions();
         let scene = self.marker_scene();
         let compiled = &self.compiled;
         self.markers.skin(

@@ -1,0 +1,926 @@
+//! The quasi-static mechanics: the chest wall in equilibrium at every instant, the lung volume
+//! the only state (docs/dynamics.md, "Quasi-static mechanics").
+//!
+//! Breathing is slow against the chest wall's own mechanics: at 0.25 Hz the inertial pressure
+//! is well under 1 % of the elastic recoil (Mead 1956; reference physiology), and the one time
+//! constant that matters is airway resistance times respiratory compliance. So the positions
+//! z of the ribs (one angle each), the sternum (centre of mass and orientation) and the free
+//! vertices of the abdominal surface are the static equilibrium under the activations,
+//! gravity, the preloads, the abdominal pressure (a penalty of the cavity's near
+//! incompressibility, P_A = K (V0 / V_A - 1), thesis eq. 2.5) and the pleural pressure P_pl,
+//! which is the multiplier of the constraint that the thoracic volume holds the lungs:
+//!
+//! ```text
+//! R(z, P_pl) = G(z) + P_A(V_A(z)) dV_A/dz + P_pl dV_T/dz = 0,   V_T(z) = V_target,
+//! ```
+//!
+//! with G the generalised forces of the elements, springs, gravity and preloads (every
+//! velocity zero: the elements' dampers, the nodal damping and the cavities' viscosities do
+//! not act) and V_target the thoracic volume that holds the current lung volume. The lung
+//! volume then follows the airflow, dV_L/dt = (P_ao - P_alv) / R_aw with P_alv = P_pl +
+//! P_L(V_L) ([`super::pleural`], the model's airway resistance): see `model::torso`.
+//!
+//! **Newton's method on the bordered system.** With J = dR/dz (the sparse part S by forward
+//! differences over a distance-2 colouring with both pressures frozen, plus the abdominal
+//! pressure's exact rank-one part P_A' u_A u_A^T, u = dV/dz being the generalised force of a
+//! unit pressure), each iteration solves
+//!
+//! ```text
+//! [ J_aug  u_T ] [dz  ]   [ -R + rho u_T c ]
+//! [ u_T^T  0   ] [dP  ] = [ -c             ],   c = V_T(z) - V_target,
+//! ```
+//!
+//! J_aug = J - rho u_T u_T^T, the augmented form (Hestenes 1969; Nocedal & Wright 2006,
+//! ch. 17), with rho the lungs' elastance: J_aug is the stiffness of the chest wall with the
+//! lungs attached and the airway shut, negative definite wherever that system is stable,
+//! and the border is eliminated by two solves with its factorisation (dP = (u_T^T a + c) /
+//! (u_T^T b), a = J_aug^-1 (-R + rho u_T c), b = J_aug^-1 u_T, dz = a - dP b). The
+//! factorisation (the block LU of [`crate::solver::sparse`], minimum-degree ordered, with the
+//! Woodbury correction for the rank-two part) is kept from solve to solve while the
+//! iterations contract (modified Newton); the first iteration of a solve from the last
+//! solution is the tangent predictor. A solve that contracts slowly takes a fresh
+//! Jacobian; one that still fails is retried from the last solution with the activations and
+//! the volume stepped there gradually (continuation); a solve that fails then is an error,
+//! and the last solution is kept.
+//!
+//! **Stability, checked at every factorisation.** By Haynsworth's inertia additivity, the
+//! number of positive eigenvalues of J_aug = S + U C U^T (C = diag(P_A', -rho), both
+//! negative) is that of S plus that of the 2 x 2 matrix -C^-1 - U^T S^-1 U, less 2; S's
+//! comes from its pivot blocks (Sylvester's law of inertia). A positive eigenvalue is a
+//! buckled chest wall; so is a border with u_T^T b >= 0, which would make the alveolar
+//! pressure fall as the lungs fill (dP_alv/dV_L = -1 / (u_T^T b) must be positive). Either
+//! is reported as [`StaticsError::Unstable`], never passed over to another branch.
+
+use super::model::{Model, RIBS, volume};
+use super::state::Layout;
+use super::{Activations, Data, accelerations, forces, kinematics};
+use crate::solver::sparse::ShiftedSolver;
+use crate::solver::{Colouring, Jacobian, Pattern};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Newton iterations allowed in one attempt at a solve.
+const MAX_ITERATIONS: u32 = 16;
+
+/// Contraction rate of the iterations above which a stale factorisation is replaced.
+const SLOW_CONTRACTION: f64 = 0.5;
+
+/// The stiffness floor, as a fraction of the largest diagonal stiffness: modes softer than
+/// it count as mechanisms of slack elements, not as buckling (module doc). The measured
+/// soft modes of the quiet breath sit at 3e-6 of the largest (0.41 / 1.46e5 N/m at level 1,
+/// `examples/quasi_static`); 1e-5 keeps them apart from a loss of stability the size of a
+/// foundation spring.
+const STIFFNESS_FLOOR: f64 = 1e-5;
+
+/// Solutions the predictor extrapolates from (a quadratic).
+const HISTORY: usize = 3;
+
+/// Oldest solution the predictor uses [s]: an eighth of a quiet breath, so that a stale one
+/// (after a restart) is not extrapolated from.
+const HISTORY_SPAN: f64 = 0.5;
+
+/// Lever [m] that turns a rib's or the sternum's rotation [rad] into a displacement for the
+/// convergence test: about the distance from a rib's hinge to its ventral end (docs/anatomy.md:
+/// rib lengths of 0.15-0.3 m).
+const LEVER: f64 = 0.2;
+
+/// Why a static solve failed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StaticsError {
+    /// The chest wall lost its stability (buckled) at these activations and volume.
+    Unstable {
+        /// What was found: positive eigenvalues of the stiffness, or the alveolar pressure
+        /// falling with volume.
+        reason: String,
+    },
+    /// The iterations did not converge, even with the activations stepped gradually.
+    NotConverged {
+        /// The last correction's size [m].
+        correction: f64,
+    },
+    /// A non-finite value appeared (the factorisation failed or a force overflowed).
+    NonFinite,
+}
+
+impl std::fmt::Display for StaticsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StaticsError::Unstable { reason } => write!(f, "the chest wall buckled: {reason}"),
+            StaticsError::NotConverged { correction } => write!(
+                f,
+                "the static equilibrium did not converge (last correction {correction:.3e} m)"
+            ),
+            StaticsError::NonFinite => write!(f, "a non-finite value in the static equilibrium"),
+        }
+    }
+}
+
+/// Work counts of the static solves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StaticsStats {
+    /// Solves asked for.
+    pub solves: u64,
+    /// Newton iterations (each one residual evaluation and one back-substitution).
+    pub iterations: u64,
+    /// Jacobian evaluations (each one residual evaluation per colour, plus three).
+    pub jacobians: u64,
+    /// Factorisations.
+    pub factorisations: u64,
+    /// Residual evaluations in all.
+    pub residuals: u64,
+    /// Solves that needed the activations stepped gradually.
+    pub continuations: u64,
+}
+
+/// What a solve leaves behind and a restart needs to continue bit for bit: the solution
+/// (warm start) and the point where the kept factorisation was evaluated.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StaticsMemory {
+    /// The last solution: the state vector's positions (velocities zero).
+    pub state: Vec<f64>,
+    /// Its pleural pressure, relative to rest [Pa].
+    pub pleural: f64,
+    /// Its activations (levels, then the airway-opening pressure).
+    pub activations: Vec<f64>,
+    /// The thoracic volume it holds [m^3].
+    pub volume: f64,
+    /// Where the kept factorisation was evaluated: state, pleural pressure, activations
+    /// (`None`: no factorisation kept).
+    pub factored_at: Option<(Vec<f64>, f64, Vec<f64>)>,
+    /// The contraction rate the last solve's iterations measured (the first iteration's
+    /// convergence test of the next solve uses it).
+    pub contraction: f64,
+    /// The predictor's history: times, states and pleural pressures of the last solutions.
+    #[serde(default)]
+    pub history: Vec<(f64, Vec<f64>, f64)>,
+    /// Work counts.
+    pub stats: StaticsStats,
+}
+
+fn act_to_vec(a: &Activations) -> Vec<f64> {
+    let mut v: Vec<f64> = a.level.iter().flatten().copied().collect();
+    v.push(a.airway_opening);
+    v
+}
+
+fn act_from_vec(v: &[f64]) -> Activations {
+    let mut a = Activations::default();
+    for (g, sides) in a.level.iter_mut().enumerate() {
+        for (s, x) in sides.iter_mut().enumerate() {
+            *x = v.get(3 * g + s).copied().unwrap_or(0.0);
+        }
+    }
+    a.airway_opening = v.get(24).copied().unwrap_or(0.0);
+    a
+}
+
+/// The static solver of one instance: pattern, colouring, factorisation and scratch, sized
+/// once per model, and the last solution.
+#[derive(Clone, Debug)]
+pub struct Statics {
+    l: Layout,
+    /// Number of position unknowns: 24 rib angles, the sternum's 3 + 3, 3 per free vertex.
+    m: usize,
+    jac: Jacobian,
+    colouring: Colouring,
+    solver: ShiftedSolver,
+    floor: Vec<f64>,
+    zero: Vec<f64>,
+    zpert: Vec<f64>,
+    f0: Vec<f64>,
+    f1: Vec<f64>,
+    r: Vec<f64>,
+    a: Vec<f64>,
+    /// J_aug^-1 u_T and u_T of the kept factorisation.
+    b: Vec<f64>,
+    ut: Vec<f64>,
+    /// The elastance rho of the augmented form at the kept factorisation [Pa/m^3].
+    rho: f64,
+    dy: Vec<f64>,
+    ytmp: Vec<f64>,
+    /// The current iterate / last solution (full state layout, velocities zero).
+    y: Vec<f64>,
+    /// The last solution, kept while a solve iterates (a failed solve returns to it).
+    y_good: Vec<f64>,
+    pleural: f64,
+    pleural_good: f64,
+    act_good: Activations,
+    volume_good: f64,
+    factored_at: Option<(Vec<f64>, f64, Activations)>,
+    /// Contraction rate of the last converged solve's iterations.
+    theta: f64,
+    /// The last solutions (time, state, pleural pressure), for the predictor.
+    history: Vec<(f64, Vec<f64>, f64)>,
+    /// Work counts.
+    pub stats: StaticsStats,
+}
+
+/// Block index of a body: ribs 0..24, the sternum 24, free vertex j 25 + j.
+fn body_of(c: super::Carrier) -> Option<usize> {
+    match c {
+        super::Carrier::Ground => None,
+        super::Carrier::Rib(r) => Some(r as usize),
+        super::Carrier::Sternum => Some(RIBS),
+        super::Carrier::Vertex(j) => Some(RIBS + 1 + j as usize),
+    }
+}
+
+/// Unknowns of body `b` among the m position unknowns.
+fn body_unknowns(b: usize) -> std::ops::Range<usize> {
+    if b < RIBS {
+        b..b + 1
+    } else if b == RIBS {
+        RIBS..RIBS + 6
+    } else {
+        let j = b - RIBS - 1;
+        RIBS + 6 + 3 * j..RIBS + 9 + 3 * j
+    }
+}
+
+impl Statics {
+    /// Pattern (bodies that share an element, a spring or a pressure triangle), colouring and
+    /// symbolic factorisation for `model`, with `start` (a state vector at rest or at an
+    /// equilibrium, velocities ignored) as the first solution and the activations `act` it
+    /// balances.
+    pub fn new(model: &Model, start: &[f64], act: &Activations) -> Statics {
+        let l = Layout::new(model);
+        let m = RIBS + 6 + 3 * l.vertices;
+        let bodies = RIBS + 1 + l.vertices;
+        let mut adj: Vec<Vec<u32>> = (0..bodies).map(|b| vec![b as u32]).collect();
+        let mut link = |anchors: &mut dyn Iterator<Item = u32>| {
+            let mut set: Vec<usize> = anchors
+                .filter_map(|a| body_of(model.carrier[a as usize]))
+                .collect();
+            set.sort_unstable();
+            set.dedup();
+            for &a in &set {
+                adj[a].extend(set.iter().map(|&b| b as u32));
+            }
+        };
+        let el = &model.elements;
+        for e in 0..el.len() {
+            link(&mut el.path_of(e).iter().copied());
+        }
+        for i in 0..model.springs.a.len() {
+            link(&mut [model.springs.a[i], model.springs.b[i]].into_iter());
+        }
+        for t in model
+            .abdomen_triangles
+            .iter()
+            .chain(&model.thorax_triangles)
+        {
+            link(&mut t.iter().copied());
+        }
+        let mut rows: Vec<Vec<u32>> = vec![Vec::new(); m];
+        let mut groups = vec![0u32; m];
+        for (b, nb) in adj.iter_mut().enumerate() {
+            nb.sort_unstable();
+            nb.dedup();
+            let cols: Vec<u32> = nb
+                .iter()
+                .flat_map(|&o| body_unknowns(o as usize).map(|i| i as u32))
+                .collect();
+            for i in body_unknowns(b) {
+                groups[i] = b as u32;
+                rows[i] = cols.clone();
+            }
+        }
+        let pattern = Pattern::from_rows(rows);
+        let colouring = Colouring::new(&pattern);
+        let mut solver = ShiftedSolver::new(&pattern, &groups);
+        solver.lu_mut().count_inertia(true);
+        // perturbations sqrt(eps) x floor: 1.5e-8 rad for angles, 4.5e-9 m for positions
+        let mut floor = vec![0.3; m];
+        floor[..RIBS].fill(1.0);
+        floor[RIBS + 3..RIBS + 6].fill(1.0);
+        let mut y = start.to_vec();
+        y[l.theta_dot..].fill(0.0);
+        Statics {
+            l,
+            m,
+            jac: Jacobian::zeros(pattern, 2),
+            colouring,
+            solver,
+            floor,
+            zero: vec![0.0; m],
+            zpert: vec![0.0; m],
+            f0: vec![0.0; m],
+            f1: vec![0.0; m],
+            r: vec![0.0; m],
+            a: vec![0.0; m],
+            b: vec![0.0; m],
+            ut: vec![0.0; m],
+            rho: 0.0,
+            dy: vec![0.0; l.len],
+            ytmp: vec![0.0; l.len],
+            y_good: y.clone(),
+            volume_good: volume_of(model, &y),
+            y,
+            pleural: 0.0,
+            pleural_good: 0.0,
+            act_good: *act,
+            factored_at: None,
+            theta: 0.1,
+            history: Vec::new(),
+            stats: StaticsStats::default(),
+        }
+    }
+
+    /// Number of colours of the Jacobian's sparse part (residual evaluations per Jacobian).
+    pub fn colours(&self) -> usize {
+        self.colouring.colours
+    }
+
+    /// Number of position unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.m
+    }
+
+    /// The last solution: a state vector (positions, velocities zero).
+    pub fn state(&self) -> &[f64] {
+        &self.y_good
+    }
+
+    /// The pleural pressure of the last solution, relative to rest [Pa].
+    pub fn pleural(&self) -> f64 {
+        self.pleural_good
+    }
+
+    /// The thoracic volume the last solution holds [m^3].
+    pub fn volume(&self) -> f64 {
+        self.volume_good
+    }
+
+    /// Makes `state` (positions, velocities ignored), balanced by `act` at pleural pressure
+    /// `pleural`, the last solution, and forgets the factorisation.
+    pub fn reset(&mut self, model: &Model, state: &[f64], pleural: f64, act: &Activations) {
+        self.y_good.copy_from_slice(state);
+        self.y_good[self.l.theta_dot..].fill(0.0);
+        self.y.copy_from_slice(&self.y_good);
+        self.pleural_good = pleural;
+        self.pleural = pleural;
+        self.act_good = *act;
+        self.volume_good = volume_of(model, &self.y_good);
+        self.factored_at = None;
+        self.theta = 0.1;
+        self.history.clear();
+        self.solver.clear();
+    }
+
+    /// What a restart needs to continue bit for bit ([`StaticsMemory`]).
+    pub fn memory(&self) -> StaticsMemory {
+        StaticsMemory {
+            state: self.y_good.clone(),
+            pleural: self.pleural_good,
+            activations: act_to_vec(&self.act_good),
+            volume: self.volume_good,
+            factored_at: self
+                .factored_at
+                .as_ref()
+                .map(|(y, p, a)| (y.clone(), *p, act_to_vec(a))),
+            contraction: self.theta,
+            history: self.history.clone(),
+            stats: self.stats,
+        }
+    }
+
+    /// Restores [`Statics::memory`]: the last solution, and the factorisation re-evaluated at
+    /// the point it was kept from (the same positions, pressure and activations give the same
+    /// factors). An error if the memory is malformed or its factorisation fails.
+    pub fn restore(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        memory: &StaticsMemory,
+    ) -> Result<(), StaticsError> {
+        if memory.state.len() != self.y.len() || memory.activations.len() != 25 {
+            return Err(StaticsError::NonFinite);
+        }
+        self.reset(
+            model,
+            &memory.state,
+            memory.pleural,
+            &act_from_vec(&memory.activations),
+        );
+        if let Some((y, p, a)) = &memory.factored_at {
+            if y.len() != self.y.len() || a.len() != 25 {
+                return Err(StaticsError::NonFinite);
+            }
+            let stats = self.stats;
+            self.factor_at(model, data, y, *p, &act_from_vec(a))?;
+            self.stats = stats;
+        }
+        self.stats = memory.stats;
+        if !(memory.contraction > 0.0 && memory.contraction < 1.0) {
+            return Err(StaticsError::NonFinite);
+        }
+        self.theta = memory.contraction;
+        if memory.history.iter().any(|(_, y, _)| y.len() != self.y.len()) {
+            return Err(StaticsError::NonFinite);
+        }
+        self.history.clone_from(&memory.history);
+        Ok(())
+    }
+
+    /// The residual R (generalised forces at zero velocity) at state `y` with the abdominal
+    /// pressure from its volume and the pleural pressure `pleural` into `out`; returns
+    /// (V_A, V_T) [m^3].
+    fn residual(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        act: &Activations,
+        pleural: f64,
+    ) -> (f64, f64) {
+        let (va, vt) = pressures_and_residual(
+            model,
+            data,
+            &self.l,
+            act,
+            &self.y,
+            None,
+            pleural,
+            &mut self.dy,
+        );
+        self.stats.residuals += 1;
+        (va, vt)
+    }
+
+    /// Evaluates J_aug at `y` (pleural pressure `pleural`, activations `act`), factors it
+    /// and checks its inertia; keeps the factorisation and where it was taken.
+    fn factor_at(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        y: &[f64],
+        pleural: f64,
+        act: &Activations,
+    ) -> Result<(), StaticsError> {
+        let l = self.l;
+        let m = self.m;
+        self.ytmp.copy_from_slice(y);
+        // base point and the pressures it is frozen at
+        let (va, vt) = pressures_and_residual(
+            model,
+            data,
+            &l,
+            act,
+            &self.ytmp,
+            None,
+            pleural,
+            &mut self.dy,
+        );
+        let pa = abdominal_pressure(model, va);
+        self.f0.copy_from_slice(&self.dy[l.theta_dot..]);
+        let frozen = Some(pa);
+        {
+            let Statics {
+                colouring,
+                zero,
+                floor,
+                zpert,
+                f1,
+                jac,
+                ytmp,
+                dy,
+                f0,
+                ..
+            } = self;
+            let mut f = |z: &[f64], out: &mut [f64]| {
+                ytmp.copy_from_slice(y);
+                apply(&l, ytmp, z);
+                pressures_and_residual(model, data, &l, act, ytmp, frozen, pleural, dy);
+                out.copy_from_slice(&dy[l.theta_dot..]);
+            };
+            let evals = colouring.differences(&mut f, zero, f0, floor, zpert, f1, &mut jac.values);
+            self.stats.residuals += evals + 1;
+        }
+        // u = generalised force of a unit pressure = dV/dz (exact: R is affine in each)
+        let mut u = [vec![0.0; m], vec![0.0; m]];
+        for (k, uk) in u.iter_mut().enumerate() {
+            self.ytmp.copy_from_slice(y);
+            let (pa_k, pl_k) = if k == 0 {
+                (pa + 1.0, pleural)
+            } else {
+                (pa, pleural + 1.0)
+            };
+            pressures_and_residual(
+                model,
+                data,
+                &l,
+                act,
+                &self.ytmp,
+                Some(pa_k),
+                pl_k,
+                &mut self.dy,
+            );
+            self.stats.residuals += 1;
+            for ((o, &a), &b) in uk.iter_mut().zip(&self.dy[l.theta_dot..]).zip(&self.f0) {
+                *o = a - b;
+            }
+        }
+        let slope_a = -model.params.bulk_modulus * model.abdomen_rest_volume / (va * va);
+        let rho = model.pleural.slope(vt);
+        self.jac.u[..m].copy_from_slice(&u[0]);
+        self.jac.u[m..].copy_from_slice(&u[1]);
+        for i in 0..m {
+            self.jac.v[i] = slope_a * u[0][i];
+            self.jac.v[m + i] = -rho * u[1][i];
+        }
+        self.stats.jacobians += 1;
+        self.factored_at = None;
+        self.solver
+            .factor_general(&self.jac, 0.0, -1.0)
+            .map_err(|_| StaticsError::Unstable {
+                reason: "the stiffness matrix is singular".into(),
+            })?;
+        self.stats.factorisations += 1;
+        // Stability: no positive eigenvalue of J_aug (module doc). Modes softer than the
+        // floor are mechanisms that slack elements leave (measured: a few vertices at the top
+        // of the dome, whose membrane is nearly flat, reach +0.03 to +0.41 N/m at the end of a
+        // quiet expiration at level 1, against -1.46e5 N/m for the stiffest mode), not
+        // buckling; the equilibrium is still solved on its branch with the exact J_aug.
+        let c = [slope_a, -rho];
+        let (positive, zero) = self.positive_eigenvalues(&u, c);
+        if positive > 0 || zero > 0 {
+            let scale = (0..m)
+                .filter_map(|i| self.jac.pattern.position(i, i))
+                .fold(0.0f64, |s, e| s.max(self.jac.values[e].abs()));
+            let floor = STIFFNESS_FLOOR * scale;
+            let shifted = self.solver.factor_general(&self.jac, -floor, -1.0);
+            let (positive, zero) = match shifted {
+                Ok(()) => self.positive_eigenvalues(&u, c),
+                Err(_) => (1, 0),
+            };
+            self.stats.factorisations += 2;
+            if positive > 0 || zero > 0 {
+                return Err(StaticsError::Unstable {
+                    reason: format!(
+                        "the stiffness of the chest wall with the lungs attached has {} \
+                         eigenvalue(s) above {floor:.3e} N/m (the floor of {STIFFNESS_FLOOR:e} \
+                         of its largest, {scale:.3e} N/m)",
+                        positive.max(0) as usize + zero
+                    ),
+                });
+            }
+            self.solver
+                .factor_general(&self.jac, 0.0, -1.0)
+                .map_err(|_| StaticsError::Unstable {
+                    reason: "the stiffness matrix is singular".into(),
+                })?;
+        }
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        self.ut.copy_from_slice(&u[1]);
+        self.b.copy_from_slice(&u[1]);
+        self.solver.solve(&mut self.b);
+        let utb = dot(&self.ut, &self.b);
+        if utb >= 0.0 || !utb.is_finite() {
+            return Err(StaticsError::Unstable {
+                reason: format!(
+                    "the alveolar pressure would fall as the lungs fill (u^T J^-1 u = {utb:.3e})"
+                ),
+            });
+        }
+        self.rho = rho;
+        self.factored_at = Some((y.to_vec(), pleural, *act));
+        Ok(())
+    }
+
+    /// The numbers of positive and zero eigenvalues of the factored J_aug = S + U C U^T
+    /// (Haynsworth: those of S, from its pivot blocks, plus those of the 2 x 2 matrix
+    /// -C^-1 - U^T S^-1 U, less the 2 of -C^-1; module doc).
+    fn positive_eigenvalues(&mut self, u: &[Vec<f64>; 2], c: [f64; 2]) -> (i64, usize) {
+        let [pos_s, zero_s, _] = self.solver.lu_mut().inertia();
+        let mut sinv = [u[0].clone(), u[1].clone()];
+        for s in &mut sinv {
+            self.solver.lu_mut().solve(s);
+        }
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let mut mm = [[0.0; 2]; 2];
+        for i in 0..2 {
+            for j in 0..2 {
+                mm[i][j] = -0.5 * (dot(&u[i], &sinv[j]) + dot(&u[j], &sinv[i]));
+            }
+            mm[i][i] -= 1.0 / c[i];
+        }
+        let (tr, det) = (mm[0][0] + mm[1][1], mm[0][0] * mm[1][1] - mm[0][1] * mm[1][0]);
+        let disc = (0.25 * tr * tr - det).max(0.0).sqrt();
+        let pos_m = [0.5 * tr + disc, 0.5 * tr - disc]
+            .iter()
+            .filter(|e| **e > 0.0)
+            .count();
+        ((pos_s + pos_m) as i64 - 2, zero_s)
+    }
+
+    /// The slope of the alveolar pressure with the lung volume at the kept factorisation,
+    /// dP_alv/dV_L = -1 / (u_T^T J_aug^-1 u_T) [Pa/m^3] (module doc): the respiratory
+    /// system's elastance with the muscles held; `None` without a factorisation.
+    pub fn elastance(&self) -> Option<f64> {
+        self.factored_at.as_ref()?;
+        let utb: f64 = self.ut.iter().zip(&self.b).map(|(x, y)| x * y).sum();
+        Some(-1.0 / utb)
+    }
+
+    /// One attempt: Newton iterations from the current iterate towards the equilibrium at
+    /// `act` holding thoracic volume `target`, to a displacement tolerance `tol` [m].
+    fn iterate(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        act: &Activations,
+        target: f64,
+        tol: f64,
+    ) -> Result<(), StaticsError> {
+        let mut prev = f64::INFINITY;
+        let mut fresh = false;
+        let mut theta = self.theta;
+        let mut last = f64::INFINITY;
+        for _ in 0..MAX_ITERATIONS {
+            let (_, vt) = self.residual(model, data, act, self.pleural);
+            let c = vt - target;
+            if !c.is_finite() || self.dy.iter().any(|v| !v.is_finite()) {
+                return Err(StaticsError::NonFinite);
+            }
+            if self.factored_at.is_none() {
+                let y = self.y.clone();
+                self.factor_at(model, data, &y, self.pleural, act)?;
+                fresh = true;
+            }
+            let l = self.l;
+            // a = J_aug^-1 (-R + rho u_T c)
+            for (i, a) in self.a.iter_mut().enumerate() {
+                *a = -self.dy[l.theta_dot + i] + self.rho * self.ut[i] * c;
+            }
+            self.solver.solve(&mut self.a);
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            let dp = (dot(&self.ut, &self.a) + c) / dot(&self.ut, &self.b);
+            for (r, (a, b)) in self.r.iter_mut().zip(self.a.iter().zip(&self.b)) {
+                *r = a - dp * b;
+            }
+            if !dp.is_finite() || self.r.iter().any(|v| !v.is_finite()) {
+                return Err(StaticsError::NonFinite);
+            }
+            let size = correction_size(&self.r);
+            apply(&l, &mut self.y, &self.r);
+            self.pleural += dp;
+            self.stats.iterations += 1;
+            last = size;
+            if prev.is_finite() {
+                theta = size / prev;
+            }
+            // error after this step about theta / (1 - theta) of it (Hairer & Wanner IV.8)
+            if size <= tol || (theta < 1.0 && theta / (1.0 - theta) * size <= tol) {
+                self.theta = theta.clamp(1e-3, 0.9);
+                return Ok(());
+            }
+            if prev.is_finite() && theta > SLOW_CONTRACTION {
+                if fresh && theta >= 1.0 {
+                    break;
+                }
+                if !fresh {
+                    // refactor at the current iterate and go on
+                    let y = self.y.clone();
+                    self.factor_at(model, data, &y, self.pleural, act)?;
+                    fresh = true;
+                    prev = f64::INFINITY;
+                    continue;
+                }
+            }
+            prev = size;
+        }
+        Err(StaticsError::NotConverged { correction: last })
+    }
+
+    /// The equilibrium at activations `act` holding thoracic volume `target` [m^3], to a
+    /// displacement tolerance `tol` [m], from the last solution (module doc). Returns the
+    /// pleural pressure relative to rest [Pa]; on error the last solution is kept.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        time: f64,
+        act: &Activations,
+        target: f64,
+        tol: f64,
+    ) -> Result<f64, StaticsError> {
+        self.stats.solves += 1;
+        if *act == self.act_good && target == self.volume_good {
+            return Ok(self.pleural_good);
+        }
+        let predicted = self.predict(time);
+        if !predicted {
+            self.y.copy_from_slice(&self.y_good);
+            self.pleural = self.pleural_good;
+        }
+        let mut first = self.iterate(model, data, act, target, tol);
+        if predicted && matches!(first, Err(StaticsError::NotConverged { .. })) {
+            // the extrapolation led astray: start again from the last solution
+            self.y.copy_from_slice(&self.y_good);
+            self.pleural = self.pleural_good;
+            first = self.iterate(model, data, act, target, tol);
+        }
+        let outcome = match first {
+            Ok(()) => Ok(()),
+            Err(StaticsError::Unstable { reason }) => Err(StaticsError::Unstable { reason }),
+            Err(_) => self.continuation(model, data, act, target, tol),
+        };
+        match outcome {
+            Ok(()) => {
+                self.y_good.copy_from_slice(&self.y);
+                self.pleural_good = self.pleural;
+                self.act_good = *act;
+                self.volume_good = target;
+                self.remember(time);
+                Ok(self.pleural)
+            }
+            Err(e) => {
+                self.y.copy_from_slice(&self.y_good);
+                self.pleural = self.pleural_good;
+                Err(e)
+            }
+        }
+    }
+
+    /// The predictor: the last solutions (at most [`HISTORY`], at distinct times within
+    /// [`HISTORY_SPAN`] of `time`) extrapolated to `time` by their Lagrange polynomial, into
+    /// the iterate; whether there were at least two to extrapolate from. Along a smooth drive
+    /// the positions are a smooth function of time, so a quadratic through three solutions a
+    /// step apart starts Newton within O(h^3) of the next.
+    fn predict(&mut self, time: f64) -> bool {
+        let nodes: Vec<usize> = (0..self.history.len())
+            .filter(|&i| (self.history[i].0 - time).abs() <= HISTORY_SPAN)
+            .collect();
+        if nodes.len() < 2 {
+            return false;
+        }
+        let weights: Vec<f64> = nodes
+            .iter()
+            .map(|&i| {
+                let ti = self.history[i].0;
+                nodes
+                    .iter()
+                    .filter(|&&j| j != i)
+                    .map(|&j| {
+                        let tj = self.history[j].0;
+                        (time - tj) / (ti - tj)
+                    })
+                    .product()
+            })
+            .collect();
+        if weights.iter().any(|w| !w.is_finite() || w.abs() > 10.0) {
+            return false;
+        }
+        self.y.fill(0.0);
+        self.pleural = 0.0;
+        for (&i, &w) in nodes.iter().zip(&weights) {
+            let (_, y, p) = &self.history[i];
+            for (a, b) in self.y.iter_mut().zip(y) {
+                *a += w * b;
+            }
+            self.pleural += w * p;
+        }
+        let q = self.l.sternum_q;
+        let norm = self.y[q..q + 4].iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(norm > 0.0) {
+            return false;
+        }
+        self.y[q..q + 4].iter_mut().for_each(|v| *v /= norm);
+        true
+    }
+
+    /// Adds the solution just accepted, at `time`, to the predictor's history (replacing one
+    /// at a time closer than 1 us, dropping the oldest beyond [`HISTORY`]).
+    fn remember(&mut self, time: f64) {
+        self.history.retain(|(t, _, _)| (t - time).abs() > 1e-6);
+        if self.history.len() >= HISTORY {
+            self.history.remove(0);
+        }
+        self.history
+            .push((time, self.y_good.clone(), self.pleural_good));
+    }
+
+    /// From the last solution to (act, target) in 4, then 16 equal steps of the activations
+    /// and the volume, each solved from the one before with a fresh Jacobian.
+    fn continuation(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        act: &Activations,
+        target: f64,
+        tol: f64,
+    ) -> Result<(), StaticsError> {
+        self.stats.continuations += 1;
+        let (a0, v0) = (self.act_good, self.volume_good);
+        let mut error = StaticsError::NotConverged {
+            correction: f64::INFINITY,
+        };
+        for steps in [4u32, 16] {
+            self.y.copy_from_slice(&self.y_good);
+            self.pleural = self.pleural_good;
+            self.factored_at = None;
+            let mut ok = true;
+            for k in 1..=steps {
+                let s = f64::from(k) / f64::from(steps);
+                let mut a = *act;
+                for (g, sides) in a.level.iter_mut().enumerate() {
+                    for (i, x) in sides.iter_mut().enumerate() {
+                        *x = a0.level[g][i] + s * (act.level[g][i] - a0.level[g][i]);
+                    }
+                }
+                a.airway_opening = a0.airway_opening + s * (act.airway_opening - a0.airway_opening);
+                let v = v0 + s * (target - v0);
+                if let Err(e) = self.iterate(model, data, &a, v, tol) {
+                    let unstable = matches!(e, StaticsError::Unstable { .. });
+                    error = e;
+                    ok = false;
+                    if unstable {
+                        return Err(error);
+                    }
+                    break;
+                }
+            }
+            if ok {
+                return Ok(());
+            }
+        }
+        Err(error)
+    }
+}
+
+/// The abdominal pressure at volume `va` (thesis eq. 2.5, relative to rest) [Pa].
+fn abdominal_pressure(model: &Model, va: f64) -> f64 {
+    model.params.bulk_modulus * (model.abdomen_rest_volume / va - 1.0)
+}
+
+/// The thoracic (mesh) volume of state `y` [m^3].
+pub fn volume_of(model: &Model, y: &[f64]) -> f64 {
+    let mut data = Data::new(model);
+    kinematics::positions_and_velocities(model, &mut data, &Layout::new(model), y);
+    volume(&data.pos, &model.thorax_triangles)
+}
+
+/// The generalised forces at zero velocity into `dy`'s acceleration rows, with the abdominal
+/// pressure `frozen_abdomen` (or that of the volume) and the pleural pressure `pleural`;
+/// returns (V_A, V_T). `y`'s velocities must be zero.
+#[allow(clippy::too_many_arguments)]
+fn pressures_and_residual(
+    model: &Model,
+    data: &mut Data,
+    l: &Layout,
+    act: &Activations,
+    y: &[f64],
+    frozen_abdomen: Option<f64>,
+    pleural: f64,
+    dy: &mut [f64],
+) -> (f64, f64) {
+    kinematics::positions_and_velocities(model, data, l, y);
+    let va = volume(&data.pos, &model.abdomen_triangles);
+    let vt = volume(&data.pos, &model.thorax_triangles);
+    let pa = frozen_abdomen.unwrap_or_else(|| abdominal_pressure(model, va));
+    forces::accumulate_frozen(model, data, act, [pa, pleural]);
+    accelerations::forces_and_rates(model, data, l, y, dy);
+    (va, vt)
+}
+
+/// Adds the increment `dz` (rib angles, sternum translation, sternum rotation vector in the
+/// world frame about its centre of mass, vertex displacements) to the state `y`.
+fn apply(l: &Layout, y: &mut [f64], dz: &[f64]) {
+    for r in 0..RIBS {
+        y[l.theta + r] += dz[r];
+    }
+    for k in 0..3 {
+        y[l.sternum_x + k] += dz[RIBS + k];
+    }
+    let phi = Vector3::new(dz[RIBS + 3], dz[RIBS + 4], dz[RIBS + 5]);
+    if phi != Vector3::zeros() {
+        let q = UnitQuaternion::from_quaternion(Quaternion::new(
+            y[l.sternum_q],
+            y[l.sternum_q + 1],
+            y[l.sternum_q + 2],
+            y[l.sternum_q + 3],
+        ));
+        let q = UnitQuaternion::from_scaled_axis(phi) * q;
+        y[l.sternum_q] = q.w;
+        y[l.sternum_q + 1] = q.i;
+        y[l.sternum_q + 2] = q.j;
+        y[l.sternum_q + 3] = q.k;
+    }
+    for (i, d) in dz[RIBS + 6..].iter().enumerate() {
+        y[l.vertex_x + i] += d;
+    }
+}
+
+/// The largest displacement a correction makes [m] (rotations times [`LEVER`]).
+fn correction_size(dz: &[f64]) -> f64 {
+    let rot = dz[..RIBS]
+        .iter()
+        .chain(&dz[RIBS + 3..RIBS + 6])
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        * LEVER;
+    let lin = dz[RIBS..RIBS + 3]
+        .iter()
+        .chain(&dz[RIBS + 6..])
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    rot.max(lin)
+}

@@ -1,0 +1,210 @@
+//! The facade's quasi-static mode ([`crate::solver::Method::QuasiStatic`]): the state is the
+//! lung volume, integrated by Dormand-Prince 5(4) with
+//!
+//! ```text
+//! dV_L/dt = (P_ao - P_alv) / R_aw,   P_alv = P_pl + P_L(V_L),
+//! ```
+//!
+//! P_pl the multiplier of the chest wall's static equilibrium holding V_L
+//! ([`crate::dynamics::statics`]), P_L the lungs' recoil ([`crate::dynamics::pleural`]) and
+//! R_aw the airway resistance. The positions are solved when something reads them (volumes
+//! other than the lungs', pressures, markers), once per communication point, warm-started from
+//! the last solution; the lung and thoracic volumes come from the state alone.
+
+use super::{Applied, Torso};
+use crate::dynamics::statics::{Statics, StaticsError, StaticsMemory};
+use crate::dynamics::{Activations, Data, Model};
+use crate::solver::Ode;
+use serde::{Deserialize, Serialize};
+
+/// Litres per cubic metre: the reduced state is held in litres, so that the integrator's
+/// absolute tolerance (1e-8 by default) is a volume the user reads.
+const LITRES: f64 = 1e3;
+
+/// The quasi-static memory of one torso.
+#[derive(Clone, Debug)]
+pub(crate) struct Quasi {
+    /// The static solver and its last solution.
+    pub(crate) statics: Statics,
+    /// The lung volume [L] (the integrated state).
+    pub(crate) volume: [f64; 1],
+    /// Whether the facade's state vector holds the equilibrium at the current time.
+    pub(crate) fresh: bool,
+    /// The airflow at the current time [L/s] and the pleural pressure relative to rest [Pa],
+    /// when `fresh`.
+    pub(crate) flow: f64,
+    pub(crate) pleural: f64,
+    /// The last failure of a solve inside an integration, for the error message.
+    pub(crate) failure: Option<StaticsError>,
+}
+
+/// What a snapshot keeps of the quasi-static mode.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QuasiMemory {
+    /// The lung volume [L].
+    pub volume: f64,
+    /// The static solver's memory.
+    pub statics: StaticsMemory,
+    /// Whether the positions were those of the current time, and if so the airflow [L/s]
+    /// and pleural pressure relative to rest [Pa] there.
+    pub fresh: bool,
+    /// Airflow [L/s] (when `fresh`).
+    pub flow: f64,
+    /// Pleural pressure relative to rest [Pa] (when `fresh`).
+    pub pleural: f64,
+}
+
+/// The displacement tolerance of the static solves for an integrator's relative tolerance:
+/// 1e-3 rtol in metres (1e-9 m at the default 1e-6), so that the solves' error stays three
+/// orders of magnitude under the step's.
+pub(crate) fn statics_tolerance(rtol: f64) -> f64 {
+    (1e-3 * rtol).max(1e-13)
+}
+
+/// The lung volume [L] held by a thoracic mesh volume [m^3].
+pub(crate) fn lung_of(model: &Model, thorax_mesh: f64) -> f64 {
+    (thorax_mesh - model.dome_faceting_volume - model.non_lung_volume) * LITRES
+}
+
+/// The thoracic mesh volume [m^3] that holds a lung volume [L].
+pub(crate) fn thorax_of(model: &Model, lung: f64) -> f64 {
+    lung / LITRES + model.dome_faceting_volume + model.non_lung_volume
+}
+
+/// The airflow into the lungs [L/s] at lung volume `lung` [L] and pleural pressure `pleural`
+/// (relative to rest) [Pa] under `act`.
+pub(crate) fn airflow(model: &Model, act: &Activations, lung: f64, pleural: f64) -> f64 {
+    let recoil = model.pleural.recoil(thorax_of(model, lung));
+    (act.airway_opening - pleural - recoil) / model.airway_resistance * LITRES
+}
+
+impl Quasi {
+    /// A quasi-static memory starting at state `y` (an equilibrium of `act`, velocities zero)
+    /// with its pleural pressure `pleural`.
+    pub(crate) fn new(model: &Model, y: &[f64], pleural: f64, act: &Activations) -> Quasi {
+        let statics = Statics::new(model, y, act);
+        let mut q = Quasi {
+            volume: [lung_of(model, statics.volume())],
+            statics,
+            fresh: true,
+            flow: 0.0,
+            pleural,
+            failure: None,
+        };
+        q.reset(model, y, pleural, act);
+        q
+    }
+
+    /// Restarts from state `y`, an equilibrium of `act` at pleural pressure `pleural`.
+    pub(crate) fn reset(&mut self, model: &Model, y: &[f64], pleural: f64, act: &Activations) {
+        self.statics.reset(model, y, pleural, act);
+        self.volume = [lung_of(model, self.statics.volume())];
+        self.pleural = pleural;
+        self.flow = airflow(model, act, self.volume[0], pleural);
+        self.fresh = true;
+        self.failure = None;
+    }
+
+    /// What a snapshot keeps.
+    pub(crate) fn memory(&self) -> QuasiMemory {
+        QuasiMemory {
+            volume: self.volume[0],
+            statics: self.statics.memory(),
+            fresh: self.fresh,
+            flow: self.flow,
+            pleural: self.pleural,
+        }
+    }
+
+    /// Restores [`Quasi::memory`] (the factorisation re-evaluated where it was taken, so
+    /// that the run continues bit for bit); on error nothing is usable and the caller keeps
+    /// its own state.
+    pub(crate) fn restore(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        memory: &QuasiMemory,
+    ) -> Result<(), StaticsError> {
+        if !memory.volume.is_finite() {
+            return Err(StaticsError::NonFinite);
+        }
+        self.statics.restore(model, data, &memory.statics)?;
+        self.volume = [memory.volume];
+        self.fresh = memory.fresh;
+        self.flow = memory.flow;
+        self.pleural = memory.pleural;
+        self.failure = None;
+        Ok(())
+    }
+}
+
+/// The reduced system seen by the integrator.
+pub(super) struct QuasiSystem<'a> {
+    pub(super) model: &'a Model,
+    pub(super) data: &'a mut Data,
+    pub(super) statics: &'a mut Statics,
+    pub(super) applied: Applied<'a>,
+    pub(super) tolerance: f64,
+    pub(super) failure: &'a mut Option<StaticsError>,
+}
+
+impl Ode for QuasiSystem<'_> {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        let act = self.applied.activations(t);
+        let target = thorax_of(self.model, y[0]);
+        dydt[0] = match self
+            .statics
+            .solve(self.model, self.data, t, &act, target, self.tolerance)
+        {
+            Ok(pleural) => airflow(self.model, &act, y[0], pleural),
+            Err(e) => {
+                // a non-finite rate makes the integrator reject the step and shorten it
+                self.failure.get_or_insert(e);
+                f64::NAN
+            }
+        };
+    }
+}
+
+impl Torso {
+    /// In quasi-static mode, solves the positions at the current time if they are not
+    /// current: the equilibrium holding the integrated lung volume under the activations
+    /// applied now. Nothing in the other modes.
+    pub(super) fn current_positions(&mut self) {
+        let time = self.time;
+        let act = self.applied(time);
+        let tolerance = super::quasi::statics_tolerance(self.config.solver.rtol);
+        let Torso {
+            compiled,
+            data,
+            quasi,
+            y,
+            ..
+        } = self;
+        let Some(q) = quasi.as_deref_mut() else {
+            return;
+        };
+        if q.fresh {
+            return;
+        }
+        let model = &compiled.model;
+        let target = thorax_of(model, q.volume[0]);
+        match q.statics.solve(model, data, time, &act, target, tolerance) {
+            Ok(pleural) => {
+                y.copy_from_slice(q.statics.state());
+                q.pleural = pleural;
+                q.flow = airflow(model, &act, q.volume[0], pleural);
+            }
+            Err(e) => {
+                // the last solution stays; the pressures say that this one failed
+                q.pleural = f64::NAN;
+                q.flow = f64::NAN;
+                q.failure = Some(e);
+            }
+        }
+        q.fresh = true;
+    }
+}
