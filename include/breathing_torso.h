@@ -177,7 +177,8 @@ typedef struct BtConfig {
   const char *slp_reference;
   /**
    * Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order,
-   * 3 Rosenbrock-W for stiff scenes).
+   * 3 Rosenbrock-W for stiff scenes, 4 quasi-static: the chest wall in equilibrium at every
+   * instant, the lung volume the only state).
    */
   int solver_method;
   /**
@@ -536,7 +537,7 @@ int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n)
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{02eb7f44-1b05-16a3-f5d5-85cb4084cec7}"
+#define BT_FMI_GUID "{7a97dd32-66d9-96ea-d753-0c061181de58}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u

@@ -222,11 +222,12 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
     // and the periodic run's second-breath frames are those one period later
     assert!(max_distance(&a.markers[..10], &a.markers[140..150]) < 1e-12);
 
-    // a lightly damped model (damping ratio 0.02 instead of 1): its response from rest still
-    // rings at the end of the frames, so it is never found periodic
+    // a lightly damped model (damping ratio 0.01 instead of 1): its response from rest still
+    // rings at the end of the frames, so it is never found periodic (at 0.02 it rang until
+    // the dome's membrane edges became tension-only, whose slack edges now damp it out)
     let mut light = config();
     let mut p = Params::for_posture(light.subject.posture);
-    p.damping_ratio = 0.02;
+    p.damping_ratio = 0.01;
     light.params = Some(p);
     let mut lm = TorsoMarkers::new(light.clone()).unwrap();
     let mut lplain = TorsoMarkers::new(light).unwrap();
@@ -241,7 +242,8 @@ fn periodic_runs_check_breath_by_breath_and_fall_back() {
     println!("{r:?}");
     assert!(!r.periodic && r.simulated_s >= *times.last().unwrap());
     assert!(r.period_mismatch_m > 1e-7);
-    assert!(max_distance(&a.markers, &b.markers) < 1e-6);
+    let d = max_distance(&a.markers, &b.markers);
+    assert!(d < 1e-6, "{d}");
 
     // frames ending within the second breath: plain
     let short = frames(4.0, 200);

@@ -117,7 +117,8 @@ pub struct BtConfig {
     /// default grid. Copied by `bt_create`.
     pub slp_reference: *const c_char,
     /// Integration method code (0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high order,
-    /// 3 Rosenbrock-W for stiff scenes).
+    /// 3 Rosenbrock-W for stiff scenes, 4 quasi-static: the chest wall in equilibrium at every
+    /// instant, the lung volume the only state).
     pub solver_method: c_int,
     /// Relative tolerance, 1e-12 .. 1e-2.
     pub solver_rtol: f64,
@@ -1061,7 +1062,7 @@ pub unsafe extern "C" fn bt_get_state(h: *mut BtTorso, y: *mut f64, n: usize) ->
             if y.is_null() {
                 return Err(Failure(BT_ERR_NULL, "argument `y` is NULL".into()));
             }
-            std::slice::from_raw_parts_mut(y, n).copy_from_slice(b.torso.state());
+            std::slice::from_raw_parts_mut(y, n).copy_from_slice(b.torso.current_state());
             Ok(())
         })
     }

@@ -54,7 +54,7 @@ pub struct CoreArgs {
     /// Right-hand-side calls per timed batch.
     #[arg(long, default_value_t = 2000)]
     pub rhs_calls: usize,
-    /// ODE solver of the frame loops: dopri5, bs3, high-order or rosenbrock (also taken as
+    /// ODE solver of the frame loops: dopri5, bs3, high-order, rosenbrock or quasi-static (also taken as
     /// its former name, --method).
     #[arg(long = "solver", alias = "method", default_value = "dopri5")]
     pub method: String,
@@ -197,7 +197,7 @@ fn core(args: &CoreArgs) -> Result<()> {
         Error::invalid(
             "--solver",
             &args.method,
-            "dopri5, bs3, high-order or rosenbrock",
+            "dopri5, bs3, high-order, rosenbrock or quasi-static",
         )
     })?;
     config.validate()?;

@@ -71,7 +71,7 @@ impl SubjectArgs {
             Error::invalid(
                 "--solver",
                 &solver.solver,
-                "dopri5, bs3, high-order or rosenbrock",
+                "dopri5, bs3, high-order, rosenbrock or quasi-static",
             )
         })?;
         c.solver.rtol = solver.rtol;
@@ -85,7 +85,8 @@ impl SubjectArgs {
 /// (hidden, see [`MethodAlias`]). `fit` and `fit-sweep` keep `--method` for the search method.
 #[derive(Args, Debug, Clone)]
 pub struct SolverArgs {
-    /// ODE solver: dopri5, bs3, high-order or rosenbrock (stiff scenes).
+    /// ODE solver: dopri5, bs3, high-order, rosenbrock (stiff scenes) or quasi-static (the chest
+    /// wall in equilibrium at every instant, the lung volume the only state).
     #[arg(long, default_value = "dopri5")]
     pub solver: String,
     /// Relative tolerance of the ODE solver.

@@ -99,7 +99,7 @@ pub fn export_obj(args: &ExportObjArgs) -> Result<()> {
     prepare_output_dir(&args.dir)?;
     let mut torso = Torso::new(config)?;
     let model = torso.marker_model()?;
-    let y = torso.state().to_vec();
+    let y = torso.current_state().to_vec();
     let dir = &args.dir;
     let skin = model.skin();
     write_obj(
@@ -192,7 +192,7 @@ impl VtkWriter {
     fn add(&mut self, torso: &mut Torso) -> Result<()> {
         let t = torso.time();
         let model = torso.marker_model()?;
-        let y = torso.state().to_vec();
+        let y = torso.current_state().to_vec();
         let mut scratch = Default::default();
         model.skin_model_frame(&y, &mut scratch, &mut self.scratch)?;
         let rest = model.skinning().rest();
@@ -310,7 +310,7 @@ pub fn breath_extremes(torso: &mut Torso, rate: f64) -> Result<BreathExtremes> {
     let model = torso.marker_model()?;
     let mut scratch = Default::default();
     let (mut rest_markers, mut rest_skin) = (Vec::new(), Vec::new());
-    let y0 = torso.state().to_vec();
+    let y0 = torso.current_state().to_vec();
     model.markers_model_frame(&y0, &mut scratch, &mut rest_markers)?;
     model.skin_model_frame(&y0, &mut scratch, &mut rest_skin)?;
     let period = 1.0 / torso.config().drive.frequency;
@@ -328,10 +328,10 @@ pub fn breath_extremes(torso: &mut Torso, rate: f64) -> Result<BreathExtremes> {
         }
         let v = torso.read(crate::Quantity::LungVolume)?;
         if v < lo.0 {
-            lo = (v, t, torso.state().to_vec());
+            lo = (v, t, torso.current_state().to_vec());
         }
         if v > hi.0 {
-            hi = (v, t, torso.state().to_vec());
+            hi = (v, t, torso.current_state().to_vec());
         }
     }
     if lo.2.is_empty() || hi.2.is_empty() {

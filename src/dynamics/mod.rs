@@ -28,8 +28,8 @@ pub mod state;
 pub mod statics;
 
 pub use model::{
-    Carrier, Elements, Model, PASSIVE, PASSIVE_SLACK, PATH_CORE, REST_LUNG_FRACTION, RIBS, VIA, VectorSprings,
-    path_length, via_segment_length, volume,
+    Carrier, Elements, Model, PASSIVE, PASSIVE_SLACK, PATH_CORE, REST_LUNG_FRACTION, RIBS, VIA,
+    VectorSprings, path_length, via_segment_length, volume,
 };
 pub use params::{
     DIAPHRAGM_CONTRACTION_UPRIGHT, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN,

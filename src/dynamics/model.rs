@@ -426,10 +426,8 @@ impl Model {
                 params.membrane_stiffness
             };
             elements.push(&[a, b], l0, k, rayleigh * k, PASSIVE, 2, 0.0);
-            if dome(u) && dome(v) {
-                if let Some(slot) = elements.slot.last_mut() {
-                    *slot = PASSIVE_SLACK;
-                }
+            if let (true, Some(slot)) = (dome(u) && dome(v), elements.slot.last_mut()) {
+                *slot = PASSIVE_SLACK;
             }
         }
         // Cartilage joints.

@@ -342,7 +342,7 @@ impl Statics {
     }
 
     /// The pleural pressure of the last solution, relative to rest [Pa].
-    pub fn pleural(&self) -> f64 {
+    pub fn last_pleural(&self) -> f64 {
         self.pleural_good
     }
 
@@ -415,7 +415,11 @@ impl Statics {
             return Err(StaticsError::NonFinite);
         }
         self.theta = memory.contraction;
-        if memory.history.iter().any(|(_, y, _)| y.len() != self.y.len()) {
+        if memory
+            .history
+            .iter()
+            .any(|(_, y, _)| y.len() != self.y.len())
+        {
             return Err(StaticsError::NonFinite);
         }
         self.history.clone_from(&memory.history);
@@ -523,9 +527,9 @@ impl Statics {
         let rho = model.pleural.slope(vt);
         self.jac.u[..m].copy_from_slice(&u[0]);
         self.jac.u[m..].copy_from_slice(&u[1]);
-        for i in 0..m {
-            self.jac.v[i] = slope_a * u[0][i];
-            self.jac.v[m + i] = -rho * u[1][i];
+        for (i, (ua, ut)) in u[0].iter().zip(&u[1]).enumerate() {
+            self.jac.v[i] = slope_a * ua;
+            self.jac.v[m + i] = -rho * ut;
         }
         self.stats.jacobians += 1;
         self.factored_at = None;
@@ -603,7 +607,10 @@ impl Statics {
             }
             mm[i][i] -= 1.0 / c[i];
         }
-        let (tr, det) = (mm[0][0] + mm[1][1], mm[0][0] * mm[1][1] - mm[0][1] * mm[1][0]);
+        let (tr, det) = (
+            mm[0][0] + mm[1][1],
+            mm[0][0] * mm[1][1] - mm[0][1] * mm[1][0],
+        );
         let disc = (0.25 * tr * tr - det).max(0.0).sqrt();
         let pos_m = [0.5 * tr + disc, 0.5 * tr - disc]
             .iter()
@@ -782,7 +789,7 @@ impl Statics {
         }
         let q = self.l.sternum_q;
         let norm = self.y[q..q + 4].iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(norm > 0.0) {
+        if norm.is_nan() || norm <= 0.0 {
             return false;
         }
         self.y[q..q + 4].iter_mut().for_each(|v| *v /= norm);

@@ -1175,7 +1175,7 @@ fn build(markers: &MarkerOutputs) -> Vec<Variable> {
             205,
             Integer,
             P::SolverMethod,
-            "Integration method: 0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high-order pair, 3 Rosenbrock-W (stiff)",
+            "Integration method: 0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high-order pair, 3 Rosenbrock-W (stiff), 4 quasi-static (chest wall in equilibrium, the lung volume integrated by Dormand-Prince 5(4))",
         )
         .range(0.0, methods),
         par("solver.rtol", 130, Real, P::SolverRtol, "Relative tolerance of the integrator").range(1e-12, 1e-2),

