@@ -372,25 +372,31 @@ const BASIS_AMPLITUDE: f64 = 0.3;
 /// Phase shifts tried per family by [`linearised_start`].
 const SHIFTS: usize = 24;
 
-/// A starting point from a linearised model (2 model runs): the displacement from rest is
-/// taken as c_r D_r(t + s_r) + c_d D_d(t + s_d), with D_r and D_d the responses to the
-/// rib-cage and the diaphragm drive alone at amplitude 0.3 and phase `psi`, time-shifted by
-/// s in [0, 1/f) (a phase change of 2 pi f s in the periodic regime). Each basis response is
-/// simulated for three breaths and read in its third, as periodic. For each pair of
-/// shifts the non-negative least-squares (c_r, c_d) are solved; the best pair gives
-/// A = 0.3 c and phi = psi + 2 pi f s. Returns (x0, model runs used).
-#[allow(clippy::too_many_arguments)]
-fn linearised_start(
+/// The two basis responses of the linearised model ([`linearised_start`]): the markers'
+/// response to the rib-cage and to the diaphragm drive alone, at amplitude 0.3 and phase
+/// `psi`, one breath of each (after two breaths of settling) sampled every `h` seconds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearBasis {
+    /// Per family (rib cage, diaphragm), per sample, per marker: the marker's position.
+    runs: [Vec<Vec<Point3<f64>>>; 2],
+    /// Sample interval [s].
+    h: f64,
+    /// Breathing period [s].
+    period: f64,
+    /// Phase of both families' waves in the basis runs [rad].
+    psi: f64,
+}
+
+/// The two basis runs of the linearised model at frequency `f` (2 model runs, each three
+/// breaths from rest); `rate` is the recording's frame rate.
+pub fn linear_basis(
     model: &mut dyn MarkerSource,
-    rest: &[Point3<f64>],
-    recorded: &[Vec<Option<Point3<f64>>>],
-    times: &[f64],
     f: f64,
     psi: f64,
     abdominals: Wave,
     inspiratory_fraction: f64,
     rate: f64,
-) -> Result<[f64; 4]> {
+) -> Result<LinearBasis> {
     let period = 1.0 / f;
     let h = 1.0 / rate.max(1.0);
     // One breath of each basis response, after two breaths of settling: frame time t
@@ -398,8 +404,8 @@ fn linearised_start(
     // 2 period + (t mod period).
     let n = (period / h).ceil() as usize + 2;
     let grid: Vec<f64> = (0..n).map(|j| 2.0 * period + j as f64 * h).collect();
-    let mut basis = Vec::with_capacity(2);
-    for family in 0..2 {
+    let mut runs: [Vec<Vec<Point3<f64>>>; 2] = [Vec::new(), Vec::new()];
+    for (family, out) in runs.iter_mut().enumerate() {
         let wave = |on: bool| Wave {
             amplitude: if on { BASIS_AMPLITUDE } else { 0.0 },
             phase: psi,
@@ -414,8 +420,74 @@ fn linearised_start(
         };
         let mut traj = Trajectory::default();
         model.run(&[(0.0, drive)], &grid, false, &mut traj)?;
-        basis.push(traj.markers);
+        *out = traj.markers;
     }
+    Ok(LinearBasis {
+        runs,
+        h,
+        period,
+        psi,
+    })
+}
+
+impl LinearBasis {
+    /// The basis of the markers `columns` only (indices into the model's markers).
+    pub fn columns(&self, columns: &[usize]) -> LinearBasis {
+        let pick = |run: &Vec<Vec<Point3<f64>>>| -> Vec<Vec<Point3<f64>>> {
+            run.iter()
+                .map(|frame| columns.iter().map(|&c| frame[c]).collect())
+                .collect()
+        };
+        LinearBasis {
+            runs: [pick(&self.runs[0]), pick(&self.runs[1])],
+            ..*self
+        }
+    }
+}
+
+/// The best linearised fit of a recording ([`linearised_fit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearFit {
+    /// (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm), phases at the first frame.
+    pub x: [f64; 4],
+    /// Sum of squared residual lengths over the samples used [m^2].
+    pub residual: f64,
+    /// Sum of squared lengths of the recorded motion about each marker's mean [m^2].
+    pub total: f64,
+    /// Tracked samples (frame, marker) used.
+    pub samples: usize,
+}
+
+impl LinearFit {
+    /// Root-mean-square length of the residual per sample [m].
+    pub fn rms_m(&self) -> f64 {
+        (self.residual / self.samples.max(1) as f64).sqrt()
+    }
+
+    /// Fraction of the recorded motion (about each marker's mean) left unexplained.
+    pub fn unexplained(&self) -> f64 {
+        if self.total > 0.0 {
+            self.residual / self.total
+        } else {
+            1.0
+        }
+    }
+}
+
+/// The linearised fit of `recorded` (model frame, frames at `times` from the first frame,
+/// markers in the basis's order): the displacement is taken as c_r D_r(t + s_r) +
+/// c_d D_d(t + s_d), with D_r and D_d the basis responses, time-shifted by s in [0, 1/f)
+/// (a phase change of 2 pi f s in the periodic regime); both sides are taken about each
+/// marker's mean. For each pair of shifts the non-negative least-squares (c_r, c_d) are
+/// solved; the best pair gives A = 0.3 c and phi = psi + 2 pi f s.
+pub fn linearised_fit(
+    basis: &LinearBasis,
+    recorded: &[Vec<Option<Point3<f64>>>],
+    times: &[f64],
+) -> LinearFit {
+    let LinearBasis { h, period, psi, .. } = *basis;
+    let points = basis.runs[0].first().map_or(0, Vec::len);
+    let n = basis.runs[0].len();
     // Frames used: about 300, evenly spread.
     let stride = (times.len() / 300).max(1);
     let frames: Vec<usize> = (0..times.len()).step_by(stride).collect();
@@ -423,24 +495,20 @@ fn linearised_start(
         let x = (t.rem_euclid(period) / h).clamp(0.0, (n - 1) as f64);
         let j = (x.floor() as usize).min(n - 2);
         let w = x - j as f64;
-        (b[j][p].coords * (1.0 - w) + b[j + 1][p].coords * w) - rest[p].coords
+        b[j][p].coords * (1.0 - w) + b[j + 1][p].coords * w
     };
     // Pre-sample each basis at every shift.
     let sample = |b: &[Vec<Point3<f64>>], s: usize| -> Vec<Vec<nalgebra::Vector3<f64>>> {
         let sigma = s as f64 * period / SHIFTS as f64;
         frames
             .iter()
-            .map(|&i| {
-                (0..rest.len())
-                    .map(|p| disp(b, times[i] + sigma, p))
-                    .collect()
-            })
+            .map(|&i| (0..points).map(|p| disp(b, times[i] + sigma, p)).collect())
             .collect()
     };
     // Per-point time means are removed from data and bases: the camera pose refinement of
     // the cost absorbs any constant offset (see `aligned_cost`).
     let centre = |mut v: Vec<Vec<nalgebra::Vector3<f64>>>| {
-        for p in 0..rest.len() {
+        for p in 0..points {
             let mean = v.iter().map(|f| f[p]).sum::<nalgebra::Vector3<f64>>() / v.len() as f64;
             for f in v.iter_mut() {
                 f[p] -= mean;
@@ -448,10 +516,14 @@ fn linearised_start(
         }
         v
     };
-    let dr: Vec<_> = (0..SHIFTS).map(|s| centre(sample(&basis[0], s))).collect();
-    let dd: Vec<_> = (0..SHIFTS).map(|s| centre(sample(&basis[1], s))).collect();
-    let mut rmean = vec![nalgebra::Vector3::zeros(); rest.len()];
-    let mut rcount = vec![0usize; rest.len()];
+    let dr: Vec<_> = (0..SHIFTS)
+        .map(|s| centre(sample(&basis.runs[0], s)))
+        .collect();
+    let dd: Vec<_> = (0..SHIFTS)
+        .map(|s| centre(sample(&basis.runs[1], s)))
+        .collect();
+    let mut rmean = vec![nalgebra::Vector3::zeros(); points];
+    let mut rcount = vec![0usize; points];
     for &i in &frames {
         for (p, q) in recorded[i].iter().enumerate() {
             if let Some(q) = q {
@@ -463,24 +535,51 @@ fn linearised_start(
     for (m, c) in rmean.iter_mut().zip(&rcount) {
         *m /= (*c).max(1) as f64;
     }
-    let mut best = (f64::INFINITY, [0.0; 4]);
+    let mut best = LinearFit {
+        x: [0.0, 0.0, psi, psi],
+        residual: f64::INFINITY,
+        total: 0.0,
+        samples: rcount.iter().sum(),
+    };
+    // The sums that depend on one shift are computed once per shift; only the cross term
+    // needs every pair.
+    let mut rr = 0.0;
+    for &i in &frames {
+        for (p, q) in recorded[i].iter().enumerate() {
+            if let Some(q) = q {
+                rr += (q.coords - rmean[p]).norm_squared();
+            }
+        }
+    }
+    let single = |d: &[Vec<Vec<nalgebra::Vector3<f64>>>]| -> Vec<(f64, f64)> {
+        d.iter()
+            .map(|u| {
+                let (mut uu, mut ur) = (0.0, 0.0);
+                for (k, &i) in frames.iter().enumerate() {
+                    for (p, q) in recorded[i].iter().enumerate() {
+                        if let Some(q) = q {
+                            uu += u[k][p].norm_squared();
+                            ur += u[k][p].dot(&(q.coords - rmean[p]));
+                        }
+                    }
+                }
+                (uu, ur)
+            })
+            .collect()
+    };
+    let (sr_sums, sd_sums) = (single(&dr), single(&dd));
     for (sr, a) in dr.iter().enumerate() {
         for (sd, b) in dd.iter().enumerate() {
-            let (mut aa, mut ab, mut bb, mut ar, mut br, mut rr) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+            let ((aa, ar), (bb, br)) = (sr_sums[sr], sd_sums[sd]);
+            let mut ab = 0.0;
             for (k, &i) in frames.iter().enumerate() {
                 for (p, q) in recorded[i].iter().enumerate() {
-                    if let Some(q) = q {
-                        let r = q.coords - rmean[p];
-                        let (u, v) = (&a[k][p], &b[k][p]);
-                        aa += u.dot(u);
-                        ab += u.dot(v);
-                        bb += v.dot(v);
-                        ar += u.dot(&r);
-                        br += v.dot(&r);
-                        rr += r.dot(&r);
+                    if q.is_some() {
+                        ab += a[k][p].dot(&b[k][p]);
                     }
                 }
             }
+            best.total = rr;
             let residual = |cr: f64, cd: f64| {
                 rr - 2.0 * (cr * ar + cd * br) + cr * cr * aa + 2.0 * cr * cd * ab + cd * cd * bb
             };
@@ -498,22 +597,37 @@ fn linearised_start(
             }
             for (cr, cd) in candidates {
                 let res = residual(cr, cd);
-                if res < best.0 {
+                if res < best.residual {
                     let phase = |s: usize| psi + wrap_angle(2.0 * PI * s as f64 / SHIFTS as f64);
-                    best = (
-                        res,
-                        [
-                            (cr * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
-                            (cd * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
-                            phase(sr),
-                            phase(sd),
-                        ],
-                    );
+                    best.residual = res.max(0.0);
+                    best.x = [
+                        (cr * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
+                        (cd * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
+                        phase(sr),
+                        phase(sd),
+                    ];
                 }
             }
         }
     }
-    Ok(best.1)
+    best
+}
+
+/// A starting point from a linearised model (2 model runs, [`linear_basis`]), the best
+/// [`linearised_fit`]. Returns (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm).
+#[allow(clippy::too_many_arguments)]
+fn linearised_start(
+    model: &mut dyn MarkerSource,
+    recorded: &[Vec<Option<Point3<f64>>>],
+    times: &[f64],
+    f: f64,
+    psi: f64,
+    abdominals: Wave,
+    inspiratory_fraction: f64,
+    rate: f64,
+) -> Result<[f64; 4]> {
+    let basis = linear_basis(model, f, psi, abdominals, inspiratory_fraction, rate)?;
+    Ok(linearised_fit(&basis, recorded, times).x)
 }
 
 /// Model runs spent by [`linearised_start`].
@@ -684,7 +798,6 @@ pub fn fit_marker_frames(
     } else if linearised {
         linearised_start(
             model,
-            &rest,
             &recorded,
             &times,
             f,

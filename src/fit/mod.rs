@@ -11,6 +11,7 @@
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
+//! | [`orient`] | the pose of a marker set on the body: shape candidates, front from the breathing motion, short fits |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
@@ -28,6 +29,7 @@ pub mod markers;
 pub mod mismatch;
 pub mod named;
 pub mod optimize;
+pub mod orient;
 pub mod principal;
 pub mod recording;
 pub mod report;
@@ -39,6 +41,7 @@ pub mod synth;
 pub use fitting::{Fit, FitOptions, Method, fit_marker_frames, fit_recording};
 pub use markers::{Format, Markers, ReadOptions};
 pub use named::{BoundRecording, MarkerSetFit, bind_recording, fit_any_markers};
+pub use orient::{Orientation, PoseOptions};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

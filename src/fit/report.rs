@@ -384,6 +384,7 @@ pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value 
         .collect();
     json!({
         "method": "principal-axes start (24 axis orderings), trimmed ICP (best 80 %) against the skin surface, Umeyama similarity",
+        "pose": pose_json(&bound.orientation),
         "markers_recorded": recorded,
         "markers_bound": bound.set.len(),
         "labels_bound": bound.set.labels,
@@ -407,6 +408,28 @@ pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value 
     })
 }
 
+/// How the pose of a marker set was chosen: every candidate pose with its registration
+/// score, the share of its inspiratory motion pointing forwards, its short-fit residual
+/// and its rotation from the chosen one.
+pub fn pose_json(o: &super::Orientation) -> Value {
+    json!({
+        "method": "distinct poses within the registration score margin; those whose inspiratory motion (signed outward) points forwards, or that put the --anterior markers on the front; the smallest residual of the linearised fit",
+        "chosen": o.chosen,
+        "frequency_hz": o.frequency_hz,
+        "candidates": o.candidates.iter().map(|c| json!({
+            "registration_score_m2": c.registration.score,
+            "registration_rms_m": c.registration.rms,
+            "markers_bound": c.registration.attached.len(),
+            "front_share": c.front,
+            "anterior_markers_in_front": c.anterior_ok,
+            "short_fit_rms_m": c.short_fit.rms_m(),
+            "short_fit_unexplained": c.short_fit.unexplained(),
+            "rotation_from_chosen_deg": c.from_chosen_deg,
+        })).collect::<Vec<_>>(),
+        "warnings": o.warnings,
+    })
+}
+
 /// A few lines on the registration of a marker set (see [`marker_set_json`]).
 pub fn marker_set_summary(bound: &super::BoundRecording, recorded: usize) -> String {
     let r = &bound.registration;
@@ -418,6 +441,15 @@ pub fn marker_set_summary(bound: &super::BoundRecording, recorded: usize) -> Str
         r.to_model.scale,
         r.to_model.rotation.angle().to_degrees()
     );
+    let o = &bound.orientation;
+    let c = &o.candidates[o.chosen];
+    s.push_str(&format!(
+        "\npose                  chosen of {} candidate poses by the breathing motion: front share {:+.2}, short-fit residual {:.2} mm ({:.0} % of the motion unexplained)",
+        o.candidates.len(),
+        c.front,
+        c.short_fit.rms_m() * 1e3,
+        100.0 * c.short_fit.unexplained()
+    ));
     for (l, d) in &bound.excluded {
         if d.is_finite() {
             s.push_str(&format!(
