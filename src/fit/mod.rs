@@ -8,6 +8,7 @@
 //! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
 //! | [`named`] | recordings of any marker set: registration to the skin without correspondences, binding, fit |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
+//! | [`quality`] | what a fit's figures mean: noise floor (local cubic fits, pre-filter check), motion explained, bounds, verdict |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
@@ -31,6 +32,7 @@ pub mod named;
 pub mod optimize;
 pub mod orient;
 pub mod principal;
+pub mod quality;
 pub mod recording;
 pub mod report;
 pub mod size;

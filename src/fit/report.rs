@@ -131,12 +131,14 @@ pub fn fit_json(
     breaths: Option<&BreathReport>,
 ) -> Value {
     let mut m = drive_fmi(&fit.drive);
-    let noise_floor = super::fitting::estimated_noise_floor(&fit.times, &fit.recorded);
+    let q = super::quality::quality(fit);
+    let noise_floor = q.noise.floor_m;
     let rot = fit.to_model.rotation.angle().to_degrees();
     let extra = json!({
         "cost_m": fit.cost_m,
         "noise_floor_estimate_m": noise_floor,
         "cost_over_noise_floor_estimate": fit.cost_m / noise_floor,
+        "quality": quality_json(&q),
         "initial_cost_m": fit.initial_cost_m,
         "skin_fit_error_m": match fit.skin_fit {
             Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
@@ -150,6 +152,7 @@ pub fn fit_json(
         "evaluations": fit.evaluations,
         "evaluations_ahead_unused": fit.unused_ahead,
         "converged": fit.converged,
+        "converged_means": "the search met its tolerances (simplex size and cost spread); it says nothing of how well the model explains the recording (see quality)",
         "wall_s": fit.wall_s,
         "delta_phase": fit.delta_phase,
         "breaths": breaths.map_or(json!([]), |r| r.json_breaths()),
@@ -193,6 +196,39 @@ pub fn fit_json(
         m.extend(e);
     }
     Value::Object(m)
+}
+
+/// The `quality` entry of the result JSON (see [`super::quality`]).
+pub fn quality_json(q: &super::quality::Quality) -> Value {
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    json!({
+        "noise": {
+            "method": "local cubic fits over an eighth of a breath per marker coordinate (Savitzky-Golay residual, MAD), checked against second differences",
+            "sigma_m": finite(q.noise.sigma_m),
+            "floor_m": finite(q.noise.floor_m),
+            "second_difference_sigma_m": finite(q.noise.second_difference_sigma_m),
+            "prefiltered": q.noise.prefiltered,
+            "window_samples": q.noise.window,
+            "residuals": q.noise.samples,
+        },
+        "variance_explained": {
+            "about": "the recorded motion about each marker's mean",
+            "overall": finite(q.explained.overall),
+            "above_noise": finite(q.explained.above_noise),
+            "per_marker": q.explained.per_marker.iter().map(|v| finite(*v)).collect::<Vec<_>>(),
+            "motion_rms_m": q.explained.motion_rms_m,
+            "residual_rms_m": q.explained.residual_rms_m,
+            "split": {
+                "drive": finite(q.explained.above_noise),
+                "sway": Value::Null,
+                "drift": Value::Null,
+                "note": "sway and drift are not removed by this fit: the drive's share is of all the motion above the noise",
+            },
+        },
+        "drive_parameters_at_bounds": q.at_bounds,
+        "explains_recording": q.explains,
+        "notes": q.notes,
+    })
 }
 
 fn create_parent(path: &Path) -> Result<()> {
@@ -332,6 +368,35 @@ pub fn truth_json(
 /// The text summary of a fit.
 pub fn summary(fit: &Fit) -> String {
     let d = &fit.drive;
+    let q = super::quality::quality(fit);
+    let explained = if q.explained.above_noise.is_finite() {
+        format!(
+            "{:.0} % of the markers' motion about their means ({:.0} % above the noise; sway and drift not removed)",
+            100.0 * q.explained.overall,
+            100.0 * q.explained.above_noise
+        )
+    } else {
+        format!(
+            "{:.0} % of the markers' motion about their means (it does not rise above the noise)",
+            100.0 * q.explained.overall
+        )
+    };
+    let noise = format!(
+        "{:.3} mm (local cubic fits; sigma {:.3} mm per coordinate), cost {:.2} x the floor{}",
+        q.noise.floor_m * 1e3,
+        q.noise.sigma_m * 1e3,
+        fit.cost_m / q.noise.floor_m,
+        if q.noise.prefiltered {
+            "; filtered before export?"
+        } else {
+            ""
+        }
+    );
+    let notes: String = q
+        .notes
+        .iter()
+        .map(|n| format!("\nquality               {n}"))
+        .collect();
     format!(
         "breathing frequency   {:.4} Hz ({:.1} breaths/min)\n\
          drive.ribs.amplitude      {:.4}\n\
@@ -342,7 +407,9 @@ pub fn summary(fit: &Fit) -> String {
          registration          mean {:.2} mm, rms {:.2} mm, rotation {:.1} deg\n\
          cost                  {:.3} mm (start {:.3} mm)\n\
          evaluations           {} ({}){}{}\n\
-         wall time             {:.2} s",
+         wall time             {:.2} s\n\
+         explained             {}\n\
+         noise floor           {}{}",
         d.frequency,
         d.frequency * 60.0,
         d.ribs.amplitude,
@@ -357,7 +424,11 @@ pub fn summary(fit: &Fit) -> String {
         fit.initial_cost_m * 1e3,
         fit.evaluations,
         fit.method.name(),
-        if fit.converged { ", converged" } else { "" },
+        if fit.converged {
+            ", search converged"
+        } else {
+            ", search stopped on its budget"
+        },
         if fit.unused_ahead > 0 {
             format!(
                 "; {} more evaluated ahead on a second thread and not used",
@@ -366,7 +437,10 @@ pub fn summary(fit: &Fit) -> String {
         } else {
             String::new()
         },
-        fit.wall_s
+        fit.wall_s,
+        explained,
+        noise,
+        notes
     )
 }
 
