@@ -123,6 +123,12 @@ pub struct FitArgs {
     /// given or the first frame registers with rms over 5 mm.
     #[arg(long)]
     pub no_fit_size: bool,
+    /// Keep each marker's slow drift in the cost. By default a fit that compares each
+    /// marker about its own mean (named sets, a stranger's grid, --marker-offsets) also
+    /// removes each marker coordinate's drift, a linear spline with knots at least three
+    /// breaths apart, in closed form at each evaluation (docs/fit_report.md).
+    #[arg(long)]
+    pub no_drift: bool,
     /// Labels of markers on the front of the trunk, comma separated (a named marker set):
     /// the pose is the one that puts them on the skin facing forwards, rather than the one
     /// the breathing motion points to (docs/recordings.md, "The pose of a marker set").
@@ -274,6 +280,8 @@ pub struct FitFlags {
     pub fit_size: bool,
     /// Never estimate the size (`--no-fit-size`).
     pub no_fit_size: bool,
+    /// Keep each marker's drift in the cost (`--no-drift`).
+    pub no_drift: bool,
     /// What the user says of a named marker set's pose (`--anterior`).
     pub pose: PoseOptions,
 }
@@ -292,6 +300,7 @@ pub fn fit_file(
         fit_size,
         no_fit_size,
         pose,
+        ..
     } = flags;
     let skin_fit = *skin_fit;
     let (recording, mut config) = read_for_fit(recording_path, read, model)?;
@@ -395,16 +404,25 @@ pub fn fit_file(
     };
     let options = &FitOptions {
         marker_offsets: about_means.is_some(),
+        drift: about_means.is_some() && !flags.no_drift,
         ..options.clone()
     };
     let cost_json = serde_json::json!({
         "about_marker_means": about_means.is_some(),
+        "drift_removed": options.drift,
         "why": about_means.unwrap_or("the grid of a given subject: the thesis's eq. 3.1 after one rigid pose correction"),
     });
     println!(
         "cost basis            {}",
         match about_means {
-            Some(why) => format!("each marker's motion about its own mean ({why})"),
+            Some(why) => format!(
+                "each marker's motion about its own mean ({why}){}",
+                if options.drift {
+                    ", each marker's slow drift removed (--no-drift keeps it)"
+                } else {
+                    ""
+                }
+            ),
             None => "marker positions after one rigid pose correction (thesis eq. 3.1)".into(),
         }
     );
@@ -624,6 +642,7 @@ pub fn main(args: &FitArgs) -> Result<()> {
             skin_fit: args.skin_fit,
             fit_size: args.fit_size,
             no_fit_size: args.no_fit_size,
+            no_drift: args.no_drift,
             pose: PoseOptions {
                 anterior: args.anterior.clone(),
             },

@@ -107,6 +107,11 @@ pub struct FitOptions {
     /// skin point by its unknown placement error and its height above the skin (half a
     /// 10-14 mm motion-capture marker); off (the thesis's eq. 3.1) for the grid.
     pub marker_offsets: bool,
+    /// Remove each marker coordinate's slow drift (a linear spline, knots at least three
+    /// breaths apart, [`super::drift`]) from the cost in closed form at each evaluation
+    /// (variable projection); implies comparing each marker about its own mean. The fit
+    /// then reports each drive parameter's sensitivity before and after the projection.
+    pub drift: bool,
 }
 
 impl Default for FitOptions {
@@ -123,6 +128,7 @@ impl Default for FitOptions {
             start: None,
             threads: 1,
             marker_offsets: false,
+            drift: false,
         }
     }
 }
@@ -176,7 +182,39 @@ pub struct Fit {
     pub grid: (usize, usize),
     /// The recording's breaths, read off its principal displacement.
     pub breathing: RecordingBreaths,
+    /// Knot times of the drift spline removed by the cost [s] (None: no drift removed).
+    pub drift_knots: Option<Vec<f64>>,
+    /// Each drive parameter's sensitivity at the optimum, before and after the drift is
+    /// projected out (empty without drift).
+    pub sensitivity: Vec<Sensitivity>,
 }
+
+/// How much a drive parameter moves the markers at the fit's optimum: the root mean square
+/// over the tracked samples of the markers' displacement per unit of the parameter
+/// (forward difference; 4 model runs after the search), about each marker's mean and after
+/// the drift spline is projected out of it. A
+/// parameter whose effect the projection removes is one the recording cannot tell from
+/// drift.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensitivity {
+    /// FMI name of the parameter.
+    pub name: &'static str,
+    /// RMS marker displacement per unit of the parameter, about each marker's mean [m per
+    /// unit].
+    pub raw_m: f64,
+    /// The same after the drift is projected out [m per unit].
+    pub projected_m: f64,
+}
+
+/// Forward-difference steps of the sensitivities: amplitude 0.01, phase 0.02 rad.
+const SENSITIVITY_STEPS: [f64; 4] = [0.01, 0.01, 0.02, 0.02];
+/// FMI names of the fitted parameters, in the search's order.
+const PARAMETER_NAMES: [&str; 4] = [
+    "drive.ribs.amplitude",
+    "drive.diaphragm.amplitude",
+    "drive.ribs.phase",
+    "drive.diaphragm.phase",
+];
 
 /// Wraps an angle to (-pi, pi].
 pub fn wrap_angle(a: f64) -> f64 {
@@ -645,6 +683,7 @@ struct CostRun<'a, S: MarkerSource + ?Sized, D> {
     traj: Trajectory,
     pairs: Pairs,
     centred: bool,
+    drift: Option<super::drift::DriftBasis>,
 }
 
 impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
@@ -662,6 +701,7 @@ impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
             traj: Trajectory::default(),
             pairs: Pairs::default(),
             centred: false,
+            drift: None,
         }
     }
 
@@ -670,6 +710,9 @@ impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
         let drive = (self.drive_of)(x);
         self.source
             .run(&[(0.0, drive)], self.times, false, &mut self.traj)?;
+        if let Some(basis) = &self.drift {
+            return Ok(basis.projected_cost(&self.traj.markers, self.recorded));
+        }
         if self.centred {
             return Ok(centred_cost(&self.traj.markers, self.recorded));
         }
@@ -845,11 +888,17 @@ pub fn fit_marker_frames(
         None
     };
     let mut main_run = CostRun::new(&mut *model, &recorded, &model_times, &drive_of);
-    main_run.centred = options.marker_offsets;
+    let about_means = options.marker_offsets || options.drift;
+    let drift_basis = options
+        .drift
+        .then(|| super::drift::DriftBasis::new(&times, f));
+    main_run.centred = about_means;
+    main_run.drift = drift_basis.clone();
     let mut cost = |x: &[f64]| main_run.cost(x);
     let mut spare_run = spare_model.as_deref_mut().map(|spare| {
         let mut run = CostRun::new(spare, &recorded, &model_times, &drive_of);
-        run.centred = options.marker_offsets;
+        run.centred = about_means;
+        run.drift = drift_basis.clone();
         run
     });
     let mut spare_cost = spare_run.as_mut().map(|run| move |x: &[f64]| run.cost(x));
@@ -890,7 +939,70 @@ pub fn fit_marker_frames(
     drive.diaphragm.phase = wrap_angle(drive.diaphragm.phase);
     let mut fitted = Trajectory::default();
     model.run(&[(0.0, drive_of(&m.x))], &model_times, true, &mut fitted)?;
-    let correction = if options.marker_offsets {
+    let mut sensitivity = Vec::new();
+    if let Some(basis) = &drift_basis {
+        let mut moved = Trajectory::default();
+        for i in 0..4 {
+            let mut x = m.x.clone();
+            let step = if x[i] + SENSITIVITY_STEPS[i] > ahi && i < 2 {
+                -SENSITIVITY_STEPS[i]
+            } else {
+                SENSITIVITY_STEPS[i]
+            };
+            x[i] += step;
+            model.run(&[(0.0, drive_of(&x))], &model_times, false, &mut moved)?;
+            let diff: Vec<Vec<Option<Point3<f64>>>> = moved
+                .markers
+                .iter()
+                .zip(&fitted.markers)
+                .zip(&recorded)
+                .map(|((a, b), r)| {
+                    a.iter()
+                        .zip(b)
+                        .zip(r)
+                        .map(|((a, b), q)| q.map(|_| Point3::from((a - b) / step)))
+                        .collect()
+                })
+                .collect();
+            let zeros: Vec<Vec<Point3<f64>>> = diff
+                .iter()
+                .map(|f| vec![Point3::origin(); f.len()])
+                .collect();
+            let drift = basis.drift(&zeros, &diff);
+            // Before: about each marker's mean (what the cost without drift sees).
+            let points = diff.first().map_or(0, Vec::len);
+            let mut mean = vec![nalgebra::Vector3::zeros(); points];
+            let mut count = vec![0usize; points];
+            for d in &diff {
+                for (p, q) in d.iter().enumerate() {
+                    if let Some(q) = q {
+                        mean[p] += q.coords;
+                        count[p] += 1;
+                    }
+                }
+            }
+            for (m, c) in mean.iter_mut().zip(&count) {
+                *m /= (*c).max(1) as f64;
+            }
+            let (mut raw, mut projected, mut n) = (0.0, 0.0, 0usize);
+            for (d, dr) in diff.iter().zip(&drift) {
+                for (p, (q, e)) in d.iter().zip(dr).enumerate() {
+                    if let Some(q) = q {
+                        raw += (q.coords - mean[p]).norm_squared();
+                        projected += (q.coords - e).norm_squared();
+                        n += 1;
+                    }
+                }
+            }
+            let n = n.max(1) as f64;
+            sensitivity.push(Sensitivity {
+                name: PARAMETER_NAMES[i],
+                raw_m: (raw / n).sqrt(),
+                projected_m: (projected / n).sqrt(),
+            });
+        }
+    }
+    let correction = if about_means {
         RigidTransform::identity()
     } else {
         aligned_cost(&fitted.markers, &recorded, &mut Pairs::default())?.1
@@ -926,6 +1038,8 @@ pub fn fit_marker_frames(
         method: options.method,
         grid: recording.grid,
         breathing,
+        drift_knots: drift_basis.map(|b| b.knots),
+        sensitivity,
     })
 }
 

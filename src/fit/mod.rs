@@ -11,6 +11,7 @@
 //! | [`quality`] | what a fit's figures mean: noise floor (local cubic fits, pre-filter check), motion explained, bounds, verdict |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
+//! | [`drift`] | each marker's slow drift (linear spline, knots three breaths apart) projected out of the cost |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
 //! | [`orient`] | the pose of a marker set on the body: shape candidates, front from the breathing motion, short fits |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
@@ -24,6 +25,7 @@
 
 pub mod breathing;
 pub mod clinical;
+pub mod drift;
 pub mod figure;
 pub mod fitting;
 pub mod markers;

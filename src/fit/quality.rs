@@ -17,12 +17,13 @@
 //!   flagged as filtered and its floor is a lower bound of the measurement noise.
 //! - **Variance explained.** Of the recorded motion about each marker's mean, the share the
 //!   fitted markers' motion (about theirs) explains: overall, per marker, and above the
-//!   noise (the noise's 3 sigma^2 per sample taken out of both sums). The split into drive,
-//!   sway and drift gives the drive's share; sway and drift are not removed by this fit and
-//!   are reported as such (null).
-//! - **Verdict.** When the drive explains under half of the motion above the noise, the
-//!   report says "the model does not explain this recording"; "converged" describes the
-//!   search only.
+//!   noise (the noise's 3 sigma^2 per sample taken out of both sums). When the fit removed
+//!   each marker's drift ([`super::drift`]), the drift's share of the motion is reported and
+//!   the drive's share is of the motion left after the drift; sway is not removed by this
+//!   fit (null).
+//! - **Verdict.** When the drive explains under half of the motion above the noise left
+//!   after the drift, the report says "the model does not explain this recording";
+//!   "converged" describes the search only.
 
 use super::Fit;
 use nalgebra::{Matrix4, Point3, Vector3, Vector4};
@@ -235,8 +236,13 @@ pub const EXPLAINS_AT_LEAST: f64 = 0.5;
 pub struct Quality {
     /// The recording's noise.
     pub noise: NoiseFloor,
-    /// The shares of the motion the drive explains.
+    /// The shares of the motion the fitted markers explain (without the drift).
     pub explained: Explained,
+    /// With drift removed: the drift's share of the motion about the means.
+    pub drift_share: Option<f64>,
+    /// With drift removed: the shares of the motion left after the drift that the drive
+    /// explains.
+    pub after_drift: Option<Explained>,
     /// Drive parameters the search left at a bound, e.g. `drive.ribs.amplitude = 0`.
     pub at_bounds: Vec<String>,
     /// Whether the drive explains at least half of the motion above the noise.
@@ -251,7 +257,31 @@ const AT_BOUND: f64 = 1e-3;
 /// The quality of `fit` (see the module doc).
 pub fn quality(fit: &Fit) -> Quality {
     let noise = noise_floor(&fit.times, &fit.recorded, fit.drive.frequency);
-    let explained = explained(&fit.recorded, &fit.fitted.markers, noise.sigma_m);
+    let whole = explained(&fit.recorded, &fit.fitted.markers, noise.sigma_m);
+    let (drift_share, after_drift) = match &fit.drift_knots {
+        None => (None, None),
+        Some(_) => {
+            let basis = super::drift::DriftBasis::new(&fit.times, fit.drive.frequency);
+            let drift = basis.drift(&fit.fitted.markers, &fit.recorded);
+            let less: Vec<Vec<Option<Point3<f64>>>> = fit
+                .recorded
+                .iter()
+                .zip(&drift)
+                .map(|(r, d)| r.iter().zip(d).map(|(q, e)| q.map(|q| q - e)).collect())
+                .collect();
+            // The drift's share: what the drift alone explains of the motion about the means.
+            let drift_points: Vec<Vec<Point3<f64>>> = drift
+                .iter()
+                .map(|d| d.iter().map(|e| Point3::from(*e)).collect())
+                .collect();
+            let alone = explained(&fit.recorded, &drift_points, f64::NAN);
+            (
+                Some(alone.overall),
+                Some(explained(&less, &fit.fitted.markers, noise.sigma_m)),
+            )
+        }
+    };
+    let explained = whole;
     let (lo, hi) = super::fitting::AMPLITUDE_RANGE;
     let mut at_bounds = Vec::new();
     for (name, a) in [
@@ -264,18 +294,24 @@ pub fn quality(fit: &Fit) -> Quality {
             at_bounds.push(format!("{name} = {hi} (its upper bound)"));
         }
     }
-    let share = if explained.above_noise.is_finite() {
-        explained.above_noise
+    let judged = after_drift.as_ref().unwrap_or(&explained);
+    let share = if judged.above_noise.is_finite() {
+        judged.above_noise
     } else {
-        explained.overall
+        judged.overall
     };
     let explains = share >= EXPLAINS_AT_LEAST;
     let mut notes = Vec::new();
     if !explains {
         notes.push(format!(
             "the model does not explain this recording: the drive explains {:.0} % of the markers' \
-             motion above the noise (under {:.0} %); sway and drift are not removed by this fit",
+             motion above the noise{} (under {:.0} %); sway is not removed by this fit",
             100.0 * share,
+            if after_drift.is_some() {
+                " left after the drift"
+            } else {
+                " (drift not removed)"
+            },
             100.0 * EXPLAINS_AT_LEAST
         ));
     }
@@ -296,6 +332,8 @@ pub fn quality(fit: &Fit) -> Quality {
     Quality {
         noise,
         explained,
+        drift_share,
+        after_drift,
         at_bounds,
         explains,
         notes,

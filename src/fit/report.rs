@@ -139,6 +139,16 @@ pub fn fit_json(
         "noise_floor_estimate_m": noise_floor,
         "cost_over_noise_floor_estimate": fit.cost_m / noise_floor,
         "quality": quality_json(&q),
+        "drift": fit.drift_knots.as_ref().map(|k| json!({
+            "method": "per marker coordinate a linear spline in time, knots at least three breaths apart, projected out of the cost in closed form at each evaluation (variable projection)",
+            "knots_s": k,
+        })),
+        "sensitivity": fit.sensitivity.iter().map(|p| json!({
+            "parameter": p.name,
+            "rms_marker_displacement_per_unit_m": p.raw_m,
+            "after_drift_projection_m": p.projected_m,
+            "kept_by_projection": p.projected_m / p.raw_m,
+        })).collect::<Vec<_>>(),
         "initial_cost_m": fit.initial_cost_m,
         "skin_fit_error_m": match fit.skin_fit {
             Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
@@ -218,11 +228,20 @@ pub fn quality_json(q: &super::quality::Quality) -> Value {
             "per_marker": q.explained.per_marker.iter().map(|v| finite(*v)).collect::<Vec<_>>(),
             "motion_rms_m": q.explained.motion_rms_m,
             "residual_rms_m": q.explained.residual_rms_m,
-            "split": {
-                "drive": finite(q.explained.above_noise),
-                "sway": Value::Null,
-                "drift": Value::Null,
-                "note": "sway and drift are not removed by this fit: the drive's share is of all the motion above the noise",
+            "split": match (&q.drift_share, &q.after_drift) {
+                (Some(d), Some(a)) => json!({
+                    "drift": finite(*d),
+                    "drive": finite(a.above_noise),
+                    "drive_overall": finite(a.overall),
+                    "sway": Value::Null,
+                    "note": "drift: its share of the motion about the means; drive: its share of the motion left after the drift, above the noise; sway is not removed by this fit",
+                }),
+                _ => json!({
+                    "drive": finite(q.explained.above_noise),
+                    "sway": Value::Null,
+                    "drift": Value::Null,
+                    "note": "sway and drift are not removed by this fit: the drive's share is of all the motion above the noise",
+                }),
             },
         },
         "drive_parameters_at_bounds": q.at_bounds,
@@ -369,7 +388,14 @@ pub fn truth_json(
 pub fn summary(fit: &Fit) -> String {
     let d = &fit.drive;
     let q = super::quality::quality(fit);
-    let explained = if q.explained.above_noise.is_finite() {
+    let explained = if let (Some(d), Some(a)) = (q.drift_share, &q.after_drift) {
+        format!(
+            "{:.0} % of the markers' motion about their means is drift; the drive explains {:.0} % of the rest ({:.0} % above the noise; sway not removed)",
+            100.0 * d,
+            100.0 * a.overall,
+            100.0 * a.above_noise
+        )
+    } else if q.explained.above_noise.is_finite() {
         format!(
             "{:.0} % of the markers' motion about their means ({:.0} % above the noise; sway and drift not removed)",
             100.0 * q.explained.overall,
@@ -392,11 +418,20 @@ pub fn summary(fit: &Fit) -> String {
             ""
         }
     );
-    let notes: String = q
+    let mut notes: String = q
         .notes
         .iter()
         .map(|n| format!("\nquality               {n}"))
         .collect();
+    for p in &fit.sensitivity {
+        notes.push_str(&format!(
+            "\nsensitivity           {}: {:.2} mm per unit, {:.2} after the drift is projected out ({:.0} % kept)",
+            p.name,
+            p.raw_m * 1e3,
+            p.projected_m * 1e3,
+            100.0 * p.projected_m / p.raw_m
+        ));
+    }
     format!(
         "breathing frequency   {:.4} Hz ({:.1} breaths/min)\n\
          drive.ribs.amplitude      {:.4}\n\
