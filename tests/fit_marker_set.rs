@@ -8,8 +8,8 @@
 use breathing_torso::anatomy::Subject;
 use breathing_torso::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions};
 use breathing_torso::fit::{
-    Camera, FitOptions, Format, Markers, ReadOptions, SynthOptions, TorsoMarkers, Units,
-    fit_any_markers, synthesize,
+    Camera, FitOptions, Format, Markers, PoseOptions, ReadOptions, SynthOptions, TorsoMarkers,
+    Units, fit_any_markers, synthesize,
 };
 use breathing_torso::model::Drive;
 use breathing_torso::{Config, Torso};
@@ -83,6 +83,7 @@ fn fit_case(set_name: &str, factor: f64) -> (f64, usize) {
         config(fitting.clone()),
         &markers,
         &SurfaceOptions::default(),
+        &PoseOptions::default(),
         &FitOptions {
             max_evals: 200,
             ..FitOptions::default()

@@ -20,12 +20,14 @@ pub struct SubjectArgs {
     /// Age [years].
     #[arg(long, default_value_t = 30.0)]
     pub age: f64,
-    /// Stature [m].
-    #[arg(long, default_value_t = 1.75)]
-    pub stature: f64,
-    /// Body mass [kg].
-    #[arg(long, default_value_t = 75.0)]
-    pub mass: f64,
+    /// Stature [m] [default: 1.75; `torso fit`: estimated from the recording when neither
+    /// --stature nor --mass is given].
+    #[arg(long)]
+    pub stature: Option<f64>,
+    /// Body mass [kg] [default: 75; `torso fit`: estimated from the recording when neither
+    /// --stature nor --mass is given].
+    #[arg(long)]
+    pub mass: Option<f64>,
     /// Breast size, 0-1.
     #[arg(long, default_value_t = 0.0)]
     pub breast_size: f64,
@@ -39,6 +41,11 @@ pub struct SubjectArgs {
 }
 
 impl SubjectArgs {
+    /// Whether the subject's size was given (`--stature` or `--mass`).
+    pub fn size_given(&self) -> bool {
+        self.stature.is_some() || self.mass.is_some()
+    }
+
     /// The subject described by the options; an error names the flag.
     pub fn subject(&self) -> Result<Subject> {
         let sex = match self.sex.as_str() {
@@ -49,8 +56,8 @@ impl SubjectArgs {
         let s = Subject {
             sex,
             age: self.age,
-            stature: self.stature,
-            mass: self.mass,
+            stature: self.stature.unwrap_or(Subject::default().stature),
+            mass: self.mass.unwrap_or(Subject::default().mass),
             breast_size: self.breast_size,
             posture: Posture::from_name(&self.posture).map_err(flag_error)?,
         };

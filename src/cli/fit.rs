@@ -12,10 +12,10 @@ use crate::fit::report::{
     LOD_KEY, marker_set_json, marker_set_summary, model_provenance, provenance_differences,
     summary, write_fit_report,
 };
-use crate::fit::size::{SizeOptions, estimate_size};
+use crate::fit::size::{SizeOptions, estimate_size, registration_residual};
 use crate::fit::{
-    FitOptions, Markers, Method, ReadOptions, Recording, TorsoMarkers, Units, fit_any_markers,
-    fit_recording,
+    FitOptions, Markers, Method, PoseOptions, ReadOptions, Recording, TorsoMarkers, Units,
+    bind_recording, fit_any_markers, fit_recording,
 };
 use crate::model::Drive;
 use crate::{Error, Result};
@@ -106,15 +106,34 @@ pub struct FitArgs {
     /// Compare each grid marker's trajectory about its own mean over the recording, as named
     /// marker sets always are: the subject's static shape then stays out of the cost and only
     /// the markers' motion is fitted (for a subject whose shape differs from the model's).
-    /// Default for named sets; off for the grid (the thesis's eq. 3.1).
+    /// Always so for named sets; for the grid, the default when neither --stature nor
+    /// --mass is given (a stranger's shape), otherwise the thesis's eq. 3.1. The result
+    /// JSON's `cost_basis` says which and why.
     #[arg(long)]
     pub marker_offsets: bool,
     /// Estimate the subject's stature and mass from the recording's first frame before the
     /// fit, starting from --stature and --mass (sex, age, breast size and posture as given):
     /// the pair whose model registers best to the markers (docs/recordings.md). The result
-    /// JSON's `subject_size` says what was found; its `model` carries the estimate.
-    #[arg(long)]
+    /// JSON's `subject_size` says what was found and why; its `model` carries the estimate.
+    /// Done by default when neither --stature nor --mass is given, or when the first frame
+    /// registers to the given subject's model with rms over 5 mm (a warning says so).
+    #[arg(long, conflicts_with = "no_fit_size")]
     pub fit_size: bool,
+    /// Keep the given (or default) stature and mass: no size estimate even when neither is
+    /// given or the first frame registers with rms over 5 mm.
+    #[arg(long)]
+    pub no_fit_size: bool,
+    /// Keep each marker's slow drift in the cost. By default a fit that compares each
+    /// marker about its own mean (named sets, a stranger's grid, --marker-offsets) also
+    /// removes each marker coordinate's drift, a linear spline with knots at least three
+    /// breaths apart, in closed form at each evaluation (docs/fit_report.md).
+    #[arg(long)]
+    pub no_drift: bool,
+    /// Labels of markers on the front of the trunk, comma separated (a named marker set):
+    /// the pose is the one that puts them on the skin facing forwards, rather than the one
+    /// the breathing motion points to (docs/recordings.md, "The pose of a marker set").
+    #[arg(long, value_delimiter = ',')]
+    pub anterior: Vec<String>,
     /// Inspiratory fraction Ti/Ttot of the fitted drive, held fixed by the search: a number
     /// (0.2-0.8; 0.5 is the sine of thesis eq. 2.4) or `auto`, the median Ti/Ttot of the
     /// recording's breaths (docs/drive.md).
@@ -210,9 +229,15 @@ pub fn read_for_fit(
     );
     if !differences.is_empty() {
         eprintln!(
-            "warning: {} was made with another model than this fit's: {}",
+            "warning: {} was made with another model than this fit's: {}; fitting with this fit's \
+             model{}",
             path.display(),
-            differences.join(", ")
+            differences.join(", "),
+            if model.subject.size_given() {
+                ""
+            } else {
+                " (its stature and mass estimated from the recording)"
+            }
         );
     }
     if !is_grid_recording(&markers) {
@@ -239,6 +264,28 @@ pub fn read_for_fit(
     Ok((ForFit::Grid(recording), config))
 }
 
+/// Registration residual of the first frame to the given subject's model above which
+/// `torso fit` estimates the subject's size itself [m] (the issue's 5 mm: the grid of a
+/// subject 8 % taller and heavier registers with 8.09 mm to the default model and 2.66 mm
+/// after the estimate, docs/recordings.md).
+pub const SIZE_TRIGGER_RMS_M: f64 = 5e-3;
+
+/// What `torso fit` does beyond the search's options.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FitFlags {
+    /// Fit the model's skin to the grid (`--skin-fit`).
+    pub skin_fit: bool,
+    /// Estimate the subject's stature and mass first (`--fit-size`; also when no size is
+    /// given or the given one registers with rms over [`SIZE_TRIGGER_RMS_M`]).
+    pub fit_size: bool,
+    /// Never estimate the size (`--no-fit-size`).
+    pub no_fit_size: bool,
+    /// Keep each marker's drift in the cost (`--no-drift`).
+    pub no_drift: bool,
+    /// What the user says of a named marker set's pose (`--anterior`).
+    pub pose: PoseOptions,
+}
+
 /// Fits `recording_path` with a model from `model` and writes the outputs at `out`.
 pub fn fit_file(
     recording_path: &Path,
@@ -246,26 +293,83 @@ pub fn fit_file(
     model: &ModelArgs,
     out: &Path,
     options: &FitOptions,
-    skin_fit: bool,
-    fit_size: bool,
+    flags: &FitFlags,
 ) -> Result<crate::fit::Fit> {
+    let FitFlags {
+        skin_fit,
+        fit_size,
+        no_fit_size,
+        pose,
+        ..
+    } = flags;
+    let skin_fit = *skin_fit;
     let (recording, mut config) = read_for_fit(recording_path, read, model)?;
     prepare_output_file(out)?;
-    let size = if fit_size {
-        let (first, grid) = match &recording {
-            ForFit::Grid(r) => (&r.frames[0], true),
-            ForFit::Named(m) => (&m.frames[0], false),
+    let in_file = |e: Error| Error::State(format!("{}: {e}", recording_path.display()));
+    let size_given = model.subject.size_given();
+    let (first, grid) = match &recording {
+        ForFit::Grid(r) => (&r.frames[0], true),
+        ForFit::Named(m) => (&m.frames[0], false),
+    };
+    // A named set's pose at the given size: the start of the size search (the shape alone
+    // may prefer the pose turned about the long axis) and its registration residual.
+    let named_pose = match &recording {
+        ForFit::Grid(_) => None,
+        ForFit::Named(m) if !no_fit_size => {
+            let torso = crate::Torso::new_at_rest(config.clone())?;
+            let bound =
+                bind_recording(&torso, m, &SurfaceOptions::default(), pose).map_err(in_file)?;
+            Some((
+                unscaled(&bound.registration.to_model, &m.frames[0]),
+                bound.registration.rms,
+            ))
+        }
+        ForFit::Named(_) => None,
+    };
+    let why_size = if *no_fit_size {
+        None
+    } else if *fit_size {
+        Some("--fit-size".to_string())
+    } else if !size_given {
+        Some("no --stature or --mass was given".to_string())
+    } else {
+        let rms = match named_pose {
+            Some((_, rms)) => rms,
+            None => {
+                registration_residual(&config, first, true, &SurfaceOptions::default(), None)
+                    .map_err(in_file)?
+                    .0
+            }
         };
+        (rms > SIZE_TRIGGER_RMS_M).then(|| {
+            eprintln!(
+                "warning: the first frame registers to the given subject's model with rms {:.1} mm \
+                 (over {:.0} mm): estimating the subject's stature and mass from the recording \
+                 (pass --no-fit-size to keep the given ones)",
+                rms * 1e3,
+                SIZE_TRIGGER_RMS_M * 1e3
+            );
+            format!(
+                "the registration rms with the given subject, {:.1} mm, is over {:.0} mm",
+                rms * 1e3,
+                SIZE_TRIGGER_RMS_M * 1e3
+            )
+        })
+    };
+    let size = if let Some(why) = why_size {
         let size = estimate_size(
             &config,
             first,
             grid,
-            &SurfaceOptions::default(),
+            &SurfaceOptions {
+                start: named_pose.map(|p| p.0),
+                ..SurfaceOptions::default()
+            },
             &SizeOptions::default(),
         )
-        .map_err(|e| Error::State(format!("{}: {e}", recording_path.display())))?;
+        .map_err(in_file)?;
         println!(
-            "subject size          stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
+            "subject size          estimated ({why}): stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
             config.subject.stature,
             size.subject.stature,
             config.subject.mass,
@@ -276,6 +380,7 @@ pub fn fit_file(
         );
         let json = serde_json::json!({
             "method": "stature and mass minimising the first frame's rigid registration residual (bounded Nelder-Mead)",
+            "why": why,
             "stature_given_m": config.subject.stature,
             "mass_given_kg": config.subject.mass,
             "stature_m": size.subject.stature,
@@ -289,6 +394,38 @@ pub fn fit_file(
     } else {
         None
     };
+    // Each marker about its own mean: always for a named set; for the grid when asked or
+    // when the subject is a stranger (a shape the model does not have stays out of the cost).
+    let about_means = match &recording {
+        ForFit::Named(_) => Some("a named marker set (each marker stands off its skin point)"),
+        ForFit::Grid(_) if options.marker_offsets => Some("--marker-offsets"),
+        ForFit::Grid(_) if !size_given => Some("no --stature or --mass was given"),
+        ForFit::Grid(_) => None,
+    };
+    let options = &FitOptions {
+        marker_offsets: about_means.is_some(),
+        drift: about_means.is_some() && !flags.no_drift,
+        ..options.clone()
+    };
+    let cost_json = serde_json::json!({
+        "about_marker_means": about_means.is_some(),
+        "drift_removed": options.drift,
+        "why": about_means.unwrap_or("the grid of a given subject: the thesis's eq. 3.1 after one rigid pose correction"),
+    });
+    println!(
+        "cost basis            {}",
+        match about_means {
+            Some(why) => format!(
+                "each marker's motion about its own mean ({why}){}",
+                if options.drift {
+                    ", each marker's slow drift removed (--no-drift keeps it)"
+                } else {
+                    ""
+                }
+            ),
+            None => "marker positions after one rigid pose correction (thesis eq. 3.1)".into(),
+        }
+    );
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
     let bar = Progress::new("fit", options.max_evals, "evaluations").up_to();
@@ -306,6 +443,7 @@ pub fn fit_file(
                 config.clone(),
                 &markers,
                 &SurfaceOptions::default(),
+                pose,
                 options,
                 &mut |n, b| bar.update(n, format!("best cost {:.3} mm", b * 1e3)),
             )
@@ -321,6 +459,7 @@ pub fn fit_file(
                 FitExtras {
                     named_set: Some(&named_set),
                     size: size.as_ref(),
+                    cost: &cost_json,
                 },
             );
         }
@@ -350,8 +489,27 @@ pub fn fit_file(
         FitExtras {
             named_set: None,
             size: size.as_ref(),
+            cost: &cost_json,
         },
     )
+}
+
+/// The rigid transform (scale 1) with the rotation of `t` that maps the centroid of the
+/// tracked points of `frame` where `t` does: a pose found with a scale, as the start of a
+/// registration without one.
+fn unscaled(
+    t: &crate::anatomy::skin::RigidTransform,
+    frame: &[Option<nalgebra::Point3<f64>>],
+) -> crate::anatomy::skin::RigidTransform {
+    let tracked: Vec<nalgebra::Vector3<f64>> = frame.iter().flatten().map(|p| p.coords).collect();
+    let mean = nalgebra::Point3::from(
+        tracked.iter().sum::<nalgebra::Vector3<f64>>() / tracked.len().max(1) as f64,
+    );
+    crate::anatomy::skin::RigidTransform {
+        rotation: t.rotation,
+        translation: t.apply(&mean).coords - t.rotation * mean.coords,
+        scale: 1.0,
+    }
 }
 
 /// What a fit adds to its result JSON beyond the fit itself.
@@ -360,6 +518,8 @@ struct FitExtras<'a> {
     named_set: Option<&'a (crate::fit::BoundRecording, usize)>,
     /// The subject-size search (`--fit-size`), as written under `subject_size`.
     size: Option<&'a serde_json::Value>,
+    /// What the cost compares and why, as written under `cost_basis`.
+    cost: &'a serde_json::Value,
 }
 
 /// Ends a fit of `recording_path`: closes the progress bar, runs the fitted model's breaths
@@ -375,7 +535,11 @@ fn finish_fit(
     bar: &Progress,
     extras: FitExtras,
 ) -> Result<crate::fit::Fit> {
-    let FitExtras { named_set, size } = extras;
+    let FitExtras {
+        named_set,
+        size,
+        cost,
+    } = extras;
     // The search's count leaves out the linearised start's runs; the fit's count is whole.
     bar.update(fit.evaluations, "");
     bar.finish(format!("best cost {:.3} mm", fit.cost_m * 1e3));
@@ -389,14 +553,14 @@ fn finish_fit(
         Some(&breath),
         Some(&breaths),
     )?;
-    let mut extra = Vec::new();
+    let mut extra = vec![("cost_basis", cost.clone())];
     if let Some((bound, recorded)) = named_set {
         extra.push(("marker_set", marker_set_json(bound, *recorded)));
     }
     if let Some(size) = size {
         extra.push(("subject_size", size.clone()));
     }
-    if !extra.is_empty() {
+    {
         let text =
             std::fs::read_to_string(&outputs.json).map_err(|e| Error::io(&outputs.json, e))?;
         let mut json: serde_json::Value = serde_json::from_str(&text)
@@ -410,6 +574,9 @@ fn finish_fit(
     }
     if let Some((bound, recorded)) = named_set {
         println!("{}", marker_set_summary(bound, *recorded));
+        for w in &bound.orientation.warnings {
+            eprintln!("warning: {w}");
+        }
     }
     println!("{}", summary(&fit));
     println!(
@@ -471,8 +638,15 @@ pub fn main(args: &FitArgs) -> Result<()> {
         &args.model,
         &args.out,
         &options,
-        args.skin_fit,
-        args.fit_size,
+        &FitFlags {
+            skin_fit: args.skin_fit,
+            fit_size: args.fit_size,
+            no_fit_size: args.no_fit_size,
+            no_drift: args.no_drift,
+            pose: PoseOptions {
+                anterior: args.anterior.clone(),
+            },
+        },
     )
     .map(|_| ())
 }
@@ -587,8 +761,8 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         subject: SubjectArgs {
             sex: "male".into(),
             age: 30.0,
-            stature: 1.75,
-            mass: 75.0,
+            stature: Some(1.75),
+            mass: Some(75.0),
             breast_size: 0.0,
             posture: "standing".into(),
             lod: Some(0),
@@ -643,8 +817,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             threads: default_threads(),
             ..FitOptions::default()
         },
-        false,
-        false,
+        &FitFlags::default(),
     )?;
     println!("what these figures mean:");
     for note in FIT_NOTES {
@@ -758,8 +931,12 @@ pub struct SweepArgs {
     pub marker_offsets: bool,
     /// With --mismatch: estimate the subject's stature and mass from each recording's first
     /// frame before fitting (as `torso fit --fit-size`).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "no_fit_size")]
     pub fit_size: bool,
+    /// Keep the given (or default) stature and mass: no size estimate even when neither is
+    /// given or the first frame registers with rms over 5 mm.
+    #[arg(long)]
+    pub no_fit_size: bool,
 }
 
 /// Runs `torso fit-sweep --mismatch`.

@@ -107,6 +107,11 @@ pub struct FitOptions {
     /// skin point by its unknown placement error and its height above the skin (half a
     /// 10-14 mm motion-capture marker); off (the thesis's eq. 3.1) for the grid.
     pub marker_offsets: bool,
+    /// Remove each marker coordinate's slow drift (a linear spline, knots at least three
+    /// breaths apart, [`super::drift`]) from the cost in closed form at each evaluation
+    /// (variable projection); implies comparing each marker about its own mean. The fit
+    /// then reports each drive parameter's sensitivity before and after the projection.
+    pub drift: bool,
 }
 
 impl Default for FitOptions {
@@ -123,6 +128,7 @@ impl Default for FitOptions {
             start: None,
             threads: 1,
             marker_offsets: false,
+            drift: false,
         }
     }
 }
@@ -176,7 +182,39 @@ pub struct Fit {
     pub grid: (usize, usize),
     /// The recording's breaths, read off its principal displacement.
     pub breathing: RecordingBreaths,
+    /// Knot times of the drift spline removed by the cost [s] (None: no drift removed).
+    pub drift_knots: Option<Vec<f64>>,
+    /// Each drive parameter's sensitivity at the optimum, before and after the drift is
+    /// projected out (empty without drift).
+    pub sensitivity: Vec<Sensitivity>,
 }
+
+/// How much a drive parameter moves the markers at the fit's optimum: the root mean square
+/// over the tracked samples of the markers' displacement per unit of the parameter
+/// (forward difference; 4 model runs after the search), about each marker's mean and after
+/// the drift spline is projected out of it. A
+/// parameter whose effect the projection removes is one the recording cannot tell from
+/// drift.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensitivity {
+    /// FMI name of the parameter.
+    pub name: &'static str,
+    /// RMS marker displacement per unit of the parameter, about each marker's mean [m per
+    /// unit].
+    pub raw_m: f64,
+    /// The same after the drift is projected out [m per unit].
+    pub projected_m: f64,
+}
+
+/// Forward-difference steps of the sensitivities: amplitude 0.01, phase 0.02 rad.
+const SENSITIVITY_STEPS: [f64; 4] = [0.01, 0.01, 0.02, 0.02];
+/// FMI names of the fitted parameters, in the search's order.
+const PARAMETER_NAMES: [&str; 4] = [
+    "drive.ribs.amplitude",
+    "drive.diaphragm.amplitude",
+    "drive.ribs.phase",
+    "drive.diaphragm.phase",
+];
 
 /// Wraps an angle to (-pi, pi].
 pub fn wrap_angle(a: f64) -> f64 {
@@ -372,25 +410,31 @@ const BASIS_AMPLITUDE: f64 = 0.3;
 /// Phase shifts tried per family by [`linearised_start`].
 const SHIFTS: usize = 24;
 
-/// A starting point from a linearised model (2 model runs): the displacement from rest is
-/// taken as c_r D_r(t + s_r) + c_d D_d(t + s_d), with D_r and D_d the responses to the
-/// rib-cage and the diaphragm drive alone at amplitude 0.3 and phase `psi`, time-shifted by
-/// s in [0, 1/f) (a phase change of 2 pi f s in the periodic regime). Each basis response is
-/// simulated for three breaths and read in its third, as periodic. For each pair of
-/// shifts the non-negative least-squares (c_r, c_d) are solved; the best pair gives
-/// A = 0.3 c and phi = psi + 2 pi f s. Returns (x0, model runs used).
-#[allow(clippy::too_many_arguments)]
-fn linearised_start(
+/// The two basis responses of the linearised model ([`linearised_start`]): the markers'
+/// response to the rib-cage and to the diaphragm drive alone, at amplitude 0.3 and phase
+/// `psi`, one breath of each (after two breaths of settling) sampled every `h` seconds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearBasis {
+    /// Per family (rib cage, diaphragm), per sample, per marker: the marker's position.
+    runs: [Vec<Vec<Point3<f64>>>; 2],
+    /// Sample interval [s].
+    h: f64,
+    /// Breathing period [s].
+    period: f64,
+    /// Phase of both families' waves in the basis runs [rad].
+    psi: f64,
+}
+
+/// The two basis runs of the linearised model at frequency `f` (2 model runs, each three
+/// breaths from rest); `rate` is the recording's frame rate.
+pub fn linear_basis(
     model: &mut dyn MarkerSource,
-    rest: &[Point3<f64>],
-    recorded: &[Vec<Option<Point3<f64>>>],
-    times: &[f64],
     f: f64,
     psi: f64,
     abdominals: Wave,
     inspiratory_fraction: f64,
     rate: f64,
-) -> Result<[f64; 4]> {
+) -> Result<LinearBasis> {
     let period = 1.0 / f;
     let h = 1.0 / rate.max(1.0);
     // One breath of each basis response, after two breaths of settling: frame time t
@@ -398,8 +442,8 @@ fn linearised_start(
     // 2 period + (t mod period).
     let n = (period / h).ceil() as usize + 2;
     let grid: Vec<f64> = (0..n).map(|j| 2.0 * period + j as f64 * h).collect();
-    let mut basis = Vec::with_capacity(2);
-    for family in 0..2 {
+    let mut runs: [Vec<Vec<Point3<f64>>>; 2] = [Vec::new(), Vec::new()];
+    for (family, out) in runs.iter_mut().enumerate() {
         let wave = |on: bool| Wave {
             amplitude: if on { BASIS_AMPLITUDE } else { 0.0 },
             phase: psi,
@@ -414,8 +458,74 @@ fn linearised_start(
         };
         let mut traj = Trajectory::default();
         model.run(&[(0.0, drive)], &grid, false, &mut traj)?;
-        basis.push(traj.markers);
+        *out = traj.markers;
     }
+    Ok(LinearBasis {
+        runs,
+        h,
+        period,
+        psi,
+    })
+}
+
+impl LinearBasis {
+    /// The basis of the markers `columns` only (indices into the model's markers).
+    pub fn columns(&self, columns: &[usize]) -> LinearBasis {
+        let pick = |run: &Vec<Vec<Point3<f64>>>| -> Vec<Vec<Point3<f64>>> {
+            run.iter()
+                .map(|frame| columns.iter().map(|&c| frame[c]).collect())
+                .collect()
+        };
+        LinearBasis {
+            runs: [pick(&self.runs[0]), pick(&self.runs[1])],
+            ..*self
+        }
+    }
+}
+
+/// The best linearised fit of a recording ([`linearised_fit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearFit {
+    /// (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm), phases at the first frame.
+    pub x: [f64; 4],
+    /// Sum of squared residual lengths over the samples used [m^2].
+    pub residual: f64,
+    /// Sum of squared lengths of the recorded motion about each marker's mean [m^2].
+    pub total: f64,
+    /// Tracked samples (frame, marker) used.
+    pub samples: usize,
+}
+
+impl LinearFit {
+    /// Root-mean-square length of the residual per sample [m].
+    pub fn rms_m(&self) -> f64 {
+        (self.residual / self.samples.max(1) as f64).sqrt()
+    }
+
+    /// Fraction of the recorded motion (about each marker's mean) left unexplained.
+    pub fn unexplained(&self) -> f64 {
+        if self.total > 0.0 {
+            self.residual / self.total
+        } else {
+            1.0
+        }
+    }
+}
+
+/// The linearised fit of `recorded` (model frame, frames at `times` from the first frame,
+/// markers in the basis's order): the displacement is taken as c_r D_r(t + s_r) +
+/// c_d D_d(t + s_d), with D_r and D_d the basis responses, time-shifted by s in [0, 1/f)
+/// (a phase change of 2 pi f s in the periodic regime); both sides are taken about each
+/// marker's mean. For each pair of shifts the non-negative least-squares (c_r, c_d) are
+/// solved; the best pair gives A = 0.3 c and phi = psi + 2 pi f s.
+pub fn linearised_fit(
+    basis: &LinearBasis,
+    recorded: &[Vec<Option<Point3<f64>>>],
+    times: &[f64],
+) -> LinearFit {
+    let LinearBasis { h, period, psi, .. } = *basis;
+    let points = basis.runs[0].first().map_or(0, Vec::len);
+    let n = basis.runs[0].len();
     // Frames used: about 300, evenly spread.
     let stride = (times.len() / 300).max(1);
     let frames: Vec<usize> = (0..times.len()).step_by(stride).collect();
@@ -423,24 +533,20 @@ fn linearised_start(
         let x = (t.rem_euclid(period) / h).clamp(0.0, (n - 1) as f64);
         let j = (x.floor() as usize).min(n - 2);
         let w = x - j as f64;
-        (b[j][p].coords * (1.0 - w) + b[j + 1][p].coords * w) - rest[p].coords
+        b[j][p].coords * (1.0 - w) + b[j + 1][p].coords * w
     };
     // Pre-sample each basis at every shift.
     let sample = |b: &[Vec<Point3<f64>>], s: usize| -> Vec<Vec<nalgebra::Vector3<f64>>> {
         let sigma = s as f64 * period / SHIFTS as f64;
         frames
             .iter()
-            .map(|&i| {
-                (0..rest.len())
-                    .map(|p| disp(b, times[i] + sigma, p))
-                    .collect()
-            })
+            .map(|&i| (0..points).map(|p| disp(b, times[i] + sigma, p)).collect())
             .collect()
     };
     // Per-point time means are removed from data and bases: the camera pose refinement of
     // the cost absorbs any constant offset (see `aligned_cost`).
     let centre = |mut v: Vec<Vec<nalgebra::Vector3<f64>>>| {
-        for p in 0..rest.len() {
+        for p in 0..points {
             let mean = v.iter().map(|f| f[p]).sum::<nalgebra::Vector3<f64>>() / v.len() as f64;
             for f in v.iter_mut() {
                 f[p] -= mean;
@@ -448,10 +554,14 @@ fn linearised_start(
         }
         v
     };
-    let dr: Vec<_> = (0..SHIFTS).map(|s| centre(sample(&basis[0], s))).collect();
-    let dd: Vec<_> = (0..SHIFTS).map(|s| centre(sample(&basis[1], s))).collect();
-    let mut rmean = vec![nalgebra::Vector3::zeros(); rest.len()];
-    let mut rcount = vec![0usize; rest.len()];
+    let dr: Vec<_> = (0..SHIFTS)
+        .map(|s| centre(sample(&basis.runs[0], s)))
+        .collect();
+    let dd: Vec<_> = (0..SHIFTS)
+        .map(|s| centre(sample(&basis.runs[1], s)))
+        .collect();
+    let mut rmean = vec![nalgebra::Vector3::zeros(); points];
+    let mut rcount = vec![0usize; points];
     for &i in &frames {
         for (p, q) in recorded[i].iter().enumerate() {
             if let Some(q) = q {
@@ -463,24 +573,51 @@ fn linearised_start(
     for (m, c) in rmean.iter_mut().zip(&rcount) {
         *m /= (*c).max(1) as f64;
     }
-    let mut best = (f64::INFINITY, [0.0; 4]);
+    let mut best = LinearFit {
+        x: [0.0, 0.0, psi, psi],
+        residual: f64::INFINITY,
+        total: 0.0,
+        samples: rcount.iter().sum(),
+    };
+    // The sums that depend on one shift are computed once per shift; only the cross term
+    // needs every pair.
+    let mut rr = 0.0;
+    for &i in &frames {
+        for (p, q) in recorded[i].iter().enumerate() {
+            if let Some(q) = q {
+                rr += (q.coords - rmean[p]).norm_squared();
+            }
+        }
+    }
+    let single = |d: &[Vec<Vec<nalgebra::Vector3<f64>>>]| -> Vec<(f64, f64)> {
+        d.iter()
+            .map(|u| {
+                let (mut uu, mut ur) = (0.0, 0.0);
+                for (k, &i) in frames.iter().enumerate() {
+                    for (p, q) in recorded[i].iter().enumerate() {
+                        if let Some(q) = q {
+                            uu += u[k][p].norm_squared();
+                            ur += u[k][p].dot(&(q.coords - rmean[p]));
+                        }
+                    }
+                }
+                (uu, ur)
+            })
+            .collect()
+    };
+    let (sr_sums, sd_sums) = (single(&dr), single(&dd));
     for (sr, a) in dr.iter().enumerate() {
         for (sd, b) in dd.iter().enumerate() {
-            let (mut aa, mut ab, mut bb, mut ar, mut br, mut rr) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+            let ((aa, ar), (bb, br)) = (sr_sums[sr], sd_sums[sd]);
+            let mut ab = 0.0;
             for (k, &i) in frames.iter().enumerate() {
                 for (p, q) in recorded[i].iter().enumerate() {
-                    if let Some(q) = q {
-                        let r = q.coords - rmean[p];
-                        let (u, v) = (&a[k][p], &b[k][p]);
-                        aa += u.dot(u);
-                        ab += u.dot(v);
-                        bb += v.dot(v);
-                        ar += u.dot(&r);
-                        br += v.dot(&r);
-                        rr += r.dot(&r);
+                    if q.is_some() {
+                        ab += a[k][p].dot(&b[k][p]);
                     }
                 }
             }
+            best.total = rr;
             let residual = |cr: f64, cd: f64| {
                 rr - 2.0 * (cr * ar + cd * br) + cr * cr * aa + 2.0 * cr * cd * ab + cd * cd * bb
             };
@@ -498,22 +635,37 @@ fn linearised_start(
             }
             for (cr, cd) in candidates {
                 let res = residual(cr, cd);
-                if res < best.0 {
+                if res < best.residual {
                     let phase = |s: usize| psi + wrap_angle(2.0 * PI * s as f64 / SHIFTS as f64);
-                    best = (
-                        res,
-                        [
-                            (cr * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
-                            (cd * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
-                            phase(sr),
-                            phase(sd),
-                        ],
-                    );
+                    best.residual = res.max(0.0);
+                    best.x = [
+                        (cr * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
+                        (cd * BASIS_AMPLITUDE).clamp(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1),
+                        phase(sr),
+                        phase(sd),
+                    ];
                 }
             }
         }
     }
-    Ok(best.1)
+    best
+}
+
+/// A starting point from a linearised model (2 model runs, [`linear_basis`]), the best
+/// [`linearised_fit`]. Returns (A_ribs, A_diaphragm, phi_ribs, phi_diaphragm).
+#[allow(clippy::too_many_arguments)]
+fn linearised_start(
+    model: &mut dyn MarkerSource,
+    recorded: &[Vec<Option<Point3<f64>>>],
+    times: &[f64],
+    f: f64,
+    psi: f64,
+    abdominals: Wave,
+    inspiratory_fraction: f64,
+    rate: f64,
+) -> Result<[f64; 4]> {
+    let basis = linear_basis(model, f, psi, abdominals, inspiratory_fraction, rate)?;
+    Ok(linearised_fit(&basis, recorded, times).x)
 }
 
 /// Model runs spent by [`linearised_start`].
@@ -531,6 +683,7 @@ struct CostRun<'a, S: MarkerSource + ?Sized, D> {
     traj: Trajectory,
     pairs: Pairs,
     centred: bool,
+    drift: Option<super::drift::DriftBasis>,
 }
 
 impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
@@ -548,6 +701,7 @@ impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
             traj: Trajectory::default(),
             pairs: Pairs::default(),
             centred: false,
+            drift: None,
         }
     }
 
@@ -556,6 +710,9 @@ impl<'a, S: MarkerSource + ?Sized, D: Fn(&[f64]) -> Drive> CostRun<'a, S, D> {
         let drive = (self.drive_of)(x);
         self.source
             .run(&[(0.0, drive)], self.times, false, &mut self.traj)?;
+        if let Some(basis) = &self.drift {
+            return Ok(basis.projected_cost(&self.traj.markers, self.recorded));
+        }
         if self.centred {
             return Ok(centred_cost(&self.traj.markers, self.recorded));
         }
@@ -684,7 +841,6 @@ pub fn fit_marker_frames(
     } else if linearised {
         linearised_start(
             model,
-            &rest,
             &recorded,
             &times,
             f,
@@ -732,11 +888,17 @@ pub fn fit_marker_frames(
         None
     };
     let mut main_run = CostRun::new(&mut *model, &recorded, &model_times, &drive_of);
-    main_run.centred = options.marker_offsets;
+    let about_means = options.marker_offsets || options.drift;
+    let drift_basis = options
+        .drift
+        .then(|| super::drift::DriftBasis::new(&times, f));
+    main_run.centred = about_means;
+    main_run.drift = drift_basis.clone();
     let mut cost = |x: &[f64]| main_run.cost(x);
     let mut spare_run = spare_model.as_deref_mut().map(|spare| {
         let mut run = CostRun::new(spare, &recorded, &model_times, &drive_of);
-        run.centred = options.marker_offsets;
+        run.centred = about_means;
+        run.drift = drift_basis.clone();
         run
     });
     let mut spare_cost = spare_run.as_mut().map(|run| move |x: &[f64]| run.cost(x));
@@ -777,7 +939,70 @@ pub fn fit_marker_frames(
     drive.diaphragm.phase = wrap_angle(drive.diaphragm.phase);
     let mut fitted = Trajectory::default();
     model.run(&[(0.0, drive_of(&m.x))], &model_times, true, &mut fitted)?;
-    let correction = if options.marker_offsets {
+    let mut sensitivity = Vec::new();
+    if let Some(basis) = &drift_basis {
+        let mut moved = Trajectory::default();
+        for i in 0..4 {
+            let mut x = m.x.clone();
+            let step = if x[i] + SENSITIVITY_STEPS[i] > ahi && i < 2 {
+                -SENSITIVITY_STEPS[i]
+            } else {
+                SENSITIVITY_STEPS[i]
+            };
+            x[i] += step;
+            model.run(&[(0.0, drive_of(&x))], &model_times, false, &mut moved)?;
+            let diff: Vec<Vec<Option<Point3<f64>>>> = moved
+                .markers
+                .iter()
+                .zip(&fitted.markers)
+                .zip(&recorded)
+                .map(|((a, b), r)| {
+                    a.iter()
+                        .zip(b)
+                        .zip(r)
+                        .map(|((a, b), q)| q.map(|_| Point3::from((a - b) / step)))
+                        .collect()
+                })
+                .collect();
+            let zeros: Vec<Vec<Point3<f64>>> = diff
+                .iter()
+                .map(|f| vec![Point3::origin(); f.len()])
+                .collect();
+            let drift = basis.drift(&zeros, &diff);
+            // Before: about each marker's mean (what the cost without drift sees).
+            let points = diff.first().map_or(0, Vec::len);
+            let mut mean = vec![nalgebra::Vector3::zeros(); points];
+            let mut count = vec![0usize; points];
+            for d in &diff {
+                for (p, q) in d.iter().enumerate() {
+                    if let Some(q) = q {
+                        mean[p] += q.coords;
+                        count[p] += 1;
+                    }
+                }
+            }
+            for (m, c) in mean.iter_mut().zip(&count) {
+                *m /= (*c).max(1) as f64;
+            }
+            let (mut raw, mut projected, mut n) = (0.0, 0.0, 0usize);
+            for (d, dr) in diff.iter().zip(&drift) {
+                for (p, (q, e)) in d.iter().zip(dr).enumerate() {
+                    if let Some(q) = q {
+                        raw += (q.coords - mean[p]).norm_squared();
+                        projected += (q.coords - e).norm_squared();
+                        n += 1;
+                    }
+                }
+            }
+            let n = n.max(1) as f64;
+            sensitivity.push(Sensitivity {
+                name: PARAMETER_NAMES[i],
+                raw_m: (raw / n).sqrt(),
+                projected_m: (projected / n).sqrt(),
+            });
+        }
+    }
+    let correction = if about_means {
         RigidTransform::identity()
     } else {
         aligned_cost(&fitted.markers, &recorded, &mut Pairs::default())?.1
@@ -813,6 +1038,8 @@ pub fn fit_marker_frames(
         method: options.method,
         grid: recording.grid,
         breathing,
+        drift_knots: drift_basis.map(|b| b.knots),
+        sensitivity,
     })
 }
 

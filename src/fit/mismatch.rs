@@ -376,6 +376,7 @@ pub fn fit_truth_recording(
             config.clone(),
             &markers,
             &SurfaceOptions::default(),
+            &super::PoseOptions::default(),
             &options,
             progress,
         )?

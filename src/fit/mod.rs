@@ -8,9 +8,12 @@
 //! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
 //! | [`named`] | recordings of any marker set: registration to the skin without correspondences, binding, fit |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
+//! | [`quality`] | what a fit's figures mean: noise floor (local cubic fits, pre-filter check), motion explained, bounds, verdict |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
+//! | [`drift`] | each marker's slow drift (linear spline, knots three breaths apart) projected out of the cost |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
+//! | [`orient`] | the pose of a marker set on the body: shape candidates, front from the breathing motion, short fits |
 //! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
@@ -22,13 +25,16 @@
 
 pub mod breathing;
 pub mod clinical;
+pub mod drift;
 pub mod figure;
 pub mod fitting;
 pub mod markers;
 pub mod mismatch;
 pub mod named;
 pub mod optimize;
+pub mod orient;
 pub mod principal;
+pub mod quality;
 pub mod recording;
 pub mod report;
 pub mod size;
@@ -39,6 +45,7 @@ pub mod synth;
 pub use fitting::{Fit, FitOptions, Method, fit_marker_frames, fit_recording};
 pub use markers::{Format, Markers, ReadOptions};
 pub use named::{BoundRecording, MarkerSetFit, bind_recording, fit_any_markers};
+pub use orient::{Orientation, PoseOptions};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

@@ -1,15 +1,15 @@
 //! Fitting recordings of any marker set (markers anywhere on the trunk, labelled or not):
-//! the first frame is registered to the model's rest skin without correspondences
-//! ([`crate::anatomy::skin::register_to_surface`]), each marker within 3 cm of the skin is
+//! the first frame is registered to the model's rest skin without correspondences, in the
+//! pose the body's shape and breathing motion choose ([`super::orient`]), each marker
+//! within 3 cm of the skin is
 //! bound to its nearest skin point and carried by the skinning like the grid's markers, the
 //! others are reported and left out, and the bound markers are fitted with the grid's cost
 //! and optimiser ([`super::fitting::fit_marker_frames`]).
 
 use super::fitting::{Fit, FitOptions, fit_marker_frames};
+use super::orient::{Orientation, PoseOptions, orient};
 use super::{Markers, Recording, TorsoMarkers};
-use crate::anatomy::skin::{
-    MarkerSet, Skin, SkinOptions, SurfaceOptions, SurfaceRegistration, register_to_surface,
-};
+use crate::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions, SurfaceRegistration};
 use crate::model::Torso;
 use crate::{Error, Result};
 use std::sync::Arc;
@@ -19,8 +19,10 @@ use std::sync::Arc;
 pub struct BoundRecording {
     /// The bound markers (labels from the recording, bindings on the rest skin).
     pub set: MarkerSet,
-    /// The registration of the first frame.
+    /// The registration of the first frame (the chosen pose's).
     pub registration: SurfaceRegistration,
+    /// How the pose was chosen: every candidate pose, the chosen one, the warnings.
+    pub orientation: Orientation,
     /// The recording of the bound markers, in the set's order, `grid = (markers, 1)`.
     pub recording: Recording,
     /// Markers left out: label and distance to the registered skin [m] (NaN: not tracked
@@ -29,12 +31,13 @@ pub struct BoundRecording {
 }
 
 /// Registers the first frame of `markers` (any labels, any frame, metres) to the rest skin
-/// of `torso`'s anatomy and binds the markers within `options.max_distance` of it
-/// (see [`register_to_surface`]). The torso is not changed; see [`fit_any_markers`].
+/// of `torso`'s anatomy in the pose [`orient`] chooses and binds the markers within
+/// `options.max_distance` of it. The torso is not changed; see [`fit_any_markers`].
 pub fn bind_recording(
     torso: &Torso,
     markers: &Markers,
     options: &SurfaceOptions,
+    pose: &PoseOptions,
 ) -> Result<BoundRecording> {
     markers.validate()?;
     if torso.config().scene.slp_reference.is_some() {
@@ -45,8 +48,8 @@ pub fn bind_recording(
         ));
     }
     let skin = Skin::for_anatomy(&torso.compiled().anatomy, &SkinOptions::default())?;
-    let registration =
-        register_to_surface(&skin.vertices, &skin.triangles, &markers.frames[0], options)?;
+    let orientation = orient(torso, &skin, markers, options, pose)?;
+    let registration = orientation.registration().clone();
     let set = MarkerSet {
         name: "recording".into(),
         labels: registration
@@ -82,6 +85,7 @@ pub fn bind_recording(
     Ok(BoundRecording {
         set,
         registration,
+        orientation,
         recording,
         excluded,
     })
@@ -96,8 +100,8 @@ pub struct MarkerSetFit {
     pub bound: BoundRecording,
 }
 
-/// Fits a recording of any marker set on a fresh torso built from `config`: registration
-/// and binding ([`bind_recording`]), then the grid's fit over the bound markers with each
+/// Fits a recording of any marker set on a fresh torso built from `config`: pose,
+/// registration and binding ([`bind_recording`]), then the grid's fit over the bound markers with each
 /// marker's constant offset left out of the cost ([`FitOptions::marker_offsets`]): a
 /// marker bound to its nearest skin point stands off it by its height above the skin and
 /// the registration's residual (the first frame is not the rest pose the skin is in), which
@@ -106,11 +110,12 @@ pub fn fit_any_markers(
     config: crate::Config,
     markers: &Markers,
     surface: &SurfaceOptions,
+    pose: &PoseOptions,
     options: &FitOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<MarkerSetFit> {
     let mut torso = Torso::new_at_rest(config)?;
-    let bound = bind_recording(&torso, markers, surface)?;
+    let bound = bind_recording(&torso, markers, surface, pose)?;
     torso.set_marker_set(Some(Arc::new(bound.set.clone())));
     let mut source = TorsoMarkers::from_torso(torso)?;
     let options = FitOptions {

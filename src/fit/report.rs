@@ -131,12 +131,24 @@ pub fn fit_json(
     breaths: Option<&BreathReport>,
 ) -> Value {
     let mut m = drive_fmi(&fit.drive);
-    let noise_floor = super::fitting::estimated_noise_floor(&fit.times, &fit.recorded);
+    let q = super::quality::quality(fit);
+    let noise_floor = q.noise.floor_m;
     let rot = fit.to_model.rotation.angle().to_degrees();
     let extra = json!({
         "cost_m": fit.cost_m,
         "noise_floor_estimate_m": noise_floor,
         "cost_over_noise_floor_estimate": fit.cost_m / noise_floor,
+        "quality": quality_json(&q),
+        "drift": fit.drift_knots.as_ref().map(|k| json!({
+            "method": "per marker coordinate a linear spline in time, knots at least three breaths apart, projected out of the cost in closed form at each evaluation (variable projection)",
+            "knots_s": k,
+        })),
+        "sensitivity": fit.sensitivity.iter().map(|p| json!({
+            "parameter": p.name,
+            "rms_marker_displacement_per_unit_m": p.raw_m,
+            "after_drift_projection_m": p.projected_m,
+            "kept_by_projection": p.projected_m / p.raw_m,
+        })).collect::<Vec<_>>(),
         "initial_cost_m": fit.initial_cost_m,
         "skin_fit_error_m": match fit.skin_fit {
             Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
@@ -150,6 +162,7 @@ pub fn fit_json(
         "evaluations": fit.evaluations,
         "evaluations_ahead_unused": fit.unused_ahead,
         "converged": fit.converged,
+        "converged_means": "the search met its tolerances (simplex size and cost spread); it says nothing of how well the model explains the recording (see quality)",
         "wall_s": fit.wall_s,
         "delta_phase": fit.delta_phase,
         "breaths": breaths.map_or(json!([]), |r| r.json_breaths()),
@@ -193,6 +206,48 @@ pub fn fit_json(
         m.extend(e);
     }
     Value::Object(m)
+}
+
+/// The `quality` entry of the result JSON (see [`super::quality`]).
+pub fn quality_json(q: &super::quality::Quality) -> Value {
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    json!({
+        "noise": {
+            "method": "local cubic fits over an eighth of a breath per marker coordinate (Savitzky-Golay residual, MAD), checked against second differences",
+            "sigma_m": finite(q.noise.sigma_m),
+            "floor_m": finite(q.noise.floor_m),
+            "second_difference_sigma_m": finite(q.noise.second_difference_sigma_m),
+            "prefiltered": q.noise.prefiltered,
+            "window_samples": q.noise.window,
+            "residuals": q.noise.samples,
+        },
+        "variance_explained": {
+            "about": "the recorded motion about each marker's mean",
+            "overall": finite(q.explained.overall),
+            "above_noise": finite(q.explained.above_noise),
+            "per_marker": q.explained.per_marker.iter().map(|v| finite(*v)).collect::<Vec<_>>(),
+            "motion_rms_m": q.explained.motion_rms_m,
+            "residual_rms_m": q.explained.residual_rms_m,
+            "split": match (&q.drift_share, &q.after_drift) {
+                (Some(d), Some(a)) => json!({
+                    "drift": finite(*d),
+                    "drive": finite(a.above_noise),
+                    "drive_overall": finite(a.overall),
+                    "sway": Value::Null,
+                    "note": "drift: its share of the motion about the means; drive: its share of the motion left after the drift, above the noise; sway is not removed by this fit",
+                }),
+                _ => json!({
+                    "drive": finite(q.explained.above_noise),
+                    "sway": Value::Null,
+                    "drift": Value::Null,
+                    "note": "sway and drift are not removed by this fit: the drive's share is of all the motion above the noise",
+                }),
+            },
+        },
+        "drive_parameters_at_bounds": q.at_bounds,
+        "explains_recording": q.explains,
+        "notes": q.notes,
+    })
 }
 
 fn create_parent(path: &Path) -> Result<()> {
@@ -332,6 +387,51 @@ pub fn truth_json(
 /// The text summary of a fit.
 pub fn summary(fit: &Fit) -> String {
     let d = &fit.drive;
+    let q = super::quality::quality(fit);
+    let explained = if let (Some(d), Some(a)) = (q.drift_share, &q.after_drift) {
+        format!(
+            "{:.0} % of the markers' motion about their means is drift; the drive explains {:.0} % of the rest ({:.0} % above the noise; sway not removed)",
+            100.0 * d,
+            100.0 * a.overall,
+            100.0 * a.above_noise
+        )
+    } else if q.explained.above_noise.is_finite() {
+        format!(
+            "{:.0} % of the markers' motion about their means ({:.0} % above the noise; sway and drift not removed)",
+            100.0 * q.explained.overall,
+            100.0 * q.explained.above_noise
+        )
+    } else {
+        format!(
+            "{:.0} % of the markers' motion about their means (it does not rise above the noise)",
+            100.0 * q.explained.overall
+        )
+    };
+    let noise = format!(
+        "{:.3} mm (local cubic fits; sigma {:.3} mm per coordinate), cost {:.2} x the floor{}",
+        q.noise.floor_m * 1e3,
+        q.noise.sigma_m * 1e3,
+        fit.cost_m / q.noise.floor_m,
+        if q.noise.prefiltered {
+            "; filtered before export?"
+        } else {
+            ""
+        }
+    );
+    let mut notes: String = q
+        .notes
+        .iter()
+        .map(|n| format!("\nquality               {n}"))
+        .collect();
+    for p in &fit.sensitivity {
+        notes.push_str(&format!(
+            "\nsensitivity           {}: {:.2} mm per unit, {:.2} after the drift is projected out ({:.0} % kept)",
+            p.name,
+            p.raw_m * 1e3,
+            p.projected_m * 1e3,
+            100.0 * p.projected_m / p.raw_m
+        ));
+    }
     format!(
         "breathing frequency   {:.4} Hz ({:.1} breaths/min)\n\
          drive.ribs.amplitude      {:.4}\n\
@@ -343,7 +443,9 @@ pub fn summary(fit: &Fit) -> String {
          relative to the model's axes; about 180 deg for a camera facing the chest)\n\
          cost                  {:.3} mm (start {:.3} mm)\n\
          evaluations           {} ({}){}{}\n\
-         wall time             {:.2} s",
+         wall time             {:.2} s\n\
+         explained             {}\n\
+         noise floor           {}{}",
         d.frequency,
         d.frequency * 60.0,
         d.ribs.amplitude,
@@ -358,7 +460,11 @@ pub fn summary(fit: &Fit) -> String {
         fit.initial_cost_m * 1e3,
         fit.evaluations,
         fit.method.name(),
-        if fit.converged { ", converged" } else { "" },
+        if fit.converged {
+            ", search converged"
+        } else {
+            ", search stopped on its budget"
+        },
         if fit.unused_ahead > 0 {
             format!(
                 "; {} more evaluated ahead on a second thread and not used (the points the \
@@ -368,7 +474,10 @@ pub fn summary(fit: &Fit) -> String {
         } else {
             String::new()
         },
-        fit.wall_s
+        fit.wall_s,
+        explained,
+        noise,
+        notes
     )
 }
 
@@ -386,6 +495,7 @@ pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value 
         .collect();
     json!({
         "method": "principal-axes start (24 axis orderings), trimmed ICP (best 80 %) against the skin surface, Umeyama similarity",
+        "pose": pose_json(&bound.orientation),
         "markers_recorded": recorded,
         "markers_bound": bound.set.len(),
         "labels_bound": bound.set.labels,
@@ -409,6 +519,28 @@ pub fn marker_set_json(bound: &super::BoundRecording, recorded: usize) -> Value 
     })
 }
 
+/// How the pose of a marker set was chosen: every candidate pose with its registration
+/// score, the share of its inspiratory motion pointing forwards, its short-fit residual
+/// and its rotation from the chosen one.
+pub fn pose_json(o: &super::Orientation) -> Value {
+    json!({
+        "method": "distinct poses within the registration score margin; those whose inspiratory motion (signed outward) points forwards, or that put the --anterior markers on the front; the smallest residual of the linearised fit",
+        "chosen": o.chosen,
+        "frequency_hz": o.frequency_hz,
+        "candidates": o.candidates.iter().map(|c| json!({
+            "registration_score_m2": c.registration.score,
+            "registration_rms_m": c.registration.rms,
+            "markers_bound": c.registration.attached.len(),
+            "front_share": c.front,
+            "anterior_markers_in_front": c.anterior_ok,
+            "short_fit_rms_m": c.short_fit.rms_m(),
+            "short_fit_unexplained": c.short_fit.unexplained(),
+            "rotation_from_chosen_deg": c.from_chosen_deg,
+        })).collect::<Vec<_>>(),
+        "warnings": o.warnings,
+    })
+}
+
 /// A few lines on the registration of a marker set (see [`marker_set_json`]).
 pub fn marker_set_summary(bound: &super::BoundRecording, recorded: usize) -> String {
     let r = &bound.registration;
@@ -420,6 +552,15 @@ pub fn marker_set_summary(bound: &super::BoundRecording, recorded: usize) -> Str
         r.to_model.scale,
         r.to_model.rotation.angle().to_degrees()
     );
+    let o = &bound.orientation;
+    let c = &o.candidates[o.chosen];
+    s.push_str(&format!(
+        "\npose                  chosen of {} candidate poses by the breathing motion: front share {:+.2}, short-fit residual {:.2} mm ({:.0} % of the motion unexplained)",
+        o.candidates.len(),
+        c.front,
+        c.short_fit.rms_m() * 1e3,
+        100.0 * c.short_fit.unexplained()
+    ));
     for (l, d) in &bound.excluded {
         if d.is_finite() {
             s.push_str(&format!(

@@ -130,10 +130,11 @@ pub fn estimate_size(
         mass: base.mass * x[1],
         ..base.clone()
     };
-    // The configuration's subject is registered first, with the full scan; every other
-    // size refines that registration (the same markers on a trunk a few per cent larger or
+    // The configuration's subject is registered first, with the full scan (or from
+    // `surface.start`, a pose already chosen, [`crate::fit::orient`]); every other size
+    // refines that registration (the same markers on a trunk a few per cent larger or
     // smaller), so the residual is a function of the size alone.
-    let mut start: Option<RigidTransform> = None;
+    let mut start: Option<RigidTransform> = surface.start;
     let mut objective = |x: &[f64]| -> Result<f64> {
         let subject = subject_of(x);
         if subject.validate().is_err() {

@@ -32,7 +32,8 @@ pub use register::{FitOptions, Registration, RigidTransform, SkinFitReport, regi
 pub use sets::{BUILTIN_SETS, MarkerSet};
 pub use smooth::{taubin_smooth, vertex_neighbours};
 pub use surface::{
-    AttachedMarker, MIN_SURFACE_MARKERS, SurfaceOptions, SurfaceRegistration, register_to_surface,
+    AttachedMarker, DISTINCT_POSE_DEG, MIN_SURFACE_MARKERS, SurfaceOptions, SurfaceRegistration,
+    register_candidates, register_to_surface,
 };
 
 use crate::anatomy::{Anatomy, Sex, Subject};

@@ -18,6 +18,14 @@
 //! coordinates); markers farther than [`SurfaceOptions::max_distance`] are reported and
 //! left out.
 //!
+//! A trunk is nearly symmetric: turned 180 degrees about its long axis, or upside down, a
+//! marker cloud fits the skin almost as well as in the right pose (a recording of 30
+//! chest-and-back markers scored 119 mm^2 in the pose turned 175 degrees about the vertical
+//! against 160 mm^2 in the right one). [`register_candidates`] therefore returns every
+//! distinct pose (rotations more than [`DISTINCT_POSE_DEG`] apart) whose score is within
+//! [`SurfaceOptions::candidate_margin`] of the best, for a choice by the breathing motion
+//! ([`crate::fit::orient`]); [`register_to_surface`] returns the best-scoring one.
+//!
 //! Limits (tests/marker_registration.rs): 300 markers spread over the trunk are registered
 //! within 0.06 deg and 0.04 % of scale; a dozen leave the smooth trunk surface ambiguous,
 //! the pose is right but the markers may slide several millimetres along the skin.
@@ -36,6 +44,11 @@ const SPINS: usize = 6;
 /// Fewest tracked markers the registration accepts: below about a dozen points spread
 /// over the trunk, a trimmed closest-point fit has too little surface to lock onto.
 pub const MIN_SURFACE_MARKERS: usize = 12;
+
+/// Poses whose rotations differ by less than this are one pose [deg]: the principal-axes
+/// starts are a sixth of a turn (60 degrees) or a quarter turn apart, and a converged
+/// registration is within 2 degrees of the truth (tests/marker_registration.rs).
+pub const DISTINCT_POSE_DEG: f64 = 20.0;
 
 /// Settings of [`register_to_surface`].
 #[derive(Clone, Debug, PartialEq)]
@@ -61,6 +74,10 @@ pub struct SurfaceOptions {
     /// of the principal-axes scan: the same markers on a slightly different skin, say
     /// (the subject-size search, [`crate::fit::size`]).
     pub start: Option<RigidTransform>,
+    /// Distinct poses whose score is at most this many times the best are candidates
+    /// ([`register_candidates`]). 3 (1.7 x in distance) keeps the near ties of a trunk's
+    /// symmetries (1.34 x in score on a real 30-marker recording) with room to spare.
+    pub candidate_margin: f64,
 }
 
 impl Default for SurfaceOptions {
@@ -71,9 +88,10 @@ impl Default for SurfaceOptions {
             max_distance: 0.03,
             probe_iterations: 10,
             max_iterations: 100,
-            finalists: 8,
+            finalists: 16,
             scale_range: (0.7, 1.4),
             start: None,
+            candidate_margin: 3.0,
         }
     }
 }
@@ -106,6 +124,9 @@ pub struct SurfaceRegistration {
     pub excluded: Vec<(usize, f64)>,
     /// Closest-point iterations spent over all candidates.
     pub iterations: usize,
+    /// The truncated-quadratic score the pose was chosen by: the mean over the tracked
+    /// markers of min(d, max_distance)^2 [m^2].
+    pub score: f64,
 }
 
 /// Barycentric coordinates of a point `p` lying on triangle (a, b, c).
@@ -149,6 +170,41 @@ fn principal_axes(points: &[(Point3<f64>, f64)]) -> (Vector3<f64>, Matrix3<f64>)
     (mean, axes)
 }
 
+/// The outward side of a patch of markers (recorded frame), or `None` when the markers are
+/// not a patch: their smallest principal spread is under a fifth of the middle one
+/// (variances under 1/25), and the side is the one the patch bulges to (on a convex trunk
+/// the markers far from the centroid lie behind it: the height along the thin axis falls
+/// with the squared distance in the patch's plane).
+fn patch_outward(
+    points: &[Point3<f64>],
+    mean: &Vector3<f64>,
+    axes: &Matrix3<f64>,
+) -> Option<Vector3<f64>> {
+    let n = points.len() as f64;
+    let var = |k: usize| {
+        points
+            .iter()
+            .map(|p| (p.coords - mean).dot(&axes.column(k)).powi(2))
+            .sum::<f64>()
+            / n
+    };
+    if var(2) >= var(1) / 25.0 {
+        return None;
+    }
+    let normal = axes.column(2).into_owned();
+    let (h, r2): (Vec<f64>, Vec<f64>) = points
+        .iter()
+        .map(|p| {
+            let d = p.coords - mean;
+            let h = d.dot(&normal);
+            (h, d.norm_squared() - h * h)
+        })
+        .unzip();
+    let (mh, mr) = (h.iter().sum::<f64>() / n, r2.iter().sum::<f64>() / n);
+    let cov: f64 = h.iter().zip(&r2).map(|(a, b)| (a - mh) * (b - mr)).sum();
+    Some(if cov > 0.0 { -normal } else { normal })
+}
+
 /// The 24 proper rotations that permute and flip the coordinate axes.
 fn axis_rotations() -> Vec<Matrix3<f64>> {
     let perms = [
@@ -175,7 +231,11 @@ fn axis_rotations() -> Vec<Matrix3<f64>> {
 }
 
 /// One candidate's state.
+#[derive(Clone)]
 struct Candidate {
+    /// The breathing motion's verdict on the pose (0 best; see `SurfaceIcp::motion_class`);
+    /// 0 for all without a motion.
+    prior: u8,
     t: RigidTransform,
     trimmed_rms: f64,
     /// Truncated-quadratic score: the mean over all markers of min(d, max_distance)^2, so
@@ -213,6 +273,33 @@ impl SurfaceIcp<'_> {
     fn score(&self, matches: &[(Point3<f64>, f64, u32)]) -> f64 {
         let c = self.options.max_distance;
         matches.iter().map(|m| m.1.min(c).powi(2)).sum::<f64>() / matches.len() as f64
+    }
+
+    /// The breathing motion's verdict on a pose: `motion` holds each recorded marker's
+    /// inspiratory direction up to sign (recorded frame, by index into the frame; the
+    /// recording's principal-displacement loadings), `tracked` the frame indices of
+    /// `points`. In the pose the motion is signed so that the markers within reach of the
+    /// skin move out of it (the front and sides expand on inspiration, the back barely
+    /// moves); then 0: it points forwards (+x) and cranially (+y), as the chest wall's does
+    /// (the sternum moves ventrally and cranially on inspiration: Wilson et al. 1987,
+    /// J Appl Physiol 62:1872); 1: forwards only; 2: backwards.
+    fn motion_class(&self, t: &RigidTransform, motion: &[Vector3<f64>], tracked: &[usize]) -> u8 {
+        let matches = self.match_points(t);
+        let (mut outward, mut sum) = (0.0, Vector3::zeros());
+        for (k, m) in matches.iter().enumerate() {
+            if m.1 > self.options.max_distance {
+                continue;
+            }
+            let l = t.rotation * motion[tracked[k]];
+            outward += l.dot(&self.normals[m.2 as usize]);
+            sum += l;
+        }
+        let sum = if outward < 0.0 { -sum } else { sum };
+        match (sum.x > 0.0, sum.y > 0.0) {
+            (true, true) => 0,
+            (true, false) => 1,
+            _ => 2,
+        }
     }
 
     /// The best-matched `keep` markers' indices and their trimmed RMS distance.
@@ -351,24 +438,56 @@ impl SurfaceIcp<'_> {
 /// Registers a recorded frame of markers (`None` = untracked) to a closed skin surface
 /// (model frame) without knowing which marker is which (see the module doc), and binds
 /// each marker within `options.max_distance` of the registered skin to its closest skin
-/// point. Needs at least [`MIN_SURFACE_MARKERS`] tracked markers not all on a line.
+/// point: the best-scoring pose of [`register_candidates`]. Needs at least
+/// [`MIN_SURFACE_MARKERS`] tracked markers not all on a line.
 pub fn register_to_surface(
     vertices: &[Point3<f64>],
     triangles: &[[u32; 3]],
     frame: &[Option<Point3<f64>>],
     options: &SurfaceOptions,
 ) -> Result<SurfaceRegistration> {
+    let all = register_candidates(vertices, triangles, frame, None, options)?;
+    Ok(all
+        .into_iter()
+        .min_by(|a, b| a.score.total_cmp(&b.score))
+        .expect("register_candidates returns at least one pose"))
+}
+
+/// Whether two transforms are one pose: rotations within [`DISTINCT_POSE_DEG`].
+fn same_pose(a: &RigidTransform, b: &RigidTransform) -> bool {
+    (a.rotation * b.rotation.inverse()).angle() < DISTINCT_POSE_DEG.to_radians()
+}
+
+/// Every distinct pose of a recorded frame on the skin whose score is within
+/// [`SurfaceOptions::candidate_margin`] times the best, each with its markers bound (see
+/// [`register_to_surface`] and the module doc). With `motion` (each marker's inspiratory
+/// direction up to sign, recorded frame, in the frame's order), the poses are ranked first
+/// by the breathing motion's verdict (a pose whose
+/// inspiratory motion points backwards or caudally comes after those where it points
+/// forwards and cranially) and then by score, in the choice of the finalists, in the
+/// margin (taken within each verdict) and in the order returned. The probes' finalists are chosen
+/// distinct (no two within [`DISTINCT_POSE_DEG`]) so that the trunk's near-symmetric poses
+/// are all run to convergence. Poses that bind fewer than 3 markers are dropped; an error
+/// when none binds 3.
+pub fn register_candidates(
+    vertices: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    frame: &[Option<Point3<f64>>],
+    motion: Option<&[Vector3<f64>]>,
+    options: &SurfaceOptions,
+) -> Result<Vec<SurfaceRegistration>> {
     let valid = (0.0..0.5).contains(&options.trim)
         && options.max_distance > 0.0
         && options.scale_range.0 > 0.0
         && options.scale_range.0 <= 1.0
         && options.scale_range.1 >= 1.0
-        && options.finalists > 0;
+        && options.finalists > 0
+        && options.candidate_margin >= 1.0;
     if !valid {
         return Err(Error::invalid(
             "surface registration options",
             format!("{options:?}"),
-            "0 <= trim < 0.5, max_distance > 0, scale range around 1, at least one finalist",
+            "0 <= trim < 0.5, max_distance > 0, scale range around 1, at least one finalist, candidate margin >= 1",
         ));
     }
     let tracked: Vec<usize> = (0..frame.len())
@@ -437,20 +556,32 @@ pub fn register_to_surface(
         options,
     };
     let mut iterations = 0;
-    let mut candidates = Vec::with_capacity(24 * SPINS);
+    let mut candidates = Vec::with_capacity(48 * SPINS);
     let long_axis = nalgebra::Unit::new_normalize(skin_axes.column(0).into_owned());
     if let Some(t) = options.start {
         candidates.push(Candidate {
+            prior: 0,
             t,
             trimmed_rms: f64::INFINITY,
             score: f64::INFINITY,
         });
     }
     let scan = if options.start.is_some() { 0 } else { 24 };
-    for (p, k) in axis_rotations()
+    // A patch of markers (one side of the trunk: its thinnest spread under a fifth of the
+    // next) started with its centroid at the skin's centre must travel a trunk's radius to
+    // the surface and may settle on the wrong side on the way; it is also started on the
+    // skin, at the skin point farthest along its outward side.
+    let outward = patch_outward(&points, &marker_mean, &marker_axes);
+    let placements: &[bool] = if outward.is_some() {
+        &[false, true]
+    } else {
+        &[false]
+    };
+    for (p, k, on_skin) in axis_rotations()
         .into_iter()
         .take(scan)
         .flat_map(|p| (0..SPINS).map(move |k| (p, k)))
+        .flat_map(|(p, k)| placements.iter().map(move |&o| (p, k, o)))
     {
         let spin = UnitQuaternion::from_axis_angle(
             &long_axis,
@@ -459,10 +590,22 @@ pub fn register_to_surface(
         let r = skin_axes * p * marker_axes.transpose();
         let rotation =
             spin * UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+        let target = match (on_skin, outward) {
+            (true, Some(n)) => {
+                let d = rotation * n;
+                vertices
+                    .iter()
+                    .map(|v| v.coords)
+                    .max_by(|a, b| (a - skin_mean).dot(&d).total_cmp(&(b - skin_mean).dot(&d)))
+                    .unwrap_or(skin_mean)
+            }
+            _ => skin_mean,
+        };
         let mut c = Candidate {
+            prior: 0,
             t: RigidTransform {
                 rotation,
-                translation: skin_mean - rotation * marker_mean,
+                translation: target - rotation * marker_mean,
                 scale: 1.0,
             },
             trimmed_rms: f64::INFINITY,
@@ -472,17 +615,74 @@ pub fn register_to_surface(
         iterations += icp.refine(&mut c, options.probe_iterations);
         candidates.push(c);
     }
-    candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
-    candidates.truncate(options.finalists);
-    for c in &mut candidates {
+    if let Some(motion) = motion {
+        for c in &mut candidates {
+            c.prior = icp.motion_class(&c.t, motion, &tracked);
+        }
+    }
+    candidates.sort_by(|a, b| a.prior.cmp(&b.prior).then(a.score.total_cmp(&b.score)));
+    let mut finalists: Vec<Candidate> = Vec::with_capacity(options.finalists);
+    for c in candidates {
+        if finalists.len() == options.finalists {
+            break;
+        }
+        if !finalists.iter().any(|f| same_pose(&f.t, &c.t)) {
+            finalists.push(c);
+        }
+    }
+    for c in &mut finalists {
         iterations += icp.run(c, options.max_iterations)?;
         iterations += icp.refine(c, options.max_iterations);
     }
-    let best = candidates
-        .into_iter()
-        .min_by(|a, b| a.score.total_cmp(&b.score))
-        .expect("candidates");
-    let matches = icp.match_points(&best.t);
+    if let Some(motion) = motion {
+        for c in &mut finalists {
+            c.prior = icp.motion_class(&c.t, motion, &tracked);
+        }
+    }
+    // The margin is taken within each class of the motion's verdict (the best class
+    // first), so that a pose the breathing motion favours is kept even when the shape
+    // prefers a pose it rules out.
+    finalists.sort_by(|a, b| a.prior.cmp(&b.prior).then(a.score.total_cmp(&b.score)));
+    let mut kept: Vec<Candidate> = Vec::new();
+    for c in finalists.iter() {
+        let class_best = finalists
+            .iter()
+            .filter(|f| f.prior == c.prior)
+            .map(|f| f.score)
+            .fold(f64::INFINITY, f64::min);
+        if c.score > options.candidate_margin * class_best {
+            continue;
+        }
+        if !kept.iter().any(|k| same_pose(&k.t, &c.t)) {
+            kept.push(c.clone());
+        }
+    }
+    let mut out = Vec::new();
+    let mut last_error = None;
+    for c in kept {
+        match bind_pose(&icp, &c, vertices, triangles, frame, &tracked, iterations) {
+            Ok(r) => out.push(r),
+            Err(e) => last_error = Some(e),
+        }
+    }
+    match (out.is_empty(), last_error) {
+        (true, Some(e)) => Err(e),
+        _ => Ok(out),
+    }
+}
+
+/// Binds each tracked marker of `frame` to its closest skin point in the pose of `c`.
+fn bind_pose(
+    icp: &SurfaceIcp,
+    c: &Candidate,
+    vertices: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    frame: &[Option<Point3<f64>>],
+    tracked: &[usize],
+    iterations: usize,
+) -> Result<SurfaceRegistration> {
+    let options = icp.options;
+    let matches = icp.match_points(&c.t);
     let mut attached = Vec::new();
     let mut excluded: Vec<(usize, f64)> = (0..frame.len())
         .filter(|i| !tracked.contains(i))
@@ -522,12 +722,13 @@ pub fn register_to_surface(
     let rms =
         (attached.iter().map(|a| a.distance.powi(2)).sum::<f64>() / attached.len() as f64).sqrt();
     Ok(SurfaceRegistration {
-        to_model: best.t,
+        to_model: c.t,
         rms,
-        trimmed_rms: best.trimmed_rms,
+        trimmed_rms: c.trimmed_rms,
         attached,
         excluded,
         iterations,
+        score: c.score,
     })
 }
 
