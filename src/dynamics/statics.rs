@@ -150,9 +150,10 @@ pub struct StaticsMemory {
     /// The contraction rate the last solve's iterations measured (the first iteration's
     /// convergence test of the next solve uses it).
     pub contraction: f64,
-    /// The predictor's history: times, states and pleural pressures of the last solutions.
+    /// The predictor's history: times, states, pleural pressures and thoracic volumes of the
+    /// last solutions.
     #[serde(default)]
-    pub history: Vec<(f64, Vec<f64>, f64)>,
+    pub history: Vec<(f64, Vec<f64>, f64, f64)>,
     /// Work counts.
     pub stats: StaticsStats,
 }
@@ -210,7 +211,7 @@ pub struct Statics {
     /// Contraction rate of the last converged solve's iterations.
     theta: f64,
     /// The last solutions (time, state, pleural pressure), for the predictor.
-    history: Vec<(f64, Vec<f64>, f64)>,
+    history: Vec<(f64, Vec<f64>, f64, f64)>,
     /// Work counts.
     pub stats: StaticsStats,
 }
@@ -418,7 +419,7 @@ impl Statics {
         if memory
             .history
             .iter()
-            .any(|(_, y, _)| y.len() != self.y.len())
+            .any(|(_, y, _, _)| y.len() != self.y.len())
         {
             return Err(StaticsError::NonFinite);
         }
@@ -715,7 +716,7 @@ impl Statics {
         if *act == self.act_good && target == self.volume_good {
             return Ok(self.pleural_good);
         }
-        let predicted = self.predict(time);
+        let predicted = self.predict(time, target);
         if !predicted {
             self.y.copy_from_slice(&self.y_good);
             self.pleural = self.pleural_good;
@@ -751,10 +752,12 @@ impl Statics {
 
     /// The predictor: the last solutions (at most [`HISTORY`], at distinct times within
     /// [`HISTORY_SPAN`] of `time`) extrapolated to `time` by their Lagrange polynomial, into
-    /// the iterate; whether there were at least two to extrapolate from. Along a smooth drive
-    /// the positions are a smooth function of time, so a quadratic through three solutions a
-    /// step apart starts Newton within O(h^3) of the next.
-    fn predict(&mut self, time: f64) -> bool {
+    /// the iterate, then moved along the tangent dz/dV = J_aug^-1 u / (u^T J_aug^-1 u) of the
+    /// kept factorisation (module doc) from the extrapolated volume to `target`; whether there
+    /// were at least two solutions to extrapolate from. Along a smooth drive the positions
+    /// are a smooth function of time, and a Runge-Kutta stage's volume departs from the
+    /// trajectory's by a step's error, which the tangent takes up to first order.
+    fn predict(&mut self, time: f64, target: f64) -> bool {
         let nodes: Vec<usize> = (0..self.history.len())
             .filter(|&i| (self.history[i].0 - time).abs() <= HISTORY_SPAN)
             .collect();
@@ -780,12 +783,14 @@ impl Statics {
         }
         self.y.fill(0.0);
         self.pleural = 0.0;
+        let mut volume = 0.0;
         for (&i, &w) in nodes.iter().zip(&weights) {
-            let (_, y, p) = &self.history[i];
+            let (_, y, p, v) = &self.history[i];
             for (a, b) in self.y.iter_mut().zip(y) {
                 *a += w * b;
             }
             self.pleural += w * p;
+            volume += w * v;
         }
         let q = self.l.sternum_q;
         let norm = self.y[q..q + 4].iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -793,18 +798,35 @@ impl Statics {
             return false;
         }
         self.y[q..q + 4].iter_mut().for_each(|v| *v /= norm);
+        if self.factored_at.is_some() {
+            let utb: f64 = self.ut.iter().zip(&self.b).map(|(x, y)| x * y).sum();
+            let dv = target - volume;
+            if utb < 0.0 && dv.is_finite() {
+                let scale = dv / utb;
+                for (r, b) in self.r.iter_mut().zip(&self.b) {
+                    *r = scale * b;
+                }
+                let l = self.l;
+                apply(&l, &mut self.y, &self.r);
+                self.pleural -= (self.rho + 1.0 / utb) * dv;
+            }
+        }
         true
     }
 
     /// Adds the solution just accepted, at `time`, to the predictor's history (replacing one
     /// at a time closer than 1 us, dropping the oldest beyond [`HISTORY`]).
     fn remember(&mut self, time: f64) {
-        self.history.retain(|(t, _, _)| (t - time).abs() > 1e-6);
+        self.history.retain(|(t, _, _, _)| (t - time).abs() > 1e-6);
         if self.history.len() >= HISTORY {
             self.history.remove(0);
         }
-        self.history
-            .push((time, self.y_good.clone(), self.pleural_good));
+        self.history.push((
+            time,
+            self.y_good.clone(),
+            self.pleural_good,
+            self.volume_good,
+        ));
     }
 
     /// From the last solution to (act, target) in 4, then 16 equal steps of the activations
