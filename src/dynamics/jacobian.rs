@@ -60,6 +60,44 @@ pub struct TorsoJacobian {
     full_mass: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
+/// For each body (block index of [`body_of`]), the bodies it interacts with, itself
+/// included, sorted: those it shares an element, a vector spring or a pressure triangle with.
+/// The block pattern of the Jacobians of the inertial right-hand side and of the static
+/// residual (`dynamics::statics`).
+pub(super) fn body_adjacency(model: &Model) -> Vec<Vec<u32>> {
+    let bodies = RIBS + 1 + model.free_vertices();
+    let mut adj: Vec<Vec<u32>> = (0..bodies).map(|b| vec![b as u32]).collect();
+    let mut link = |anchors: &mut dyn Iterator<Item = u32>| {
+        let mut set: Vec<usize> = anchors
+            .filter_map(|a| body_of(model.carrier[a as usize]))
+            .collect();
+        set.sort_unstable();
+        set.dedup();
+        for &a in &set {
+            adj[a].extend(set.iter().map(|&b| b as u32));
+        }
+    };
+    let el = &model.elements;
+    for e in 0..el.len() {
+        link(&mut el.path_of(e).iter().copied());
+    }
+    for i in 0..model.springs.a.len() {
+        link(&mut [model.springs.a[i], model.springs.b[i]].into_iter());
+    }
+    for t in model
+        .abdomen_triangles
+        .iter()
+        .chain(&model.thorax_triangles)
+    {
+        link(&mut t.iter().copied());
+    }
+    for nb in &mut adj {
+        nb.sort_unstable();
+        nb.dedup();
+    }
+    adj
+}
+
 /// Block index of a body: ribs 0..24, the sternum 24, free vertex j 25 + j.
 fn body_of(c: Carrier) -> Option<usize> {
     match c {
@@ -92,37 +130,10 @@ impl TorsoJacobian {
     /// colouring for `model`.
     pub fn new(model: &Model) -> TorsoJacobian {
         let l = Layout::new(model);
-        let bodies = RIBS + 1 + l.vertices;
-        let mut adj: Vec<Vec<u32>> = (0..bodies).map(|b| vec![b as u32]).collect();
-        let mut link = |anchors: &mut dyn Iterator<Item = u32>| {
-            let mut set: Vec<usize> = anchors
-                .filter_map(|a| body_of(model.carrier[a as usize]))
-                .collect();
-            set.sort_unstable();
-            set.dedup();
-            for &a in &set {
-                adj[a].extend(set.iter().map(|&b| b as u32));
-            }
-        };
-        let el = &model.elements;
-        for e in 0..el.len() {
-            link(&mut el.path_of(e).iter().copied());
-        }
-        for i in 0..model.springs.a.len() {
-            link(&mut [model.springs.a[i], model.springs.b[i]].into_iter());
-        }
-        for t in model
-            .abdomen_triangles
-            .iter()
-            .chain(&model.thorax_triangles)
-        {
-            link(&mut t.iter().copied());
-        }
+        let adj = body_adjacency(model);
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); l.len];
         let mut groups = vec![0u32; l.len];
-        for (b, nb) in adj.iter_mut().enumerate() {
-            nb.sort_unstable();
-            nb.dedup();
+        for (b, nb) in adj.iter().enumerate() {
             let mut cols = Vec::new();
             for &o in nb.iter() {
                 cols.extend(body_columns(&l, o as usize));

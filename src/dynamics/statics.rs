@@ -216,16 +216,6 @@ pub struct Statics {
     pub stats: StaticsStats,
 }
 
-/// Block index of a body: ribs 0..24, the sternum 24, free vertex j 25 + j.
-fn body_of(c: super::Carrier) -> Option<usize> {
-    match c {
-        super::Carrier::Ground => None,
-        super::Carrier::Rib(r) => Some(r as usize),
-        super::Carrier::Sternum => Some(RIBS),
-        super::Carrier::Vertex(j) => Some(RIBS + 1 + j as usize),
-    }
-}
-
 /// Unknowns of body `b` among the m position unknowns.
 fn body_unknowns(b: usize) -> std::ops::Range<usize> {
     if b < RIBS {
@@ -246,37 +236,10 @@ impl Statics {
     pub fn new(model: &Model, start: &[f64], act: &Activations) -> Statics {
         let l = Layout::new(model);
         let m = RIBS + 6 + 3 * l.vertices;
-        let bodies = RIBS + 1 + l.vertices;
-        let mut adj: Vec<Vec<u32>> = (0..bodies).map(|b| vec![b as u32]).collect();
-        let mut link = |anchors: &mut dyn Iterator<Item = u32>| {
-            let mut set: Vec<usize> = anchors
-                .filter_map(|a| body_of(model.carrier[a as usize]))
-                .collect();
-            set.sort_unstable();
-            set.dedup();
-            for &a in &set {
-                adj[a].extend(set.iter().map(|&b| b as u32));
-            }
-        };
-        let el = &model.elements;
-        for e in 0..el.len() {
-            link(&mut el.path_of(e).iter().copied());
-        }
-        for i in 0..model.springs.a.len() {
-            link(&mut [model.springs.a[i], model.springs.b[i]].into_iter());
-        }
-        for t in model
-            .abdomen_triangles
-            .iter()
-            .chain(&model.thorax_triangles)
-        {
-            link(&mut t.iter().copied());
-        }
+        let adj = super::jacobian::body_adjacency(model);
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); m];
         let mut groups = vec![0u32; m];
-        for (b, nb) in adj.iter_mut().enumerate() {
-            nb.sort_unstable();
-            nb.dedup();
+        for (b, nb) in adj.iter().enumerate() {
             let cols: Vec<u32> = nb
                 .iter()
                 .flat_map(|&o| body_unknowns(o as usize).map(|i| i as u32))
@@ -816,17 +779,18 @@ impl Statics {
 
     /// Adds the solution just accepted, at `time`, to the predictor's history (replacing one
     /// at a time closer than 1 us, dropping the oldest beyond [`HISTORY`]).
+    /// The oldest entry's buffer is reused, so that a full history allocates nothing.
     fn remember(&mut self, time: f64) {
         self.history.retain(|(t, _, _, _)| (t - time).abs() > 1e-6);
-        if self.history.len() >= HISTORY {
-            self.history.remove(0);
-        }
-        self.history.push((
-            time,
-            self.y_good.clone(),
-            self.pleural_good,
-            self.volume_good,
-        ));
+        let mut state = if self.history.len() >= HISTORY {
+            self.history.remove(0).1
+        } else {
+            Vec::with_capacity(self.y_good.len())
+        };
+        state.clear();
+        state.extend_from_slice(&self.y_good);
+        self.history
+            .push((time, state, self.pleural_good, self.volume_good));
     }
 
     /// From the last solution to (act, target) in 4, then 16 equal steps of the activations
