@@ -859,13 +859,27 @@ pub unsafe extern "C" fn bt_read_markers(
                 return Err(Failure(BT_ERR_NULL, "argument `xyz` is NULL".into()));
             }
             let out = std::slice::from_raw_parts_mut(xyz, 3 * n);
-            for (i, o) in out.iter_mut().enumerate() {
-                let q = crate::model::Quantity::Marker {
-                    index: (i / 3) as u16,
-                    axis: (i % 3) as u8,
-                };
-                let name = format!("marker[{}].{}", i / 3 + 1, ["x", "y", "z"][i % 3]);
-                *o = b.torso.read_output(&name, q)?;
+            // the markers of the state once (not 3 n reads by name); those past the marker
+            // count read 0, as in `bt_read`
+            let count = b.torso.marker_count().min(n);
+            let time = b.torso.time();
+            let markers = b
+                .torso
+                .markers()
+                .map_err(|e| crate::Error::State(format!("cannot read the markers: {e}")))?;
+            out.fill(0.0);
+            for (i, (o, p)) in out.chunks_exact_mut(3).zip(&markers[..count]).enumerate() {
+                for (axis, (o, x)) in o.iter_mut().zip(p.coords.iter()).enumerate() {
+                    if !x.is_finite() {
+                        let name = format!("marker[{}].{}", i + 1, ["x", "y", "z"][axis]);
+                        return Err(crate::Error::Numerical {
+                            time,
+                            reason: format!("`{name}` is not finite ({x})"),
+                        }
+                        .into());
+                    }
+                    *o = *x;
+                }
             }
             Ok(())
         })

@@ -17,11 +17,10 @@ impl Torso {
         {
             return Ok(0.0);
         }
-        let stats = self.solver_stats();
         let value = match q {
-            Quantity::SolverSteps => stats.steps as f64,
-            Quantity::SolverRejectedSteps => stats.rejected as f64,
-            Quantity::SolverRhsEvaluations => stats.rhs_evaluations as f64,
+            Quantity::SolverSteps => self.solver_stats().steps as f64,
+            Quantity::SolverRejectedSteps => self.solver_stats().rejected as f64,
+            Quantity::SolverRhsEvaluations => self.solver_stats().rhs_evaluations as f64,
             q => self
                 .read(q)
                 .map_err(|e| Error::State(format!("cannot read `{name}`: {e}")))?,

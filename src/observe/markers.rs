@@ -528,6 +528,18 @@ impl MarkerOutputs {
         Ok(self.model.as_ref().expect("set above"))
     }
 
+    /// Whether the markers of the current state have been computed (and
+    /// [`MarkerOutputs::positions`] returns them without work).
+    pub fn is_valid(&self) -> bool {
+        self.valid
+    }
+
+    /// The markers last computed (those of the current state when
+    /// [`MarkerOutputs::is_valid`]).
+    pub fn cached(&self) -> &[Point3<f64>] {
+        &self.positions
+    }
+
     /// The markers at state `y` (output frame), computed once per state.
     pub fn positions(
         &mut self,

@@ -59,6 +59,10 @@ impl Torso {
     /// (`scene.slp_reference`), otherwise in the model frame. Computed once per state: only
     /// the markers' skin points are blended.
     pub fn markers(&mut self) -> Result<&[Point3<f64>]> {
+        if self.markers.is_valid() {
+            // read again at the same state (the FMU reads one value at a time): no scene
+            return Ok(self.markers.cached());
+        }
         self.current_positions();
         let scene = self.marker_scene();
         let compiled = &self.compiled;
