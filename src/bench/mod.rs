@@ -6,6 +6,7 @@
 //! declared parameter ranges for the stress suite. Nothing here prints; the CLI (`src/cli/bench.rs`) formats the
 //! results and the stress tests (`tests/stress_*.rs`) assert on them.
 
+pub mod reduced;
 pub mod stress;
 
 use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};

@@ -82,7 +82,7 @@ const HISTORY_SPAN: f64 = 0.5;
 /// Lever [m] that turns a rib's or the sternum's rotation [rad] into a displacement for the
 /// convergence test: about the distance from a rib's hinge to its ventral end (docs/anatomy.md:
 /// rib lengths of 0.15-0.3 m).
-const LEVER: f64 = 0.2;
+pub(crate) const LEVER: f64 = 0.2;
 
 /// Why a static solve failed.
 #[derive(Clone, Debug, PartialEq)]
@@ -857,7 +857,7 @@ pub fn volume_of(model: &Model, y: &[f64]) -> f64 {
 /// pressure `frozen_abdomen` (or that of the volume) and the pleural pressure `pleural`;
 /// returns (V_A, V_T). `y`'s velocities must be zero.
 #[allow(clippy::too_many_arguments)]
-fn pressures_and_residual(
+pub(crate) fn pressures_and_residual(
     model: &Model,
     data: &mut Data,
     l: &Layout,
@@ -878,7 +878,7 @@ fn pressures_and_residual(
 
 /// Adds the increment `dz` (rib angles, sternum translation, sternum rotation vector in the
 /// world frame about its centre of mass, vertex displacements) to the state `y`.
-fn apply(l: &Layout, y: &mut [f64], dz: &[f64]) {
+pub(crate) fn apply(l: &Layout, y: &mut [f64], dz: &[f64]) {
     for r in 0..RIBS {
         y[l.theta + r] += dz[r];
     }

@@ -360,7 +360,7 @@ impl Torso {
 
     /// The activations applied at time `t` with the current inputs, drive and airway-opening
     /// pressure.
-    fn applied(&self, t: f64) -> Activations {
+    pub(crate) fn applied(&self, t: f64) -> Activations {
         let (right, left) = side_gains(&self.config);
         let mut groups = [0.0; 8];
         for g in MuscleGroup::ALL {
