@@ -371,15 +371,20 @@ impl MassMatrix {
             m.solve_blocks(col);
         }
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-        let gram = Matrix2::new(
-            1.0 / inertance[0] + dot(&ga, &z[0]),
-            dot(&ga, &z[1]),
-            dot(&gt, &z[0]),
-            1.0 / inertance[1] + dot(&gt, &z[1]),
-        );
-        m.s = gram
-            .try_inverse()
-            .expect("the volume coupling is invertible");
+        m.s = if inertance[0] > 0.0 {
+            let gram = Matrix2::new(
+                1.0 / inertance[0] + dot(&ga, &z[0]),
+                dot(&ga, &z[1]),
+                dot(&gt, &z[0]),
+                1.0 / inertance[1] + dot(&gt, &z[1]),
+            );
+            gram.try_inverse()
+                .expect("the volume coupling is invertible")
+        } else {
+            // true masses (frequency infinite): no inertance added to the abdomen's volume,
+            // only the airways' gas inertance on the thorax's
+            Matrix2::new(0.0, 0.0, 0.0, 1.0 / (1.0 / inertance[1] + dot(&gt, &z[1])))
+        };
         m.u = [ga, gt].concat();
         m.z = [z[0].clone(), z[1].clone()].concat();
         debug_assert_eq!(m.u.len(), 2 * n);

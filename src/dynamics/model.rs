@@ -591,9 +591,14 @@ impl Model {
         };
         // the abdomen's volume mode is damped like every other stiffness: beta dP/dV
         model.abdomen_viscosity = rayleigh * model.params.bulk_modulus / model.abdomen_rest_volume;
+        let scaling = if model.params.true_masses {
+            f64::INFINITY // nothing added: the true masses
+        } else {
+            model.params.inertia_frequency
+        };
         model.mass = MassMatrix::new(
             &model,
-            model.params.inertia_frequency,
+            scaling,
             [
                 model.params.bulk_modulus / model.abdomen_rest_volume,
                 model.pleural.slope(model.thorax_rest_volume),

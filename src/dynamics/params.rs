@@ -198,6 +198,14 @@ pub struct Params {
     /// it existed read [`INERTIA_FREQUENCY`].
     #[serde(default = "default_inertia_frequency")]
     pub inertia_frequency: f64,
+    /// The true masses: no selective mass scaling, so the mass matrix holds the bodies' and
+    /// vertices' own masses and inertias and the airways' gas inertance only (the damping
+    /// keeps its coefficients, tuned to [`Params::inertia_frequency`]). For validating the
+    /// quasi-static mode against the inertial formulation (docs/dynamics.md, "Quasi-static
+    /// mechanics"), not for running: an explicit step then shrinks to the true vibration
+    /// modes (80-130 Hz and above). Off by default.
+    #[serde(default)]
+    pub true_masses: bool,
     /// Specific airway conductance [1/(Pa s)]: the airway resistance between the alveoli and
     /// the mouth is 1 / (sGaw FRC) for the subject's functional residual capacity, and the
     /// pleural pressure carries the pressure drop R dV/dt of the flow through it.
@@ -348,6 +356,7 @@ impl Params {
             beta_max_diaphragm: diaphragm_contraction(posture),
             damping_ratio: 1.0,
             inertia_frequency: INERTIA_FREQUENCY,
+            true_masses: false,
             specific_airway_conductance: SPECIFIC_AIRWAY_CONDUCTANCE,
             tension_toe: TENSION_TOE,
             transverse_fraction: TRANSVERSE_FRACTION,
