@@ -120,6 +120,9 @@ pub struct SoakArgs {
     /// Output check rate [Hz].
     #[arg(long, default_value_t = 56.0)]
     pub rate: f64,
+    /// ODE solver of every scene: dopri5, bs3, high-order, rosenbrock or quasi-static.
+    #[arg(long = "solver", default_value = "dopri5")]
+    pub solver: String,
 }
 
 /// Runs `torso bench ...`.
@@ -760,13 +763,21 @@ fn soak(args: &SoakArgs) -> Result<()> {
             "positive values",
         ));
     }
+    let method = Method::from_name(&args.solver).ok_or_else(|| {
+        Error::invalid(
+            "--solver",
+            &args.solver,
+            "dopri5, bs3, high-order, rosenbrock or quasi-static",
+        )
+    })?;
     let mut rng = Pcg64::new(args.seed, 6);
     let (mut ok, mut numerical, mut bounds) = (0, 0, 0);
     let start = std::time::Instant::now();
     let bar = super::progress::Progress::new("soak", args.scenes, "scenes");
     bar.update(0, "");
     for i in 0..args.scenes {
-        let config = random_scene(&mut rng, args.lod)?;
+        let mut config = random_scene(&mut rng, args.lod)?;
+        config.solver.method = method;
         match stress_scene(&config, args.seconds, args.rate)? {
             SceneOutcome::Ok { .. } => ok += 1,
             SceneOutcome::Numerical(reason) => {
@@ -794,11 +805,12 @@ fn soak(args: &SoakArgs) -> Result<()> {
         "{ok} ok, {numerical} numerical failures, {bounds} out of bounds"
     ));
     println!(
-        "soak: {} scenes x {} s (seed {}, level of detail {}): {ok} ok, {numerical} numerical failures, {bounds} out of bounds, {:.0} s wall",
+        "soak: {} scenes x {} s (seed {}, level of detail {}, {}): {ok} ok, {numerical} numerical failures, {bounds} out of bounds, {:.0} s wall",
         args.scenes,
         args.seconds,
         args.seed,
         args.lod,
+        method.name(),
         start.elapsed().as_secs_f64()
     );
     if numerical + bounds > 0 {

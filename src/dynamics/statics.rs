@@ -75,6 +75,10 @@ const STIFFNESS_FLOOR: f64 = 1e-5;
 /// Solutions the predictor extrapolates from (a quadratic).
 const HISTORY: usize = 3;
 
+/// Solutions kept: more than a Dormand-Prince step's six stages, so that after a rejected
+/// step the solution at the step's start is still there to start the retry from.
+const KEPT: usize = 8;
+
 /// Oldest solution the predictor uses [s]: an eighth of a quiet breath, so that a stale one
 /// (after a restart) is not extrapolated from.
 const HISTORY_SPAN: f64 = 0.5;
@@ -154,6 +158,10 @@ pub struct StaticsMemory {
     /// last solutions.
     #[serde(default)]
     pub history: Vec<(f64, Vec<f64>, f64, f64)>,
+    /// The activations of each solution of `history` (levels, then the airway-opening
+    /// pressure); memories written before it existed give each the last solution's.
+    #[serde(default)]
+    pub history_activations: Vec<Vec<f64>>,
     /// Work counts.
     pub stats: StaticsStats,
 }
@@ -210,8 +218,11 @@ pub struct Statics {
     factored_at: Option<(Vec<f64>, f64, Activations)>,
     /// Contraction rate of the last converged solve's iterations.
     theta: f64,
-    /// The last solutions (time, state, pleural pressure), for the predictor.
+    /// The last solutions (time, state, pleural pressure, thoracic volume), for the
+    /// predictor and as starting points.
     history: Vec<(f64, Vec<f64>, f64, f64)>,
+    /// The activations of each solution in `history`.
+    history_act: Vec<Activations>,
     /// Work counts.
     pub stats: StaticsStats,
 }
@@ -286,6 +297,7 @@ impl Statics {
             factored_at: None,
             theta: 0.1,
             history: Vec::new(),
+            history_act: Vec::new(),
             stats: StaticsStats::default(),
         }
     }
@@ -328,6 +340,7 @@ impl Statics {
         self.factored_at = None;
         self.theta = 0.1;
         self.history.clear();
+        self.history_act.clear();
         self.solver.clear();
     }
 
@@ -344,6 +357,7 @@ impl Statics {
                 .map(|(y, p, a)| (y.clone(), *p, act_to_vec(a))),
             contraction: self.theta,
             history: self.history.clone(),
+            history_activations: self.history_act.iter().map(act_to_vec).collect(),
             stats: self.stats,
         }
     }
@@ -387,6 +401,17 @@ impl Statics {
             return Err(StaticsError::NonFinite);
         }
         self.history.clone_from(&memory.history);
+        self.history_act = if memory.history_activations.len() == memory.history.len()
+            && memory.history_activations.iter().all(|a| a.len() == 25)
+        {
+            memory
+                .history_activations
+                .iter()
+                .map(|a| act_from_vec(a))
+                .collect()
+        } else {
+            vec![self.act_good; memory.history.len()]
+        };
         Ok(())
     }
 
@@ -679,22 +704,25 @@ impl Statics {
         if *act == self.act_good && target == self.volume_good {
             return Ok(self.pleural_good);
         }
+        // where to start from: the latest solution at or before `time` (after a rejected
+        // step the later solutions are its stages', off the trajectory being retried)
+        let origin = self.origin(time);
         let predicted = self.predict(time, target);
         if !predicted {
-            self.y.copy_from_slice(&self.y_good);
-            self.pleural = self.pleural_good;
+            self.start_at(origin);
         }
         let mut first = self.iterate(model, data, act, target, tol);
-        if predicted && matches!(first, Err(StaticsError::NotConverged { .. })) {
-            // the extrapolation led astray: start again from the last solution
-            self.y.copy_from_slice(&self.y_good);
-            self.pleural = self.pleural_good;
+        if predicted && first.is_err() {
+            // the extrapolation led astray: start again from the origin
+            self.start_at(origin);
             first = self.iterate(model, data, act, target, tol);
         }
+        // An iterate off the equilibrium may be unstable where the equilibrium is not
+        // (elements slack or compressed on the way): the continuation, whose first
+        // factorisation is at the origin's equilibrium, decides whether the chest wall buckles.
         let outcome = match first {
             Ok(()) => Ok(()),
-            Err(StaticsError::Unstable { reason }) => Err(StaticsError::Unstable { reason }),
-            Err(_) => self.continuation(model, data, act, target, tol),
+            Err(_) => self.continuation(model, data, act, target, tol, origin),
         };
         match outcome {
             Ok(()) => {
@@ -713,17 +741,21 @@ impl Statics {
         }
     }
 
-    /// The predictor: the last solutions (at most [`HISTORY`], at distinct times within
-    /// [`HISTORY_SPAN`] of `time`) extrapolated to `time` by their Lagrange polynomial, into
+    /// The predictor: the latest solutions at or before `time` (at most [`HISTORY`], at
+    /// distinct times within [`HISTORY_SPAN`] of it) extrapolated to `time` by their Lagrange polynomial, into
     /// the iterate, then moved along the tangent dz/dV = J_aug^-1 u / (u^T J_aug^-1 u) of the
     /// kept factorisation (module doc) from the extrapolated volume to `target`; whether there
     /// were at least two solutions to extrapolate from. Along a smooth drive the positions
     /// are a smooth function of time, and a Runge-Kutta stage's volume departs from the
     /// trajectory's by a step's error, which the tangent takes up to first order.
     fn predict(&mut self, time: f64, target: f64) -> bool {
-        let nodes: Vec<usize> = (0..self.history.len())
-            .filter(|&i| (self.history[i].0 - time).abs() <= HISTORY_SPAN)
+        // the latest solutions at or before `time`: after a rejected step the later ones
+        // are its stages', off the trajectory being retried
+        let mut nodes: Vec<usize> = (0..self.history.len())
+            .filter(|&i| self.history[i].0 <= time && time - self.history[i].0 <= HISTORY_SPAN)
             .collect();
+        nodes.sort_by(|&a, &b| self.history[b].0.total_cmp(&self.history[a].0));
+        nodes.truncate(HISTORY);
         if nodes.len() < 2 {
             return false;
         }
@@ -777,12 +809,21 @@ impl Statics {
         true
     }
 
-    /// Adds the solution just accepted, at `time`, to the predictor's history (replacing one
-    /// at a time closer than 1 us, dropping the oldest beyond [`HISTORY`]).
+    /// Adds the solution just accepted, at `time`, to the history (replacing one at a time
+    /// closer than 1 us, dropping the oldest beyond [`KEPT`]).
     /// The oldest entry's buffer is reused, so that a full history allocates nothing.
     fn remember(&mut self, time: f64) {
-        self.history.retain(|(t, _, _, _)| (t - time).abs() > 1e-6);
-        let mut state = if self.history.len() >= HISTORY {
+        let mut i = 0;
+        while i < self.history.len() {
+            if (self.history[i].0 - time).abs() <= 1e-6 {
+                self.history.remove(i);
+                self.history_act.remove(i);
+            } else {
+                i += 1;
+            }
+        }
+        let mut state = if self.history.len() >= KEPT {
+            self.history_act.remove(0);
             self.history.remove(0).1
         } else {
             Vec::with_capacity(self.y_good.len())
@@ -791,6 +832,7 @@ impl Statics {
         state.extend_from_slice(&self.y_good);
         self.history
             .push((time, state, self.pleural_good, self.volume_good));
+        self.history_act.push(self.act_good);
     }
 
     /// From the last solution to (act, target) in 4, then 16 equal steps of the activations
@@ -802,15 +844,18 @@ impl Statics {
         act: &Activations,
         target: f64,
         tol: f64,
+        origin: Option<usize>,
     ) -> Result<(), StaticsError> {
         self.stats.continuations += 1;
-        let (a0, v0) = (self.act_good, self.volume_good);
+        let (a0, v0) = match origin {
+            Some(i) => (self.history_act[i], self.history[i].3),
+            None => (self.act_good, self.volume_good),
+        };
         let mut error = StaticsError::NotConverged {
             correction: f64::INFINITY,
         };
         for steps in [4u32, 16] {
-            self.y.copy_from_slice(&self.y_good);
-            self.pleural = self.pleural_good;
+            self.start_at(origin);
             self.factored_at = None;
             let mut ok = true;
             for k in 1..=steps {
@@ -823,11 +868,17 @@ impl Statics {
                 }
                 a.airway_opening = a0.airway_opening + s * (act.airway_opening - a0.airway_opening);
                 let v = v0 + s * (target - v0);
+                let before = self.stats.iterations;
                 if let Err(e) = self.iterate(model, data, &a, v, tol) {
-                    let unstable = matches!(e, StaticsError::Unstable { .. });
+                    // unstable at the origin's own equilibrium (the first factorisation of
+                    // the first step, before any correction): the chest wall buckles there,
+                    // finer steps do not help
+                    let at_origin = k == 1
+                        && self.stats.iterations == before
+                        && matches!(e, StaticsError::Unstable { .. });
                     error = e;
                     ok = false;
-                    if unstable {
+                    if at_origin {
                         return Err(error);
                     }
                     break;
@@ -838,6 +889,27 @@ impl Statics {
             }
         }
         Err(error)
+    }
+
+    /// The latest solution at or before `time` ([`Statics::solve`]'s starting point).
+    fn origin(&self, time: f64) -> Option<usize> {
+        (0..self.history.len())
+            .filter(|&i| self.history[i].0 <= time)
+            .max_by(|&a, &b| self.history[a].0.total_cmp(&self.history[b].0))
+    }
+
+    /// The iterate set to the solution `origin` (or the last solution).
+    fn start_at(&mut self, origin: Option<usize>) {
+        match origin {
+            Some(i) => {
+                self.y.copy_from_slice(&self.history[i].1);
+                self.pleural = self.history[i].2;
+            }
+            None => {
+                self.y.copy_from_slice(&self.y_good);
+                self.pleural = self.pleural_good;
+            }
+        }
     }
 }
 
