@@ -635,6 +635,14 @@ impl Torso {
             integrator.integrate(&mut system, time, volume, t)
         };
         q.fresh = false;
+        // the positions at the new time balance the activations the step ended with
+        q.held = Applied {
+            inputs: self.inputs,
+            airway_opening: self.airway_opening,
+            drive: &self.config.drive,
+            gains: side_gains(&self.config),
+        }
+        .activations(self.time);
         let failure = q.failure.take();
         self.observation = None;
         self.sides = None;

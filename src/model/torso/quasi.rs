@@ -36,6 +36,12 @@ pub(crate) struct Quasi {
     pub(crate) pleural: f64,
     /// The last failure of a solve inside an integration, for the error message.
     pub(crate) failure: Option<StaticsError>,
+    /// The activations the positions at the current time balance: those of the last step's
+    /// end (or of the start, a reset or a set state). An input set since acts from the next
+    /// step on, as it does on the inertial formulation's state, so that what is read at a
+    /// communication point does not depend on whether it was read before the inputs were
+    /// set (no direct feedthrough, as `<ModelStructure>` declares).
+    pub(crate) held: Activations,
 }
 
 /// What a snapshot keeps of the quasi-static mode.
@@ -52,6 +58,11 @@ pub struct QuasiMemory {
     pub flow: f64,
     /// Pleural pressure relative to rest [Pa] (when `fresh`).
     pub pleural: f64,
+    /// The activations the positions at the current time balance (levels, then the
+    /// airway-opening pressure); memories written before it existed give the activations
+    /// applied at the restored time.
+    #[serde(default)]
+    pub held: Option<Vec<f64>>,
 }
 
 /// The displacement tolerance of the static solves for an integrator's relative tolerance:
@@ -93,6 +104,7 @@ impl Quasi {
             flow: 0.0,
             pleural,
             failure: None,
+            held: *act,
         };
         q.reset(model, y, pleural, act);
         q
@@ -106,6 +118,7 @@ impl Quasi {
         self.flow = airflow(model, act, self.volume[0], pleural);
         self.fresh = true;
         self.failure = None;
+        self.held = *act;
     }
 
     /// What a snapshot keeps.
@@ -116,7 +129,14 @@ impl Quasi {
             fresh: self.fresh,
             flow: self.flow,
             pleural: self.pleural,
+            held: Some(self.statics_act_vec()),
         }
+    }
+
+    fn statics_act_vec(&self) -> Vec<f64> {
+        let mut v: Vec<f64> = self.held.level.iter().flatten().copied().collect();
+        v.push(self.held.airway_opening);
+        v
     }
 
     /// Restores [`Quasi::memory`] (the factorisation re-evaluated where it was taken, so
@@ -131,12 +151,23 @@ impl Quasi {
         if !memory.volume.is_finite() {
             return Err(StaticsError::NonFinite);
         }
+        let held = memory
+            .held
+            .as_deref()
+            .unwrap_or(&memory.statics.activations);
+        if held.len() != 25 || held.iter().any(|v| !v.is_finite()) {
+            return Err(StaticsError::NonFinite);
+        }
         self.statics.restore(model, data, &memory.statics)?;
         self.volume = [memory.volume];
         self.fresh = memory.fresh;
         self.flow = memory.flow;
         self.pleural = memory.pleural;
         self.failure = None;
+        for (g, sides) in self.held.level.iter_mut().enumerate() {
+            sides.copy_from_slice(&held[3 * g..3 * g + 3]);
+        }
+        self.held.airway_opening = held[24];
         Ok(())
     }
 }
@@ -178,7 +209,6 @@ impl Torso {
     /// applied now. Nothing in the other modes.
     pub(super) fn current_positions(&mut self) {
         let time = self.time;
-        let act = self.applied(time);
         let tolerance = super::quasi::statics_tolerance(self.config.solver.rtol);
         let Torso {
             compiled,
@@ -193,6 +223,7 @@ impl Torso {
         if q.fresh {
             return;
         }
+        let act = q.held;
         let model = &compiled.model;
         let target = thorax_of(model, q.volume[0]);
         match q.statics.solve(model, data, time, &act, target, tolerance) {
