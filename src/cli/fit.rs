@@ -295,6 +295,21 @@ pub fn fit_file(
     options: &FitOptions,
     flags: &FitFlags,
 ) -> Result<crate::fit::Fit> {
+    fit_file_observed(recording_path, read, model, out, options, flags, None)
+}
+
+/// [`fit_file`] reporting to `observer` (evaluations so far, best cost [m]) at every
+/// evaluation the search reports, on the calling thread, instead of drawing the progress
+/// bar on stderr (the Python package's progress callback and its Ctrl-C check).
+pub fn fit_file_observed(
+    recording_path: &Path,
+    read: &ReadOptions,
+    model: &ModelArgs,
+    out: &Path,
+    options: &FitOptions,
+    flags: &FitFlags,
+    mut observer: Option<&mut dyn FnMut(usize, f64)>,
+) -> Result<crate::fit::Fit> {
     let FitFlags {
         skin_fit,
         fit_size,
@@ -428,7 +443,24 @@ pub fn fit_file(
     );
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
-    let bar = Progress::new("fit", options.max_evals, "evaluations").up_to();
+    let bar = match observer {
+        None => Progress::new("fit", options.max_evals, "evaluations"),
+        Some(_) => Progress::to_writer(
+            "fit",
+            options.max_evals,
+            "evaluations",
+            false,
+            std::time::Duration::from_secs(3600),
+            Box::new(std::io::sink()),
+        ),
+    }
+    .up_to();
+    let mut report = |n: usize, b: f64| {
+        bar.update(n, format!("best cost {:.3} mm", b * 1e3));
+        if let Some(o) = observer.as_mut() {
+            o(n, b);
+        }
+    };
     let recording = match recording {
         ForFit::Grid(r) => r,
         ForFit::Named(markers) => {
@@ -445,7 +477,7 @@ pub fn fit_file(
                 &SurfaceOptions::default(),
                 pose,
                 options,
-                &mut |n, b| bar.update(n, format!("best cost {:.3} mm", b * 1e3)),
+                &mut report,
             )
             .map_err(|e| Error::State(format!("{}: {e}", recording_path.display())))?;
             let named_set = (set_fit.bound, markers.markers());
@@ -467,17 +499,13 @@ pub fn fit_file(
     let fit = if skin_fit {
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
         let reference = out.with_file_name(format!("{stem}_reference.csv"));
-        let fit = fit_with_skin(&config, &recording, &reference, options, &mut |n, b| {
-            bar.update(n, format!("best cost {:.3} mm", b * 1e3))
-        })?;
+        let fit = fit_with_skin(&config, &recording, &reference, options, &mut report)?;
         println!("rest-pose reference grid: {}", reference.display());
         model.scene.slp_reference = Some(reference);
         fit
     } else {
         let mut source = TorsoMarkers::new(config.clone())?;
-        fit_recording(&mut source, &recording, options, &mut |n, b| {
-            bar.update(n, format!("best cost {:.3} mm", b * 1e3))
-        })?
+        fit_recording(&mut source, &recording, options, &mut report)?
     };
     finish_fit(
         fit,
