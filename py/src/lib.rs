@@ -27,7 +27,7 @@ use pyo3::types::{PyBytes, PyDict};
 use std::path::PathBuf;
 
 create_exception!(
-    _native,
+    breathing_torso,
     TorsoError,
     PyException,
     "An error of the breathing torso library (a failed solve, a state outside the physiological bounds, a file that cannot be read); its message is the library's."

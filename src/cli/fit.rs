@@ -300,7 +300,8 @@ pub fn fit_file(
 
 /// [`fit_file`] reporting to `observer` (evaluations so far, best cost [m]) at every
 /// evaluation the search reports, on the calling thread, instead of drawing the progress
-/// bar on stderr (the Python package's progress callback and its Ctrl-C check).
+/// bar on stderr and printing the summary on stdout (the Python package's fit: its progress
+/// callback and its Ctrl-C check; the result is the JSON). Warnings still go to stderr.
 pub fn fit_file_observed(
     recording_path: &Path,
     read: &ReadOptions,
@@ -310,6 +311,8 @@ pub fn fit_file_observed(
     flags: &FitFlags,
     mut observer: Option<&mut dyn FnMut(usize, f64)>,
 ) -> Result<crate::fit::Fit> {
+    // With an observer the caller reads the result from the JSON: nothing is printed.
+    let quiet = observer.is_some();
     let FitFlags {
         skin_fit,
         fit_size,
@@ -383,16 +386,18 @@ pub fn fit_file_observed(
             &SizeOptions::default(),
         )
         .map_err(in_file)?;
-        println!(
-            "subject size          estimated ({why}): stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
-            config.subject.stature,
-            size.subject.stature,
-            config.subject.mass,
-            size.subject.mass,
-            size.start_rms_m * 1e3,
-            size.rms_m * 1e3,
-            size.evaluations
-        );
+        if !quiet {
+            println!(
+                "subject size          estimated ({why}): stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
+                config.subject.stature,
+                size.subject.stature,
+                config.subject.mass,
+                size.subject.mass,
+                size.start_rms_m * 1e3,
+                size.rms_m * 1e3,
+                size.evaluations
+            );
+        }
         let json = serde_json::json!({
             "method": "stature and mass minimising the first frame's rigid registration residual (bounded Nelder-Mead)",
             "why": why,
@@ -427,20 +432,22 @@ pub fn fit_file_observed(
         "drift_removed": options.drift,
         "why": about_means.unwrap_or("the grid of a given subject: the thesis's eq. 3.1 after one rigid pose correction"),
     });
-    println!(
-        "cost basis            {}",
-        match about_means {
-            Some(why) => format!(
-                "each marker's motion about its own mean ({why}){}",
-                if options.drift {
-                    ", each marker's slow drift removed (--no-drift keeps it)"
-                } else {
-                    ""
-                }
-            ),
-            None => "marker positions after one rigid pose correction (thesis eq. 3.1)".into(),
-        }
-    );
+    if !quiet {
+        println!(
+            "cost basis            {}",
+            match about_means {
+                Some(why) => format!(
+                    "each marker's motion about its own mean ({why}){}",
+                    if options.drift {
+                        ", each marker's slow drift removed (--no-drift keeps it)"
+                    } else {
+                        ""
+                    }
+                ),
+                None => "marker positions after one rigid pose correction (thesis eq. 3.1)".into(),
+            }
+        );
+    }
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
     let bar = match observer {
@@ -492,6 +499,7 @@ pub fn fit_file_observed(
                     named_set: Some(&named_set),
                     size: size.as_ref(),
                     cost: &cost_json,
+                    quiet,
                 },
             );
         }
@@ -500,7 +508,9 @@ pub fn fit_file_observed(
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
         let reference = out.with_file_name(format!("{stem}_reference.csv"));
         let fit = fit_with_skin(&config, &recording, &reference, options, &mut report)?;
-        println!("rest-pose reference grid: {}", reference.display());
+        if !quiet {
+            println!("rest-pose reference grid: {}", reference.display());
+        }
         model.scene.slp_reference = Some(reference);
         fit
     } else {
@@ -518,6 +528,7 @@ pub fn fit_file_observed(
             named_set: None,
             size: size.as_ref(),
             cost: &cost_json,
+            quiet,
         },
     )
 }
@@ -548,6 +559,8 @@ struct FitExtras<'a> {
     size: Option<&'a serde_json::Value>,
     /// What the cost compares and why, as written under `cost_basis`.
     cost: &'a serde_json::Value,
+    /// Print nothing on stdout (the result is read from the JSON).
+    quiet: bool,
 }
 
 /// Ends a fit of `recording_path`: closes the progress bar, runs the fitted model's breaths
@@ -567,6 +580,7 @@ fn finish_fit(
         named_set,
         size,
         cost,
+        quiet,
     } = extras;
     // The search's count leaves out the linearised start's runs; the fit's count is whole.
     bar.update(fit.evaluations, "");
@@ -601,10 +615,15 @@ fn finish_fit(
         std::fs::write(&outputs.json, text + "\n").map_err(|e| Error::io(&outputs.json, e))?;
     }
     if let Some((bound, recorded)) = named_set {
-        println!("{}", marker_set_summary(bound, *recorded));
+        if !quiet {
+            println!("{}", marker_set_summary(bound, *recorded));
+        }
         for w in &bound.orientation.warnings {
             eprintln!("warning: {w}");
         }
+    }
+    if quiet {
+        return Ok(fit);
     }
     println!("{}", summary(&fit));
     println!(

@@ -321,7 +321,7 @@ def fit(
     Args:
         recording: a recording file (any format :func:`read_recording` reads) or a
             :class:`Recording`.
-        out: the result JSON to write, with ``<stem>_lung_volume.csv`` and the report
+        out: the result JSON to write (its folder is created), with ``<stem>_lung_volume.csv`` and the report
             figure beside it; None writes them to a temporary folder removed afterwards.
         subject, posture, lod, solver, rtol: the model, as for :class:`Torso`; with no
             ``stature`` or ``mass`` in ``subject`` the size is estimated from the recording
@@ -359,6 +359,7 @@ def fit(
         else:
             path = Path(os.fspath(recording))
         json_path = Path(os.fspath(out)) if out is not None else Path(tmp) / "fit" / "result.json"
+        json_path.parent.mkdir(parents=True, exist_ok=True)
         written = _native.fit(
             os.fspath(path),
             os.fspath(json_path),
