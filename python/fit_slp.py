@@ -7,13 +7,14 @@ The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface
    (the Python package; docs/python.md), so as `torso fit` reads it (docs/recordings.md):
    the grid CSV, a C3D file, a TRC file or a CSV of named markers (`--units`, `--rate` when
    the file does not say), the markers labelled `marker[1]`..`marker[R*C]`;
-2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`); with
+2. the first frame is registered rigidly to the FMU's rest markers by the library (`breathing_torso.register`, as `torso fit`); with
    `--slp-reference` a first fit gives the rest-pose grid the recording implies, written as
    `<out stem>_reference.csv`, and the FMU registers its grid and fits its skin to it
    (`slp.reference`, as `torso fit --skin-fit`; its `marker[i].x|y|z` outputs are then in the
    recording's frame) before a polish;
 3. the breathing frequency comes from the recording's principal displacement (PCA of the
-   detrended marker trajectories, Hann-windowed DFT with two-bin interpolation);
+   detrended marker trajectories, Hann-windowed DFT with two-bin interpolation), estimated
+   by the library (`breathing_torso.breathing_frequency`), as `torso fit` estimates it;
 4. a linearised start (two basis runs, rib cage alone and diaphragm alone, time-shifted,
    non-negative least squares) then scipy's bounded Nelder-Mead over
    (drive.ribs.amplitude, drive.diaphragm.amplitude, drive.ribs.phase, drive.diaphragm.phase);
@@ -124,40 +125,13 @@ def detrend(x: np.ndarray) -> np.ndarray:
     return x - mean - slope * t[:, None]
 
 
-def fill_gaps(times: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Linear interpolation of NaN gaps in each column (nearest value at the ends)."""
-    out = x.copy()
-    for j in range(x.shape[1]):
-        ok = ~np.isnan(x[:, j])
-        if ok.sum() >= 2:
-            out[:, j] = np.interp(times, times[ok], x[ok, j])
-        else:
-            out[:, j] = 0.0
-    return out
-
-
 def breathing_frequency(times: np.ndarray, pts: np.ndarray):
-    """Principal displacement (first principal component of the detrended trajectories) and
-    its frequency: Hann-windowed DFT over 0.1-1 Hz, two-bin interpolation."""
-    n = len(times)
-    fs = (n - 1) / (times[-1] - times[0])
-    x = detrend(fill_gaps(times, pts.reshape(n, -1)))
-    _, _, vt = np.linalg.svd(x, full_matrices=False)
-    axis = vt[0]
-    signal = x @ axis
-    s = detrend(signal[:, None])[:, 0]
-    w = 0.5 * (1.0 - np.cos(2.0 * np.pi * np.arange(n) / n))
-    mags = np.abs(np.fft.rfft(s * w))
-    lo, hi = max(1, int(0.1 * n / fs)), min(len(mags) - 2, int(math.ceil(1.0 * n / fs)))
-    k = lo + int(np.argmax(mags[lo : hi + 1]))
-    left, right = mags[k - 1], mags[k + 1]
-    if right >= left:
-        a = right / mags[k]
-        delta = (2 * a - 1) / (a + 1)
-    else:
-        a = left / mags[k]
-        delta = -(2 * a - 1) / (a + 1)
-    return (k + float(np.clip(delta, -1, 1))) * fs / n, signal, axis.reshape(-1, 3)
+    """The breathing frequency, the principal displacement and each point's loading on its
+    axis, as `torso fit` estimates them (`breathing_torso.breathing_frequency`: gap-filled,
+    detrended trajectories, first principal axis, Hann-windowed DFT with two-bin
+    interpolation and the autocorrelation cross-check)."""
+    est = breathing_torso.breathing_frequency(times, pts)
+    return est["frequency_hz"], est["signal"], est["loadings"]
 
 
 def _moving_average(v: np.ndarray, half: int) -> np.ndarray:
@@ -239,15 +213,10 @@ def recording_ti_ttot(times: np.ndarray, signal: np.ndarray, loadings: np.ndarra
 
 
 def kabsch(model: np.ndarray, rec: np.ndarray):
-    """Rigid transform (R, t) minimising sum |R rec + t - model|^2 (Umeyama 1991)."""
-    mm, mr = model.mean(axis=0), rec.mean(axis=0)
-    cov = (model - mm).T @ (rec - mr) / len(model)
-    u, _, vt = np.linalg.svd(cov)
-    d = np.eye(3)
-    if np.linalg.det(u) * np.linalg.det(vt) < 0:
-        d[2, 2] = -1.0
-    r = u @ d @ vt
-    return r, mm - r @ mr
+    """Rigid transform (R, t) minimising sum |R rec + t - model|^2, the registration of
+    `torso fit` (`breathing_torso.register`, Umeyama 1991)."""
+    reg = breathing_torso.register(model, rec)
+    return reg["rotation"], reg["translation"]
 
 
 def wrap(a: float) -> float:

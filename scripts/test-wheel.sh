@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Tests the Python package as a user installs it: builds the wheel (scripts/build-wheel.sh),
 # checks that it is manylinux2014 (auditwheel show: glibc 2.17 symbol versions, no library
-# outside the manylinux policy), installs it into a fresh venv in a temporary folder (no
+# outside the manylinux policy) and that the FMUs inside carry no pyo3, installs it into a fresh venv in a temporary folder (no
 # source tree on the path), and runs the package's tests (py/tests, copied there) with
 # pytest against the `torso` tool built from the same source (target/release/torso).
 #
@@ -33,6 +33,20 @@ grep -q 'manylinux_2_17_x86_64' <<<"$show" || {
 }
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
+echo "== the FMUs in the wheel carry no Python binding"
+.venv/bin/python - "$WHEEL" <<'PY'
+import sys, zipfile, io
+wheel = zipfile.ZipFile(sys.argv[1])
+fmus = [n for n in wheel.namelist() if n.endswith(".fmu")]
+assert len(fmus) == 2, f"expected the FMI 2.0 and 3.0 FMUs in the wheel, found {fmus}"
+for name in fmus:
+    fmu = zipfile.ZipFile(io.BytesIO(wheel.read(name)))
+    for binary in (n for n in fmu.namelist() if n.startswith("binaries/") and not n.endswith("/")):
+        data = fmu.read(binary)
+        for needle in (b"PyInit_", b"pyo3", b"Py_IsInitialized"):
+            assert needle not in data, f"{name}:{binary} contains {needle!r}"
+        print(f"   {name}:{binary}: {len(data)} bytes, no pyo3")
+PY
 echo "== fresh venv in $WORK"
 python3 -m venv "$WORK/venv"
 # fmpy runs the bundled FMUs, pandas the table results

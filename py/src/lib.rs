@@ -486,16 +486,7 @@ fn write_recording(
     let frames = if per_frame == 0 {
         vec![Vec::new(); times.len()]
     } else {
-        positions
-            .chunks_exact(per_frame)
-            .map(|f| {
-                f.chunks_exact(3)
-                    .map(|p| {
-                        (p.iter().all(|v| v.is_finite())).then(|| Point3::new(p[0], p[1], p[2]))
-                    })
-                    .collect()
-            })
-            .collect()
+        frames_of(&positions, labels.len())
     };
     let m = Markers {
         labels,
@@ -506,6 +497,117 @@ fn write_recording(
         provenance,
     };
     py.detach(|| m.write(&path)).map_err(to_py)
+}
+
+/// Per frame, per point: the positions of f64 bytes (frames x points x 3), `None` where a
+/// coordinate is not finite (a missing sample).
+fn frames_of(values: &[f64], points: usize) -> Vec<Vec<Option<Point3<f64>>>> {
+    if points == 0 {
+        return Vec::new();
+    }
+    values
+        .chunks_exact(points * 3)
+        .map(|f| {
+            f.chunks_exact(3)
+                .map(|p| {
+                    p.iter()
+                        .all(|v| v.is_finite())
+                        .then(|| Point3::new(p[0], p[1], p[2]))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The breathing frequency of a grid recording as `torso fit` reads it: the principal
+/// displacement (first principal axis of the gap-filled, detrended trajectories) and its
+/// frequency (Hann-windowed DFT with two-bin interpolation, autocorrelation cross-check).
+/// Returns (frequency [Hz], signal bytes (frames), loadings bytes (points x 3), explained
+/// variance fraction).
+#[pyfunction]
+fn breathing_frequency<'py>(
+    py: Python<'py>,
+    times: &[u8],
+    positions: &[u8],
+    points: usize,
+) -> PyResult<(f64, Bound<'py, PyBytes>, Bound<'py, PyBytes>, f64)> {
+    let times = from_f64_bytes(times, "time")?;
+    let values = from_f64_bytes(positions, "positions")?;
+    if points == 0 || values.len() != times.len() * points * 3 {
+        return Err(PyValueError::new_err(format!(
+            "positions: {} values, expected frames x points x 3 = {} x {points} x 3",
+            values.len(),
+            times.len()
+        )));
+    }
+    let recording = breathing_torso::fit::Recording {
+        grid: (1, points),
+        frames: frames_of(&values, points),
+        times,
+        units: Units::Metres,
+        provenance: Vec::new(),
+    };
+    let (pd, f) = py
+        .detach(|| -> breathing_torso::Result<_> {
+            let pd = breathing_torso::fit::principal::principal_displacement(&recording)?;
+            let f = breathing_torso::stats::frequency::estimate_frequency(
+                &pd.signal,
+                recording.rate(),
+            )?;
+            Ok((pd, f))
+        })
+        .map_err(to_py)?;
+    let loadings: Vec<f64> = pd.loadings.iter().flat_map(|l| [l.x, l.y, l.z]).collect();
+    Ok((
+        f.frequency_hz,
+        f64_bytes(py, &pd.signal),
+        f64_bytes(py, &loadings),
+        pd.explained,
+    ))
+}
+
+/// What `register` returns: rotation (3 x 3 row-major bytes), translation, scale, rms [m].
+type Transform<'py> = (Bound<'py, PyBytes>, (f64, f64, f64), f64, f64);
+
+/// The least-squares rigid (or, `with_scale`, similarity) transform mapping the tracked
+/// `recorded` points onto `model` (Umeyama 1991), as `torso fit` registers a frame: returns
+/// (rotation bytes, 3 x 3 row-major; translation (3); scale; rms residual [m]).
+#[pyfunction]
+#[pyo3(signature = (model, recorded, with_scale=false))]
+fn register<'py>(
+    py: Python<'py>,
+    model: &[u8],
+    recorded: &[u8],
+    with_scale: bool,
+) -> PyResult<Transform<'py>> {
+    let model = from_f64_bytes(model, "model")?;
+    let recorded = from_f64_bytes(recorded, "recorded")?;
+    if model.len() % 3 != 0 || model.len() != recorded.len() {
+        return Err(PyValueError::new_err(format!(
+            "model and recorded: {} and {} values, expected the same number of points x 3",
+            model.len(),
+            recorded.len()
+        )));
+    }
+    let n = model.len() / 3;
+    let model: Vec<Point3<f64>> = model
+        .chunks_exact(3)
+        .map(|p| Point3::new(p[0], p[1], p[2]))
+        .collect();
+    let recorded = frames_of(&recorded, n).pop().unwrap_or_default();
+    let (t, rms) = breathing_torso::anatomy::skin::register_rigid(&model, &recorded, with_scale)
+        .map_err(to_py)?;
+    let m = t.rotation.to_rotation_matrix();
+    let rows: Vec<f64> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .map(|(i, j)| m.matrix()[(i, j)])
+        .collect();
+    Ok((
+        f64_bytes(py, &rows),
+        (t.translation.x, t.translation.y, t.translation.z),
+        t.scale,
+        rms,
+    ))
 }
 
 /// A Python error raised inside a fit's progress callback, carried out of the fit by
@@ -729,6 +831,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_recording, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
+    m.add_function(wrap_pyfunction!(breathing_frequency, m)?)?;
+    m.add_function(wrap_pyfunction!(register, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add("TorsoError", m.py().get_type::<TorsoError>())?;
     Ok(())

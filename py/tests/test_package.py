@@ -375,3 +375,40 @@ def test_exceptions_carry_the_library_message():
     with pytest.raises(bt.TorsoError, match=r"volume\.\w+ = .* outside the physiological bounds"):
         t.simulate(1.0)
     assert t.time == 0.0
+
+
+def test_breathing_frequency_of_a_recording(synth_recording):
+    """The recording's frequency as `torso fit` finds it (`breathing frequency` in its JSON's
+    `frequency`), from the package's arrays; the principal displacement's loadings are a unit
+    vector over the points' coordinates."""
+    rec = bt.read_recording(synth_recording)
+    est = bt.breathing_frequency(rec.time, rec.positions)
+    # torso synth's default drive: 0.25 Hz; the fit's acceptance (docs/results.md): within 1 %
+    assert abs(est["frequency_hz"] - 0.25) <= 0.01 * 0.25
+    assert est["signal"].shape == rec.time.shape
+    assert est["loadings"].shape == (60, 3)
+    assert np.isclose(np.sum(est["loadings"] ** 2), 1.0, rtol=0, atol=1e-12)
+    assert 0.0 < est["explained"] <= 1.0
+    with pytest.raises(ValueError, match="expected .frames, points, 3."):
+        bt.breathing_frequency(rec.time[:-1], rec.positions)
+
+
+def test_register_recovers_a_known_pose():
+    """Points moved by a known rotation, translation (and scale) are registered back exactly,
+    untracked points skipped; fewer than three tracked points is an error."""
+    rng = np.random.default_rng(7)
+    model = rng.normal(size=(12, 3)) * 0.1
+    a = 0.7
+    rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    recorded = (model @ rot.T) * 1.3 + [0.5, -0.2, 1.0]
+    recorded[3] = np.nan
+    rigid = bt.register(model, recorded / 1.3)
+    assert rigid["scale"] == 1.0
+    back = (recorded / 1.3) @ rigid["rotation"].T + rigid["translation"]
+    ok = ~np.isnan(recorded[:, 0])
+    assert np.allclose(back[ok], model[ok], rtol=0, atol=1e-12) and rigid["rms_m"] < 1e-12
+    similar = bt.register(model, recorded, with_scale=True)
+    assert similar["scale"] == pytest.approx(1 / 1.3, rel=1e-12)
+    recorded[:10] = np.nan
+    with pytest.raises(ValueError):
+        bt.register(model, recorded)

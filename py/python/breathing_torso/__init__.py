@@ -38,6 +38,8 @@ __all__ = [
     "write_recording",
     "fit",
     "validate",
+    "breathing_frequency",
+    "register",
     "fmu_path",
     "TorsoError",
     "MUSCLE_GROUPS",
@@ -460,6 +462,66 @@ def validate(
         bool(detrend),
     )
     return json.loads(text)
+
+
+def breathing_frequency(time: Any, positions: Any) -> Dict[str, Any]:
+    """The breathing frequency of a marker recording as ``torso fit`` estimates it.
+
+    The principal displacement is the projection of the gap-filled (linear in time), linearly
+    detrended trajectories on their first principal axis; its frequency comes from a
+    Hann-windowed DFT with two-bin interpolation, cross-checked by the autocorrelation.
+
+    Args:
+        time: frame times [s], shape (frames,).
+        positions: marker positions [m], shape (frames, points, 3), NaN where missing.
+
+    Returns:
+        ``frequency_hz``; ``signal`` (frames,), the principal displacement [m];
+        ``loadings`` (points, 3), each point's share of the principal axis; ``explained``,
+        the fraction of the detrended variance on the axis.
+    """
+    t = np.asarray(time, dtype=np.float64)
+    p = np.asarray(positions, dtype=np.float64)
+    if p.ndim != 3 or p.shape[0] != len(t) or p.shape[2] != 3:
+        raise ValueError(f"positions: shape {p.shape}, expected (frames, points, 3) with {len(t)} frames")
+    f, signal, loadings, explained = _native.breathing_frequency(
+        _f64_bytes(t, "time"), _f64_bytes(p, "positions"), p.shape[1]
+    )
+    return {
+        "frequency_hz": f,
+        "signal": _f64(signal),
+        "loadings": _f64(loadings).reshape(-1, 3),
+        "explained": explained,
+    }
+
+
+def register(model: Any, recorded: Any, with_scale: bool = False) -> Dict[str, Any]:
+    """The least-squares rigid transform (with ``with_scale``, similarity) that maps the
+    ``recorded`` points onto the ``model`` points (Umeyama 1991), as ``torso fit`` registers
+    a frame to the model's grid.
+
+    Args:
+        model: points (n, 3) [m].
+        recorded: the same points as recorded (n, 3), NaN rows for untracked points (at
+            least three tracked).
+
+    Returns:
+        ``rotation`` (3, 3), ``translation`` (3,), ``scale`` and ``rms_m``, the
+        root-mean-square residual: ``model ~ scale * recorded @ rotation.T + translation``.
+    """
+    m = np.asarray(model, dtype=np.float64)
+    r = np.asarray(recorded, dtype=np.float64)
+    if m.ndim != 2 or m.shape[1] != 3 or r.shape != m.shape:
+        raise ValueError(f"model and recorded: shapes {m.shape} and {r.shape}, expected the same (n, 3)")
+    rotation, translation, scale, rms = _native.register(
+        _f64_bytes(m, "model"), _f64_bytes(r, "recorded"), bool(with_scale)
+    )
+    return {
+        "rotation": _f64(rotation).reshape(3, 3),
+        "translation": np.array(translation, dtype=np.float64),
+        "scale": scale,
+        "rms_m": rms,
+    }
 
 
 def fmu_path(fmi_version: int = 2) -> str:
