@@ -4,8 +4,9 @@
 #   1. the distributable FMUs (scripts/deploy.sh: linux64 against glibc 2.17, win64 where its
 #      toolchain is had; FMI 2.0 and 3.0) into py/python/breathing_torso/fmu/, so that they
 #      ship inside the wheel (breathing_torso.fmu_path());
-#   2. `maturin build --release` of the extension module (py/, pyo3 abi3: one wheel for every
-#      CPython >= 3.9) with maturin from python/requirements-wheel.txt in .venv. The wheel is
+#   2. `maturin build --profile wheel` (release code without debug info) of the extension
+#      module (py/, pyo3 abi3: one wheel for every CPython >= 3.9) with maturin from
+#      python/requirements-wheel.txt in .venv. The wheel is
 #      built for manylinux2014 (glibc 2.17) with cargo-zigbuild's zig (`--zig`), the same
 #      baseline as the FMU's library; maturin's own audit checks the glibc symbol versions.
 #
@@ -28,6 +29,6 @@ bash scripts/deploy.sh --platforms "$PLATFORMS" --out "$FMU_DIR/BreathingTorso.f
 echo "== wheel (maturin, manylinux2014)"
 rm -f target/wheels/breathing_torso-*.whl
 # deploy.sh installed ziglang and cargo-zigbuild into .venv; maturin --zig runs them.
-PATH="$PWD/.venv/bin:$PATH" .venv/bin/maturin build --release --zig --compatibility manylinux2014 \
+PATH="$PWD/.venv/bin:$PATH" .venv/bin/maturin build --profile wheel --zig --compatibility manylinux2014 \
   -m py/Cargo.toml -i "$PWD/.venv/bin/python" --out target/wheels
 ls -l target/wheels/breathing_torso-*.whl

@@ -9,12 +9,13 @@
 //! Arrays cross the boundary as `bytes` of little-endian f64 (numpy reads them without a
 //! copy), so the binding needs no numpy headers. Errors become Python exceptions carrying the
 //! crate's message ([`to_py`]). Simulation and fits run with the GIL released; a fit checks
-//! for Ctrl-C (and calls the user's progress callback) at every cost evaluation it reports.
+//! for Ctrl-C (and calls the user's progress callback) at every cost evaluation it reports, a
+//! simulation every 64 output frames.
 
 use breathing_torso::cli::common::{DriveArgs, SolverArgs, SubjectArgs};
 use breathing_torso::cli::fit::{FitFlags, ModelArgs, default_threads};
 use breathing_torso::fit::{FitOptions, Format, Markers, Method, PoseOptions, ReadOptions, Units};
-use breathing_torso::model::run::{Frame, frame, run};
+use breathing_torso::model::run::{Frame, frame};
 use breathing_torso::model::{AdvanceOptions, Drive};
 use breathing_torso::stats::io::Series;
 use breathing_torso::stats::prepare::SpiroKind;
@@ -261,6 +262,18 @@ fn group(name: &str) -> PyResult<MuscleGroup> {
         })
 }
 
+/// Why a simulation stopped early: the library's error, or a Python exception (Ctrl-C).
+enum Stop {
+    Library(Error),
+    Python(PyErr),
+}
+
+impl From<Error> for Stop {
+    fn from(e: Error) -> Stop {
+        Stop::Library(e)
+    }
+}
+
 /// The breathing torso model (see the Python class `breathing_torso.Torso`).
 #[pyclass(module = "breathing_torso._native")]
 struct Torso {
@@ -342,23 +355,21 @@ impl Torso {
         }
         let fresh = self.fresh;
         let torso = &mut self.torso;
-        let rows = py.detach(move || -> breathing_torso::Result<Vec<f64>> {
+        // The frame loop of `model::run::run` (what `torso simulate` runs), with the inputs
+        // set before each interval and a check for Ctrl-C every 64 frames.
+        let rows = py.detach(move || -> Result<Vec<f64>, Stop> {
             let mut rows = Vec::with_capacity((n + 1) * 20);
-            if inputs.is_empty() {
-                for f in run(torso, duration, rate)? {
-                    frame_row(&f, &mut rows);
-                }
-                return Ok(rows);
-            }
             let set = |torso: &mut breathing_torso::Torso, i: usize| {
                 for (g, v) in &inputs {
                     torso.set_activation(*g, v[i.min(v.len() - 1)])?;
                 }
                 Ok::<(), Error>(())
             };
-            set(torso, 0)?;
-            if fresh {
-                torso.start_at_equilibrium();
+            if !inputs.is_empty() {
+                set(torso, 0)?;
+                if fresh {
+                    torso.start_at_equilibrium();
+                }
             }
             let t0 = torso.time();
             let options = AdvanceOptions {
@@ -369,11 +380,18 @@ impl Torso {
                 set(torso, i - 1)?;
                 torso.advance_to_with(t0 + i as f64 / rate, options)?;
                 frame_row(&frame(torso)?, &mut rows);
+                if i % 64 == 0 {
+                    Python::attach(|py| py.check_signals()).map_err(Stop::Python)?;
+                }
             }
             Ok(rows)
         });
         self.fresh = false;
-        Ok(f64_bytes(py, &rows.map_err(to_py)?))
+        match rows {
+            Ok(rows) => Ok(f64_bytes(py, &rows)),
+            Err(Stop::Library(e)) => Err(to_py(e)),
+            Err(Stop::Python(e)) => Err(e),
+        }
     }
 
     /// The state vector at the current time, as f64 bytes.

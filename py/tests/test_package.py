@@ -319,6 +319,24 @@ def test_ctrl_c_interrupts_a_fit(synth_recording):
     assert time.perf_counter() - t0 < 5.5
 
 
+def test_ctrl_c_interrupts_a_simulation():
+    """SIGINT during a long simulation (a day at 1 Hz, minutes of work) raises
+    KeyboardInterrupt within 5 s; the model stays at the last frame it reached, whole."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals reach the main thread only")
+    t = bt.Torso(lod=0)
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        t.simulate(86400.0, rate=1.0)
+    timer.join()
+    assert time.perf_counter() - t0 < 5.5
+    assert 0.0 < t.time < 86400.0 and t.time == round(t.time)
+    again = t.simulate(2.0, rate=1.0, as_frame=False)
+    assert again["time"][0] == t.time - 2.0 and np.all(np.isfinite(again["volume.lung"]))
+
+
 def test_validate_is_torso_validate(torso_cli, tmp_path):
     """validate() from the files, and from the arrays simulate returns, gives the statistics
     `torso validate` writes."""

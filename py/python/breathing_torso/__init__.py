@@ -168,7 +168,8 @@ class Torso:
         Returns:
             ``round(duration * rate) + 1`` frames (the first at the current time): a dict of
             float64 arrays by output name, or a DataFrame with those columns. Volumes in
-            litres, pressure in Pa, displacements in m.
+            litres, pressure in Pa, displacements in m. Ctrl-C raises KeyboardInterrupt
+            within 64 frames, the model left at the last frame it reached.
         """
         names = self.outputs()
         if outputs is not None:
