@@ -7,7 +7,9 @@ Subcommands:
   recursively) is fitted by one Dask task, on a LocalCluster (`--workers N` processes of one
   thread each, default one per core) or on an existing cluster (`--scheduler ADDRESS`). A task
   runs the native `torso fit` (`--torso PATH`) or, with `--engine fmu`, `python/fit_slp.py`
-  on the FMU (`--fmu PATH`) as a subprocess, so a worker needs only the binary or the FMU.
+  on the FMU (`--fmu PATH`) as a subprocess, so a worker needs only the binary or the FMU;
+  with `--engine package` it calls `breathing_torso.fit` (the Python package, the same
+  library as `torso fit`) in the worker itself, so a worker needs only the package installed.
   Paths are passed as the driver sees them: on an existing cluster, the recordings, the output
   folder and the binary must be at the same paths on every worker (a shared file system).
   `--fit-args "..."` pass through to every fit; a file `<stem>.args` beside a recording adds
@@ -47,7 +49,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-ENGINES = ("native", "fmu")
+ENGINES = ("native", "fmu", "package")
 #: cost / noise floor above which a fit is flagged as bad in the report.
 BAD_FIT_RATIO = 1.3
 #: columns of the results table, in order (more may follow).
@@ -84,6 +86,42 @@ def recording_options(path: Path, fit_args: list[str]) -> list[str]:
 def task_key(sha: str, engine: str, options: list[str]) -> str:
     """The key of a task: the recording's content hash and the fitting options (engine included)."""
     return hashlib.sha256(f"{sha}\n{engine}\n{shlex.join(options)}".encode()).hexdigest()[:24]
+
+
+def package_keywords(options: list[str]) -> dict:
+    """The keywords of `breathing_torso.fit` for `torso fit` options (`--fit-args` and a
+    recording's `.args`): the subject, model and search options; a ValueError names an
+    option the package engine does not take (`--out` and `--slp` are the task's own)."""
+    p = argparse.ArgumentParser(prog="--engine package", add_help=False, exit_on_error=False)
+    for flag in ("--sex", "--posture", "--solver", "--grid", "--units", "--method", "--ti-ttot", "--anterior"):
+        p.add_argument(flag)
+    for flag in ("--age", "--stature", "--mass", "--breast-size", "--rtol", "--rate"):
+        p.add_argument(flag, type=float)
+    for flag in ("--lod", "--max-evals", "--seed", "--threads"):
+        p.add_argument(flag, type=int)
+    for flag in ("--skin-fit", "--marker-offsets", "--fit-size", "--no-fit-size", "--no-drift"):
+        p.add_argument(flag, action="store_true")
+    try:
+        a, unknown = p.parse_known_args(options)
+    except argparse.ArgumentError as e:
+        raise ValueError(f"--fit-args: {e}") from None
+    if unknown:
+        raise ValueError(f"--fit-args: {' '.join(unknown)}: not an option --engine package passes to the fit")
+    kw = {"subject": {k: v for k, v in (("sex", a.sex), ("age", a.age), ("stature", a.stature),
+                                          ("mass", a.mass), ("breast_size", a.breast_size)) if v is not None}}
+    for name in ("posture", "solver", "grid", "units", "method", "rtol", "rate", "lod", "seed", "threads"):
+        if getattr(a, name) is not None:
+            kw[name] = getattr(a, name)
+    if a.max_evals is not None:
+        kw["max_evals"] = a.max_evals
+    if a.ti_ttot is not None:
+        kw["ti_ttot"] = None if a.ti_ttot == "auto" else float(a.ti_ttot)
+    if a.anterior:
+        kw["anterior"] = a.anterior.split(",")
+    kw["skin_fit"], kw["marker_offsets"], kw["drift"] = a.skin_fit, a.marker_offsets, not a.no_drift
+    if a.fit_size or a.no_fit_size:
+        kw["fit_size"] = a.fit_size
+    return kw
 
 
 def write_atomic(path: Path, text: str):
@@ -211,6 +249,8 @@ def fit_one(recording: str, key: str, sha: str, out: str, engine: str, options: 
     attempts.parent.mkdir(parents=True, exist_ok=True)
     with open(attempts, "a") as f:
         f.write(f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())} pid {os.getpid()}\n")
+    if engine == "package":
+        return fit_in_process(rec, key, sha, out, options, group, rel, fit_json, attempts)
     if engine == "native":
         cmd = [torso, "fit", "--slp", str(rec), "--out", str(fit_json), *options]
     else:
@@ -248,6 +288,37 @@ def fit_one(recording: str, key: str, sha: str, out: str, engine: str, options: 
     # memory: the fit's process (sampled while it ran) and the worker process itself
     row["fit_peak_rss_mib"] = peak_rss / 2**20
     row["worker_rss_mib"] = psutil.Process().memory_info().rss / 2**20
+    write_atomic(out / "rows" / f"{key}.json", json.dumps(row, indent=1, allow_nan=True))
+    return row
+
+
+def fit_in_process(rec: Path, key: str, sha: str, out: Path, options: list[str], group: str, rel: str,
+                   fit_json: Path, attempts: Path) -> dict:
+    """`fit_one` with `--engine package`: `breathing_torso.fit` in this worker (the GIL
+    released while it runs), its JSON written where `torso fit` writes it."""
+    import psutil  # a dependency of dask.distributed
+
+    import breathing_torso
+
+    start = time.perf_counter()
+    try:
+        breathing_torso.fit(rec, fit_json, as_frame=False, **package_keywords(options))
+    except (ValueError, OSError, breathing_torso.TorsoError) as e:
+        raise RuntimeError(f"{rel}: {e}") from None
+    wall = time.perf_counter() - start
+    fit = json.loads(fit_json.read_text())
+    rss = psutil.Process().memory_info().rss / 2**20
+    row = {"recording": rel, "group": group, "key": key, "sha256": sha, "options": shlex.join(options),
+           "engine": "package", "status": "ok", "error": "",
+           "attempts": sum(1 for _ in open(attempts)), "fit_json": str(fit_json.relative_to(out)),
+           "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    row.update(figures(fit, rec, fit_json))
+    if math.isnan(row["wall_s"]):
+        row["wall_s"] = wall
+    row["task_wall_s"] = wall
+    # the fit runs in the worker: its memory is the worker's
+    row["fit_peak_rss_mib"] = rss
+    row["worker_rss_mib"] = rss
     write_atomic(out / "rows" / f"{key}.json", json.dumps(row, indent=1, allow_nan=True))
     return row
 
@@ -342,6 +413,16 @@ def cmd_fit(args) -> int:
     if args.engine == "fmu" and not Path(fmu).is_file():
         say(f"error: --fmu {args.fmu}: no such file (build it with `target/release/torso fmu build`)")
         return 2
+    if args.engine == "package":
+        try:
+            import breathing_torso  # noqa: F401
+            package_keywords(shlex.split(args.fit_args))
+        except ImportError:
+            say("error: --engine package: the breathing_torso package is not installed (pip install target/wheels/breathing_torso-*.whl)")
+            return 2
+        except ValueError as e:
+            say(f"error: {e}")
+            return 2
     groups = read_groups(Path(args.groups) if args.groups else None)
     fit_args = shlex.split(args.fit_args)
     recordings = [r for r in find_recordings(folder, args.glob) if out not in r.parents]

@@ -3,18 +3,18 @@
 
 The same loop as `torso fit`, driven through the FMI 2.0 co-simulation interface:
 
-1. the recording is read as `torso fit` reads it (docs/recordings.md): the grid CSV
-   (`# grid: RxC`, `# units: m|cm|mm`, `time,marker[i].x,...`), a C3D file (the `c3d`
-   package; `POINT:UNITS`, `POINT:RATE`, residual < 0 missing), a TRC file or a CSV of
-   named markers (`NAME X` / `NAME.x` / `NAME_x`; `--units`, `--rate` when the file does not
-   say), the markers labelled `marker[1]`..`marker[R*C]`;
-2. the first frame is registered rigidly to the FMU's rest markers (as `torso fit`); with
+1. the recording is read by the library's own reader, `breathing_torso.read_recording`
+   (the Python package; docs/python.md), so as `torso fit` reads it (docs/recordings.md):
+   the grid CSV, a C3D file, a TRC file or a CSV of named markers (`--units`, `--rate` when
+   the file does not say), the markers labelled `marker[1]`..`marker[R*C]`;
+2. the first frame is registered rigidly to the FMU's rest markers by the library (`breathing_torso.register`, as `torso fit`); with
    `--slp-reference` a first fit gives the rest-pose grid the recording implies, written as
    `<out stem>_reference.csv`, and the FMU registers its grid and fits its skin to it
    (`slp.reference`, as `torso fit --skin-fit`; its `marker[i].x|y|z` outputs are then in the
    recording's frame) before a polish;
 3. the breathing frequency comes from the recording's principal displacement (PCA of the
-   detrended marker trajectories, Hann-windowed DFT with two-bin interpolation);
+   detrended marker trajectories, Hann-windowed DFT with two-bin interpolation), estimated
+   by the library (`breathing_torso.breathing_frequency`), as `torso fit` estimates it;
 4. a linearised start (two basis runs, rib cage alone and diaphragm alone, time-shifted,
    non-negative least squares) then scipy's bounded Nelder-Mead over
    (drive.ribs.amplitude, drive.diaphragm.amplitude, drive.ribs.phase, drive.diaphragm.phase);
@@ -51,6 +51,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+import breathing_torso
 
 POSTURES = {"standing": 0, "sitting": 1, "supine": 2}
 SEXES = {"male": 0, "female": 1}
@@ -100,183 +102,18 @@ def _parse_grid(value: str):
     return int(r), int(c)
 
 
-def _read_c3d(path: Path):
-    """A C3D recording (the `c3d` package): labels, rate, units, residual < 0 missing."""
-    import c3d
-
-    try:
-        with open(path, "rb") as handle:
-            reader = c3d.Reader(handle)
-            labels = [label.strip() for label in reader.point_labels]
-            rate = float(reader.point_rate)
-            units_param = reader.get("POINT:UNITS")
-            units = units_param.string_value.strip().lower() if units_param else ""
-            prov = {}
-            if reader.get("BREATHING_TORSO:KEYS") is not None:
-                keys = [k.strip() for k in reader.get("BREATHING_TORSO:KEYS").string_array]
-                values = [v.strip() for v in reader.get("BREATHING_TORSO:VALUES").string_array]
-                prov = dict(zip(keys, values))
-            frames = []
-            for _, points, _ in reader.read_frames():
-                xyz = points[:, :3].astype(float)
-                xyz[points[:, 3] < 0] = np.nan
-                frames.append(xyz)
-    except (OSError, ValueError, EOFError, KeyError) as e:
-        raise RecordingError(f"{path}:0:0: not a readable C3D file: {e}") from e
-    if units not in UNIT_SCALES:
-        raise RecordingError(f"{path}:0:0: POINT:UNITS `{units}` is not mm, cm or m")
-    coords = np.array(frames) * UNIT_SCALES[units]
-    grid = _parse_grid(prov["grid"]) if "grid" in prov else None
-    grid, pts = _grid_points(path, labels, coords, grid)
-    return grid, np.arange(len(frames)) / rate, pts
-
-
-def _read_trc(path: Path):
-    """A TRC recording: header fields (Units, extra provenance fields), the marker row, then
-    `Frame# Time X1 Y1 Z1 ...` rows with empty cells for missing samples."""
-    lines = path.read_text(encoding="utf-8").splitlines()
-    if len(lines) < 5:
-        raise RecordingError(f"{path}:1:1: a TRC file has five header lines")
-    keys, values = lines[1].split("\t"), lines[2].split("\t")
-    header = dict(zip((k.strip() for k in keys), (v.strip() for v in values)))
-    units = header.get("Units", "").lower()
-    if units not in UNIT_SCALES:
-        raise RecordingError(f"{path}:3:1: Units: `{units}` is not mm, cm or m")
-    names = lines[3].split("\t")[2::3]
-    labels = [n.strip() for n in names if n.strip()]
-    times, rows = [], []
-    for no, line in enumerate(lines[5:], start=6):
-        if not line.strip():
-            continue
-        cells = line.split("\t")
-        try:
-            times.append(float(cells[1]))
-            vals = [float(c) if c.strip() else np.nan for c in cells[2:2 + 3 * len(labels)]]
-        except (ValueError, IndexError) as e:
-            raise RecordingError(f"{path}:{no}:1: {e}") from e
-        vals += [np.nan] * (3 * len(labels) - len(vals))
-        rows.append(vals)
-    coords = np.array(rows).reshape(len(rows), len(labels), 3) * UNIT_SCALES[units]
-    coords[np.isnan(coords).any(axis=2)] = np.nan
-    grid = _parse_grid(header["grid"]) if "grid" in header else None
-    grid, pts = _grid_points(path, labels, coords, grid)
-    return grid, np.array(times), pts
-
-
-NAMED_AXIS = re.compile(r"^(.+?)(?: |\.|_)([xyzXYZ])$")
-
-
-def _read_named_csv(path: Path, lines: list, k: int, meta: dict, units=None, rate=None):
-    """A CSV of named markers (docs/recordings.md): `NAME X|.x|_x` columns, optional time
-    and frame columns; units and rate from `#` lines or the arguments."""
-    header = [c.strip() for c in lines[k].split(",")]
-    time_col, axes = None, {}
-    order = []
-    for j, cell in enumerate(header):
-        if cell.lower() in ("time", "t", "time (s)"):
-            time_col = j
-            continue
-        if cell.lower() == "frame":
-            continue
-        m = NAMED_AXIS.match(cell)
-        if not m:
-            raise RecordingError(f"{path}:{k + 1}:1: column {j + 1} `{cell}`: expected `time`, `frame` or "
-                                 "a marker coordinate `NAME X`, `NAME.x` or `NAME_x`")
-        name, axis = m.group(1).strip(), "xyz".index(m.group(2).lower())
-        if name not in axes:
-            axes[name] = [None] * 3
-            order.append(name)
-        axes[name][axis] = j
-    file_units = meta.get("units", "").lower() or None
-    if units and file_units and units != file_units:
-        raise RecordingError(f"{path}:0:0: the file says units {file_units}, --units says {units}")
-    units = units or file_units
-    if units not in UNIT_SCALES:
-        raise RecordingError(f"{path}:0:0: the file does not state its units: pass --units mm|cm|m")
-    rows = []
-    for no, line in enumerate(lines[k + 1:], start=k + 2):
-        if not line.strip():
-            continue
-        cells = line.split(",")
-        if len(cells) != len(header):
-            raise RecordingError(f"{path}:{no}:1: ragged row")
-        try:
-            rows.append([float(c) if c.strip() and c.strip().lower() != "nan" else np.nan for c in cells])
-        except ValueError as e:
-            raise RecordingError(f"{path}:{no}:1: {e}") from e
-    data = np.array(rows)
-    if time_col is not None:
-        times = data[:, time_col]
-    else:
-        r = rate or (float(meta["rate"]) if "rate" in meta else None)
-        if not r:
-            raise RecordingError(f"{path}:0:0: no time column and no rate: pass --rate HZ")
-        times = np.arange(len(rows)) / r
-    coords = np.stack([data[:, axes[name]] if None not in axes[name] else np.full((len(rows), 3), np.nan)
-                       for name in order], axis=1) * UNIT_SCALES[units]
-    coords[np.isnan(coords).any(axis=2)] = np.nan
-    grid = _parse_grid(meta["grid"]) if "grid" in meta else None
-    grid, pts = _grid_points(path, order, coords, grid)
-    return grid, times, pts
-
-
 def read_recording(path: Path, units=None, rate=None):
-    """Reads a recording in any of the formats `torso fit` reads (see the module doc). Returns
-    (grid, times [s], points [frames, P, 3] in metres with NaN for untracked points)."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".c3d":
-        return _read_c3d(path)
-    if suffix == ".trc":
-        return _read_trc(path)
-    if suffix != ".csv":
-        raise RecordingError(f"{path}:0:0: unknown extension `{suffix}`: expected .c3d, .trc or .csv")
-    head = path.read_text(encoding="utf-8").splitlines()
-    j = 0
-    meta = {}
-    while j < len(head) and (head[j].startswith("#") or not head[j].strip()):
-        body = head[j][1:].strip() if head[j].startswith("#") else ""
-        if ":" in body:
-            key, value = (x.strip() for x in body.split(":", 1))
-            meta[key.lower() if key.lower() in ("units", "rate", "grid") else key] = value
-        j += 1
-    if j < len(head) and not head[j].startswith("time,marker[1].x"):
-        return _read_named_csv(path, head, j, meta, units, rate)
-    grid, scale = None, 1.0
-    lines = path.read_text(encoding="utf-8").splitlines()
-    k = 0
-    while k < len(lines) and (lines[k].startswith("#") or not lines[k].strip()):
-        body = lines[k][1:].strip() if lines[k].startswith("#") else ""
-        if ":" in body:
-            key, value = (s.strip() for s in body.split(":", 1))
-            if key.lower() == "grid":
-                r, c = value.lower().split("x")
-                grid = (int(r), int(c))
-            elif key.lower() == "units":
-                scales = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
-                if value.lower() not in scales:
-                    raise RecordingError(f"{path}:{k + 1}:1: unknown units `{value}`")
-                scale = scales[value.lower()]
-        k += 1
-    if k >= len(lines):
-        raise RecordingError(f"{path}:0:0: no header row")
-    header = lines[k].split(",")
-    points = (len(header) - 1) // 3
-    if grid is None:
-        if points != 60:
-            raise RecordingError(f"{path}:1:1: add a `# grid: ROWSxCOLS` line")
-        grid = (10, 6)
-    times, frames = [], []
-    for no, line in enumerate(lines[k + 1 :], start=k + 2):
-        if not line.strip():
-            continue
-        cells = line.split(",")
-        if len(cells) != len(header):
-            raise RecordingError(f"{path}:{no}:1: ragged row")
-        values = np.array([float(c) if c.strip() else np.nan for c in cells])
-        times.append(values[0])
-        frames.append(values[1:].reshape(points, 3) * scale)
-    return grid, np.array(times), np.array(frames)
+    """Reads a recording in any of the formats `torso fit` reads (see the module doc) with
+    the library's own reader (`breathing_torso.read_recording`). Returns (grid, times [s],
+    points [frames, R*C, 3] in metres with NaN for untracked points), the points in the
+    grid's order; a malformed file is a RecordingError naming file, line and column."""
+    try:
+        rec = breathing_torso.read_recording(path, units=units, rate=rate)
+    except ValueError as e:
+        raise RecordingError(str(e)) from e
+    grid = _parse_grid(rec.provenance["grid"]) if "grid" in rec.provenance else None
+    grid, pts = _grid_points(Path(path), rec.labels, rec.positions, grid)
+    return grid, rec.time, pts
 
 
 def detrend(x: np.ndarray) -> np.ndarray:
@@ -288,40 +125,13 @@ def detrend(x: np.ndarray) -> np.ndarray:
     return x - mean - slope * t[:, None]
 
 
-def fill_gaps(times: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Linear interpolation of NaN gaps in each column (nearest value at the ends)."""
-    out = x.copy()
-    for j in range(x.shape[1]):
-        ok = ~np.isnan(x[:, j])
-        if ok.sum() >= 2:
-            out[:, j] = np.interp(times, times[ok], x[ok, j])
-        else:
-            out[:, j] = 0.0
-    return out
-
-
 def breathing_frequency(times: np.ndarray, pts: np.ndarray):
-    """Principal displacement (first principal component of the detrended trajectories) and
-    its frequency: Hann-windowed DFT over 0.1-1 Hz, two-bin interpolation."""
-    n = len(times)
-    fs = (n - 1) / (times[-1] - times[0])
-    x = detrend(fill_gaps(times, pts.reshape(n, -1)))
-    _, _, vt = np.linalg.svd(x, full_matrices=False)
-    axis = vt[0]
-    signal = x @ axis
-    s = detrend(signal[:, None])[:, 0]
-    w = 0.5 * (1.0 - np.cos(2.0 * np.pi * np.arange(n) / n))
-    mags = np.abs(np.fft.rfft(s * w))
-    lo, hi = max(1, int(0.1 * n / fs)), min(len(mags) - 2, int(math.ceil(1.0 * n / fs)))
-    k = lo + int(np.argmax(mags[lo : hi + 1]))
-    left, right = mags[k - 1], mags[k + 1]
-    if right >= left:
-        a = right / mags[k]
-        delta = (2 * a - 1) / (a + 1)
-    else:
-        a = left / mags[k]
-        delta = -(2 * a - 1) / (a + 1)
-    return (k + float(np.clip(delta, -1, 1))) * fs / n, signal, axis.reshape(-1, 3)
+    """The breathing frequency, the principal displacement and each point's loading on its
+    axis, as `torso fit` estimates them (`breathing_torso.breathing_frequency`: gap-filled,
+    detrended trajectories, first principal axis, Hann-windowed DFT with two-bin
+    interpolation and the autocorrelation cross-check)."""
+    est = breathing_torso.breathing_frequency(times, pts)
+    return est["frequency_hz"], est["signal"], est["loadings"]
 
 
 def _moving_average(v: np.ndarray, half: int) -> np.ndarray:
@@ -403,15 +213,10 @@ def recording_ti_ttot(times: np.ndarray, signal: np.ndarray, loadings: np.ndarra
 
 
 def kabsch(model: np.ndarray, rec: np.ndarray):
-    """Rigid transform (R, t) minimising sum |R rec + t - model|^2 (Umeyama 1991)."""
-    mm, mr = model.mean(axis=0), rec.mean(axis=0)
-    cov = (model - mm).T @ (rec - mr) / len(model)
-    u, _, vt = np.linalg.svd(cov)
-    d = np.eye(3)
-    if np.linalg.det(u) * np.linalg.det(vt) < 0:
-        d[2, 2] = -1.0
-    r = u @ d @ vt
-    return r, mm - r @ mr
+    """Rigid transform (R, t) minimising sum |R rec + t - model|^2, the registration of
+    `torso fit` (`breathing_torso.register`, Umeyama 1991)."""
+    reg = breathing_torso.register(model, rec)
+    return reg["rotation"], reg["translation"]
 
 
 def wrap(a: float) -> float:

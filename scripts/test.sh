@@ -50,6 +50,8 @@ stage() {
 
 stage "cargo fmt --check" optional cargo fmt --all -- --check
 stage "cargo clippy" optional cargo clippy --all-targets --release -- -D warnings
+# The Python binding (py/) is a workspace member outside the root package's targets.
+stage "cargo clippy (Python binding, py/)" optional cargo clippy --release -p breathing-torso-python -- -D warnings
 # fmpy also supplies the official FMI 2.0 headers for the Rust tests.
 stage "python venv" required bash scripts/python-env.sh
 # The C tests link the cdylib; the Python tests load the FMU.
@@ -73,6 +75,14 @@ stage "the crate is built once for build and test (Cargo.toml: resolver)" option
 # The distributable FMU replaces the development one for the Python tests.
 stage "distributable FMU: stripped linux64 (glibc 2.17) and win64 binaries, checked (scripts/deploy.sh)" \
   optional bash scripts/deploy.sh --out fmu/BreathingTorso.fmu
+
+# The Python package as a user installs it: the wheel (manylinux2014, the distributable FMUs
+# inside), auditwheel's check, a fresh venv outside the source tree and the package's tests.
+stage "Python package: wheel, auditwheel, fresh venv, py/tests (scripts/test-wheel.sh)" \
+  optional bash scripts/test-wheel.sh
+# python/fit_slp.py reads recordings with the package: the same wheel goes into .venv.
+stage "Python package into .venv" optional \
+  bash -c '.venv/bin/python -m pip install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/breathing_torso-*.whl'
 
 if ! command -v wine >/dev/null && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   echo "== wine (runs the win64 binary against linux64, FMI 2.0 and FMI 3.0, in python/tests/test_fmu_win64.py)"

@@ -295,6 +295,24 @@ pub fn fit_file(
     options: &FitOptions,
     flags: &FitFlags,
 ) -> Result<crate::fit::Fit> {
+    fit_file_observed(recording_path, read, model, out, options, flags, None)
+}
+
+/// [`fit_file`] reporting to `observer` (evaluations so far, best cost [m]) at every
+/// evaluation the search reports, on the calling thread, instead of drawing the progress
+/// bar on stderr and printing the summary on stdout (the Python package's fit: its progress
+/// callback and its Ctrl-C check; the result is the JSON). Warnings still go to stderr.
+pub fn fit_file_observed(
+    recording_path: &Path,
+    read: &ReadOptions,
+    model: &ModelArgs,
+    out: &Path,
+    options: &FitOptions,
+    flags: &FitFlags,
+    mut observer: Option<&mut dyn FnMut(usize, f64)>,
+) -> Result<crate::fit::Fit> {
+    // With an observer the caller reads the result from the JSON: nothing is printed.
+    let quiet = observer.is_some();
     let FitFlags {
         skin_fit,
         fit_size,
@@ -368,16 +386,18 @@ pub fn fit_file(
             &SizeOptions::default(),
         )
         .map_err(in_file)?;
-        println!(
-            "subject size          estimated ({why}): stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
-            config.subject.stature,
-            size.subject.stature,
-            config.subject.mass,
-            size.subject.mass,
-            size.start_rms_m * 1e3,
-            size.rms_m * 1e3,
-            size.evaluations
-        );
+        if !quiet {
+            println!(
+                "subject size          estimated ({why}): stature {:.3} -> {:.3} m, mass {:.1} -> {:.1} kg (registration rms {:.2} -> {:.2} mm, {} model builds)",
+                config.subject.stature,
+                size.subject.stature,
+                config.subject.mass,
+                size.subject.mass,
+                size.start_rms_m * 1e3,
+                size.rms_m * 1e3,
+                size.evaluations
+            );
+        }
         let json = serde_json::json!({
             "method": "stature and mass minimising the first frame's rigid registration residual (bounded Nelder-Mead)",
             "why": why,
@@ -412,23 +432,42 @@ pub fn fit_file(
         "drift_removed": options.drift,
         "why": about_means.unwrap_or("the grid of a given subject: the thesis's eq. 3.1 after one rigid pose correction"),
     });
-    println!(
-        "cost basis            {}",
-        match about_means {
-            Some(why) => format!(
-                "each marker's motion about its own mean ({why}){}",
-                if options.drift {
-                    ", each marker's slow drift removed (--no-drift keeps it)"
-                } else {
-                    ""
-                }
-            ),
-            None => "marker positions after one rigid pose correction (thesis eq. 3.1)".into(),
-        }
-    );
+    if !quiet {
+        println!(
+            "cost basis            {}",
+            match about_means {
+                Some(why) => format!(
+                    "each marker's motion about its own mean ({why}){}",
+                    if options.drift {
+                        ", each marker's slow drift removed (--no-drift keeps it)"
+                    } else {
+                        ""
+                    }
+                ),
+                None => "marker positions after one rigid pose correction (thesis eq. 3.1)".into(),
+            }
+        );
+    }
     config.solver.atol = FIT_ATOL_PER_RTOL * config.solver.rtol;
     let mut model = config.clone();
-    let bar = Progress::new("fit", options.max_evals, "evaluations").up_to();
+    let bar = match observer {
+        None => Progress::new("fit", options.max_evals, "evaluations"),
+        Some(_) => Progress::to_writer(
+            "fit",
+            options.max_evals,
+            "evaluations",
+            false,
+            std::time::Duration::from_secs(3600),
+            Box::new(std::io::sink()),
+        ),
+    }
+    .up_to();
+    let mut report = |n: usize, b: f64| {
+        bar.update(n, format!("best cost {:.3} mm", b * 1e3));
+        if let Some(o) = observer.as_mut() {
+            o(n, b);
+        }
+    };
     let recording = match recording {
         ForFit::Grid(r) => r,
         ForFit::Named(markers) => {
@@ -445,7 +484,7 @@ pub fn fit_file(
                 &SurfaceOptions::default(),
                 pose,
                 options,
-                &mut |n, b| bar.update(n, format!("best cost {:.3} mm", b * 1e3)),
+                &mut report,
             )
             .map_err(|e| Error::State(format!("{}: {e}", recording_path.display())))?;
             let named_set = (set_fit.bound, markers.markers());
@@ -460,6 +499,7 @@ pub fn fit_file(
                     named_set: Some(&named_set),
                     size: size.as_ref(),
                     cost: &cost_json,
+                    quiet,
                 },
             );
         }
@@ -467,17 +507,15 @@ pub fn fit_file(
     let fit = if skin_fit {
         let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("result");
         let reference = out.with_file_name(format!("{stem}_reference.csv"));
-        let fit = fit_with_skin(&config, &recording, &reference, options, &mut |n, b| {
-            bar.update(n, format!("best cost {:.3} mm", b * 1e3))
-        })?;
-        println!("rest-pose reference grid: {}", reference.display());
+        let fit = fit_with_skin(&config, &recording, &reference, options, &mut report)?;
+        if !quiet {
+            println!("rest-pose reference grid: {}", reference.display());
+        }
         model.scene.slp_reference = Some(reference);
         fit
     } else {
         let mut source = TorsoMarkers::new(config.clone())?;
-        fit_recording(&mut source, &recording, options, &mut |n, b| {
-            bar.update(n, format!("best cost {:.3} mm", b * 1e3))
-        })?
+        fit_recording(&mut source, &recording, options, &mut report)?
     };
     finish_fit(
         fit,
@@ -490,6 +528,7 @@ pub fn fit_file(
             named_set: None,
             size: size.as_ref(),
             cost: &cost_json,
+            quiet,
         },
     )
 }
@@ -520,6 +559,8 @@ struct FitExtras<'a> {
     size: Option<&'a serde_json::Value>,
     /// What the cost compares and why, as written under `cost_basis`.
     cost: &'a serde_json::Value,
+    /// Print nothing on stdout (the result is read from the JSON).
+    quiet: bool,
 }
 
 /// Ends a fit of `recording_path`: closes the progress bar, runs the fitted model's breaths
@@ -539,6 +580,7 @@ fn finish_fit(
         named_set,
         size,
         cost,
+        quiet,
     } = extras;
     // The search's count leaves out the linearised start's runs; the fit's count is whole.
     bar.update(fit.evaluations, "");
@@ -573,10 +615,15 @@ fn finish_fit(
         std::fs::write(&outputs.json, text + "\n").map_err(|e| Error::io(&outputs.json, e))?;
     }
     if let Some((bound, recorded)) = named_set {
-        println!("{}", marker_set_summary(bound, *recorded));
+        if !quiet {
+            println!("{}", marker_set_summary(bound, *recorded));
+        }
         for w in &bound.orientation.warnings {
             eprintln!("warning: {w}");
         }
+    }
+    if quiet {
+        return Ok(fit);
     }
     println!("{}", summary(&fit));
     println!(

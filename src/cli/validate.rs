@@ -88,14 +88,14 @@ fn lung_volume_column(t: &Table, named: Option<&str>) -> Result<String> {
 }
 
 /// Reads the simulation series (see [`lung_volume_column`]).
-fn read_sim(args: &ValidateArgs) -> Result<Series> {
+pub fn read_sim(args: &ValidateArgs) -> Result<Series> {
     let t = read_table(&args.sim)?;
     let name = lung_volume_column(&t, args.sim_column.as_deref())?;
     t.series(&name, 32)
 }
 
 /// Reads the spirometry series (`volume`, else `flow`).
-fn read_spiro(args: &ValidateArgs) -> Result<(Series, SpiroKind)> {
+pub fn read_spiro(args: &ValidateArgs) -> Result<(Series, SpiroKind)> {
     let t = read_table(&args.spiro)?;
     if t.column_index("volume").is_some() {
         Ok((t.series("volume", 32)?, SpiroKind::Volume))
