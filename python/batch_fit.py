@@ -418,7 +418,7 @@ def cmd_fit(args) -> int:
             import breathing_torso  # noqa: F401
             package_keywords(shlex.split(args.fit_args))
         except ImportError:
-            say("error: --engine package: the breathing_torso package is not installed (pip install target/wheels/breathing_torso-*.whl)")
+            say("error: --engine package: the breathing_torso package is not installed (pip install target/wheels/breathing_torso-*manylinux*.whl)")
             return 2
         except ValueError as e:
             say(f"error: {e}")

@@ -10,6 +10,9 @@
 #      built for manylinux2014 (glibc 2.17) with cargo-zigbuild's zig (`--zig`), the same
 #      baseline as the FMU's library; maturin's own audit checks the glibc symbol versions.
 #
+#   3. with win64 among the platforms and mingw-w64 at hand, the win64 wheel too
+#      (x86_64-pc-windows-gnu, abi3: it imports python3.dll alone).
+#
 # Usage: bash scripts/build-wheel.sh [--platforms linux64,win64]   (the FMUs' platforms)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -31,4 +34,15 @@ rm -f target/wheels/breathing_torso-*.whl
 # deploy.sh installed ziglang and cargo-zigbuild into .venv; maturin --zig runs them.
 PATH="$PWD/.venv/bin:$PATH" .venv/bin/maturin build --profile wheel --zig --compatibility manylinux2014 \
   -m py/Cargo.toml -i "$PWD/.venv/bin/python" --out target/wheels
+# The win64 wheel, cross-built with Debian's mingw-w64 where scripts/deploy.sh found it (the
+# same toolchain as the FMU's win64 DLL); pyo3 makes the python3.dll import library itself
+# (its generate-import-lib feature), as no Windows Python is at hand to link against.
+if [[ ",$PLATFORMS," == *",win64,"* ]] && command -v x86_64-w64-mingw32-gcc >/dev/null &&
+  rustup target list --installed 2>/dev/null | grep -qx x86_64-pc-windows-gnu; then
+  echo "== win64 wheel (maturin, x86_64-pc-windows-gnu)"
+  PATH="$PWD/.venv/bin:$PATH" .venv/bin/maturin build --profile wheel --target x86_64-pc-windows-gnu \
+    -m py/Cargo.toml -i "$PWD/.venv/bin/python" --out target/wheels
+else
+  echo "== win64 wheel: skipped (no x86_64-w64-mingw32-gcc or Rust target x86_64-pc-windows-gnu)"
+fi
 ls -l target/wheels/breathing_torso-*.whl

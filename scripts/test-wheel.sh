@@ -19,9 +19,29 @@ if [ "$BUILD" = 1 ]; then
   bash scripts/build-wheel.sh
 fi
 cargo build --release --bin torso
-wheels=(target/wheels/breathing_torso-*.whl)
+wheels=(target/wheels/breathing_torso-*manylinux*.whl)
 [ -f "${wheels[0]}" ] || { echo "test-wheel.sh: no wheel in target/wheels" >&2; exit 1; }
 WHEEL=${wheels[0]}
+win=(target/wheels/breathing_torso-*win_amd64.whl)
+if [ -f "${win[0]}" ]; then
+  # No Windows Python runs here: the win64 wheel is checked as a file. abi3 for CPython
+  # >= 3.9, both FMUs inside, and an extension module that exports PyInit__native and
+  # imports python3.dll (the stable ABI) and no version's own python3X.dll.
+  echo "== ${win[0]}: $(stat -c %s "${win[0]}") bytes"
+  WINDIR=$(mktemp -d)
+  .venv/bin/python -m zipfile -e "${win[0]}" "$WINDIR"
+  case "${win[0]}" in *-cp39-abi3-win_amd64.whl) ;; *) echo "test-wheel.sh: ${win[0]} is not a cp39-abi3 win_amd64 wheel" >&2; exit 1 ;; esac
+  [ "$(find "$WINDIR" -name '*.fmu' | wc -l)" = 2 ] || { echo "test-wheel.sh: the win64 wheel lacks its FMUs" >&2; exit 1; }
+  dump=$(x86_64-w64-mingw32-objdump -p "$WINDIR/breathing_torso/_native.pyd")
+  grep -q 'DLL Name: python3.dll' <<<"$dump" || { echo "test-wheel.sh: _native.pyd does not import python3.dll" >&2; exit 1; }
+  if grep -qE 'DLL Name: python3[0-9]+\.dll' <<<"$dump"; then
+    echo "test-wheel.sh: _native.pyd imports a versioned python3X.dll (not abi3)" >&2
+    exit 1
+  fi
+  grep -q 'PyInit__native' <<<"$dump" || { echo "test-wheel.sh: _native.pyd does not export PyInit__native" >&2; exit 1; }
+  echo "   abi3 win_amd64, both FMUs inside, _native.pyd imports python3.dll and exports PyInit__native"
+  rm -rf "$WINDIR"
+fi
 echo "== $WHEEL: $(stat -c %s "$WHEEL") bytes"
 echo "== auditwheel show"
 .venv/bin/python -m pip install -q --disable-pip-version-check -r python/requirements-wheel.txt

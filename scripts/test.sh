@@ -82,7 +82,7 @@ stage "Python package: wheel, auditwheel, fresh venv, py/tests (scripts/test-whe
   optional bash scripts/test-wheel.sh
 # python/fit_slp.py reads recordings with the package: the same wheel goes into .venv.
 stage "Python package into .venv" optional \
-  bash -c '.venv/bin/python -m pip install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/breathing_torso-*.whl'
+  bash -c '.venv/bin/python -m pip install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/breathing_torso-*manylinux*.whl'
 
 if ! command -v wine >/dev/null && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   echo "== wine (runs the win64 binary against linux64, FMI 2.0 and FMI 3.0, in python/tests/test_fmu_win64.py)"
