@@ -290,7 +290,8 @@ fn a_heartbeat_in_the_residual_is_reported_and_noise_alone_is_not() {
             })
             .collect()
     };
-    let peak = cardiac_peak(&times, &residual(1, 0.2e-3), 0.25).expect("a heartbeat of 0.2 mm");
+    let peak =
+        cardiac_peak(&times, &residual(1, 0.2e-3), 0.25, 0.0).expect("a heartbeat of 0.2 mm");
     println!(
         "heartbeat: {:.3} Hz, {:.3} mm rms, largest {:.3} mm, ratio {:.1}, false alarm {:.1e}",
         peak.frequency_hz,
@@ -302,7 +303,7 @@ fn a_heartbeat_in_the_residual_is_reported_and_noise_alone_is_not() {
     assert!((peak.frequency_hz - 1.2).abs() <= 1.0 / 18.0 + 1e-9);
     assert!(peak.marker < 10);
     let false_peaks = (1..=20)
-        .filter(|&seed| cardiac_peak(&times, &residual(100 + seed, 0.0), 0.25).is_some())
+        .filter(|&seed| cardiac_peak(&times, &residual(100 + seed, 0.0), 0.25, 0.0).is_some())
         .count();
     println!("false peaks in white noise: {false_peaks} of 20");
     assert!(false_peaks <= 1);

@@ -248,6 +248,7 @@ pub fn fit_any_markers(
         &bound.set.labels,
         &reference,
         chosen_by,
+        options.drift,
     )?;
     let recording = Recording {
         frames: desway.frames,

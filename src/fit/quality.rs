@@ -28,8 +28,10 @@
 //!   there: the residual's periodogram summed over every marker coordinate, each bin against
 //!   the mean of the band's other bins, is an F(2M, 2M(K - 1)) variate for white noise (M
 //!   coordinates, K bins); a peak whose probability times K (Bonferroni) is under 1 % is
-//!   reported. Bins within one frequency step of a harmonic of the breath are left out (the
-//!   fitted breath's harmonics may differ from the recorded one's).
+//!   reported. Bins within one frequency step of a harmonic h of the breath, widened by h
+//!   times the recording's breath-to-breath variation of period (the coefficient of
+//!   variation of its breaths' Ttot), are left out: the fitted breath's harmonics differ
+//!   from a varying recorded one's, and the difference spreads over that band.
 //! - **Verdict.** When the drive explains under half of the motion above the noise left
 //!   after the drift, the report says "the model does not explain this recording";
 //!   "converged" describes the search only.
@@ -260,12 +262,15 @@ pub struct CardiacPeak {
 }
 
 /// The cardiac peak of `residual` (per frame, per marker; `times` from the first frame),
-/// with the breath at `breathing` Hz; None when there is none (see the module doc) or the
-/// recording is too short or too slowly sampled to hold the band.
+/// with the breath at `breathing` Hz varying from breath to breath by `spread` (coefficient
+/// of variation of the breath's period); None when there is none (see the module doc), or
+/// the recording is too short or too slowly sampled, or the breath's spread harmonics cover
+/// the band (fewer than 4 bins left).
 pub fn cardiac_peak(
     times: &[f64],
     residual: &[Vec<Option<Vector3<f64>>>],
     breathing: f64,
+    spread: f64,
 ) -> Option<CardiacPeak> {
     let n = times.len();
     if n < 16 {
@@ -279,8 +284,12 @@ pub fn cardiac_peak(
     let bins: Vec<f64> = ((lo / step).ceil() as usize..=(hi / step).floor() as usize)
         .map(|k| k as f64 * step)
         .filter(|f| {
-            let h = (f / breathing).round();
-            h < 1.0 || (f - h * breathing).abs() > step
+            // Every harmonic h of the breath, spread by h times the breath-to-breath
+            // variation of the breathing frequency, and one step either side.
+            (1..=(f / breathing * (1.0 + spread) + 1.0) as usize).all(|h| {
+                let fh = h as f64 * breathing;
+                (f - fh).abs() > step + fh * spread
+            })
         })
         .collect();
     if bins.len() < 4 {
@@ -422,7 +431,15 @@ pub fn quality(fit: &Fit) -> Quality {
                 .collect()
         })
         .collect();
-    let cardiac = cardiac_peak(&fit.times, &residual, fit.drive.frequency);
+    let periods: Vec<f64> = fit.breathing.breaths.iter().map(|b| b.ttot).collect();
+    let spread = if periods.len() > 1 {
+        let m = periods.iter().sum::<f64>() / periods.len() as f64;
+        let v = periods.iter().map(|p| (p - m).powi(2)).sum::<f64>() / (periods.len() - 1) as f64;
+        v.sqrt() / m
+    } else {
+        0.0
+    };
+    let cardiac = cardiac_peak(&fit.times, &residual, fit.drive.frequency, spread);
     let (drift_share, after_drift) = match drift_of {
         None => (None, None),
         Some(drift) => {

@@ -24,7 +24,11 @@
 //!    frequency (no wrap-around at the recording's ends), a line and a parabola (every
 //!    cosine is flat at both ends, a sway need not be), together with the breath's
 //!    first [`HARMONICS`] harmonics; the cosine part is the sway, the harmonics (the back's
-//!    motion with each breath) are left in the recording. Standing sway lies at
+//!    motion with each breath) are left in the recording. When the fit projects each
+//!    marker's drift out ([`super::drift`]), the part of the slow motion the drift spline
+//!    spans is left to it: the reference markers' own drift (marker slip, skin creep) reads
+//!    as a slow rigid motion, and removing it from every marker would add it to the others.
+//!    Standing sway lies at
 //!    0.02-0.15 Hz (the sway; quiet-standing centre-of-pressure spectra have most of
 //!    their power under 0.5 Hz and a median frequency near 0.1-0.3 Hz, Prieto et al. 1996,
 //!    IEEE Trans Biomed Eng 43:956), quiet breathing at 0.2-0.33 Hz (12-20 breaths/min).
@@ -378,13 +382,16 @@ pub struct Desway {
 
 /// Removes the sway of `frames` (per frame, per marker, recorded frame, uniformly sampled
 /// at `times`) estimated from the markers `reference` (indices; `labels` name every
-/// marker). See the module doc; `chosen_by` says how the reference was chosen.
+/// marker). See the module doc; `chosen_by` says how the reference was chosen. With
+/// `drift` (the fit projects each marker's drift out, [`super::drift`]) the part of the
+/// sway the drift spline spans is left to that projection.
 pub fn remove_sway(
     times: &[f64],
     frames: &[Vec<Option<Point3<f64>>>],
     labels: &[String],
     reference: &[usize],
     chosen_by: &'static str,
+    drift: bool,
 ) -> Result<Desway> {
     let points = frames.first().map_or(0, Vec::len);
     let names: Vec<String> = reference.iter().map(|&k| labels[k].clone()).collect();
@@ -448,10 +455,28 @@ pub fn remove_sway(
             series[3 + a].push(p.map(|p| p[a]));
         }
     }
-    let slow: Vec<Vec<f64>> = series
+    let mut slow: Vec<Vec<f64>> = series
         .iter()
         .map(|s| slow_part(times, s, breathing, cutoff))
         .collect();
+    // With each marker's drift projected out by the fit, the sway's part the drift spline
+    // spans is left to it: the reference markers' own drifts read as a slow rigid motion,
+    // and removing it would add their drift to every other marker.
+    if drift {
+        let t0 = times[0];
+        let relative: Vec<f64> = times.iter().map(|t| t - t0).collect();
+        let basis = super::drift::DriftBasis::new(&relative, breathing);
+        for s in slow.iter_mut() {
+            // The drift's variation only: each number's mean (the trunk frame's mean pose)
+            // stays.
+            let values: Vec<Option<f64>> = s.iter().map(|v| Some(*v)).collect();
+            let fitted = basis.fit_series(&values);
+            let mean = fitted.iter().sum::<f64>() / fitted.len().max(1) as f64;
+            for (v, d) in s.iter_mut().zip(fitted) {
+                *v -= d - mean;
+            }
+        }
+    }
     // The slow transforms: recorded -> trunk, x -> R (x - p) + centroid.
     let smooth: Vec<RigidTransform> = (0..times.len())
         .map(|i| {
@@ -557,10 +582,15 @@ pub fn remove_sway(
         sway: Sway {
             removed: true,
             note: format!(
-                "the trunk's rigid motion from {} reference markers ({}), its part below {:.3} Hz removed",
+                "the trunk's rigid motion from {} reference markers ({}), its part below {:.3} Hz removed{}",
                 names.len(),
                 chosen_by,
-                cutoff
+                cutoff,
+                if drift {
+                    " (its part the drift spline spans left to the drift projection)"
+                } else {
+                    ""
+                }
             ),
             reference: names,
             chosen_by,
