@@ -310,3 +310,158 @@ fn sway_of_a_chest_and_back_set_is_removed_and_the_tidal_volume_kept() {
         }
     }
 }
+
+/// The reference markers are found from the registered pose: the chest-and-back set's 10
+/// back markers and the OEP-like set's 42 posterior ones, each recorded in a laboratory
+/// frame at level of detail 0 and bound without correspondences; the front markers alone
+/// have none, and no sway is removed from them, the report saying why.
+#[test]
+fn the_markers_over_the_back_are_found_from_the_registered_pose() {
+    use breathing_torso::fit::bind_recording;
+    for (name, back_tag) in [("chest30", b'B'), ("oep89", b'P')] {
+        let mut torso = Torso::new(config(0)).unwrap();
+        let skin = Skin::for_anatomy(&torso.compiled().anatomy, &SkinOptions::default()).unwrap();
+        let set = MarkerSet::builtin(&skin, name).unwrap();
+        torso.set_marker_set(Some(Arc::new(set.clone())));
+        let mut source = TorsoMarkers::from_torso(torso).unwrap();
+        let s = synthesize(
+            &mut source,
+            &SynthOptions {
+                duration: 12.0,
+                rate: 20.0,
+                camera: Camera::Lab,
+                ..SynthOptions::default()
+            },
+        )
+        .unwrap();
+        let markers = |keep: &dyn Fn(&str) -> bool| {
+            let columns: Vec<usize> = (0..set.len()).filter(|&k| keep(&set.labels[k])).collect();
+            Markers {
+                labels: columns.iter().map(|&k| set.labels[k].clone()).collect(),
+                times: s.recording.times.clone(),
+                frames: s
+                    .recording
+                    .frames
+                    .iter()
+                    .map(|f| columns.iter().map(|&k| f[k]).collect())
+                    .collect(),
+                units: Units::Metres,
+                format: Format::MarkerCsv,
+                provenance: Vec::new(),
+            }
+        };
+        let torso = Torso::new_at_rest(config(0)).unwrap();
+        let is_back = |l: &str| l.as_bytes()[2] == back_tag;
+        let all = markers(&|_| true);
+        let bound = bind_recording(
+            &torso,
+            &all,
+            &SurfaceOptions::default(),
+            &PoseOptions::default(),
+        )
+        .unwrap();
+        let found: Vec<&str> = bound
+            .back
+            .iter()
+            .map(|&k| bound.set.labels[k].as_str())
+            .collect();
+        let want = set.labels.iter().filter(|l| is_back(l)).count();
+        println!(
+            "{name}: {} markers over the back found ({} posterior in the set)",
+            found.len(),
+            want
+        );
+        assert_eq!(found.len(), want, "{found:?}");
+        assert!(found.iter().all(|l| is_back(l)), "{found:?}");
+        let front = markers(&|l| l.as_bytes()[2] == if back_tag == b'B' { b'F' } else { b'A' });
+        let bound = bind_recording(
+            &torso,
+            &front,
+            &SurfaceOptions::default(),
+            &PoseOptions::default(),
+        )
+        .unwrap();
+        assert!(bound.back.is_empty(), "{:?}", bound.back);
+        let d = remove_sway(
+            &bound.recording.times,
+            &bound.recording.frames,
+            &bound.set.labels,
+            &bound.back,
+            "back",
+            true,
+        )
+        .unwrap();
+        println!("{name}, front only: {}", d.sway.summary());
+        assert!(!d.sway.removed && d.sway.note.contains("front-only"));
+    }
+}
+
+/// `torso fit --reference LABELS`: labels the recording does not have are refused, naming
+/// the flag and the label; named ones are the sway's reference (the bundled 6 s recording
+/// spans 1.6 breaths, too few to tell sway from breath: none is removed, and the result says
+/// why). `--marker-radius` is refused for the grid.
+#[test]
+fn the_command_line_names_the_reference_and_refuses_what_it_cannot_use() {
+    let dir = std::env::temp_dir().join(format!("torso_fit_sway_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("result.json");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let fit = |recording: &str, extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_torso"))
+            .args([
+                "fit",
+                "--no-fit-size",
+                "--max-evals",
+                "12",
+                "--threads",
+                "1",
+                "--slp",
+            ])
+            .arg(root.join(recording))
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let bad = fit(
+        "data/recordings/chest30_lab.c3d",
+        &["--reference", "C1BR1,C2BR1,NOPE"],
+    );
+    let err = String::from_utf8_lossy(&bad.stderr);
+    println!("{err}");
+    assert!(!bad.status.success());
+    assert!(err.contains("--reference") && err.contains("NOPE"), "{err}");
+    let good = fit(
+        "data/recordings/chest30_lab.c3d",
+        &["--reference", "C1BR1,C2BR1,C3BR1,C4BL1"],
+    );
+    assert!(
+        good.status.success(),
+        "{}",
+        String::from_utf8_lossy(&good.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    println!("{}", json["sway"]);
+    assert_eq!(json["sway"]["reference_chosen_by"], "named");
+    assert_eq!(
+        json["sway"]["reference_markers"].as_array().unwrap().len(),
+        4
+    );
+    assert_eq!(json["sway"]["removed"], false);
+    assert!(json["sway"]["note"].as_str().unwrap().contains("breaths"));
+    assert!(
+        json["cost_basis"]["marker_radius_assumption"]
+            .as_str()
+            .unwrap()
+            .contains("skin points")
+    );
+    let grid = fit("data/recordings/demo_quiet.csv", &["--marker-radius", "6"]);
+    let err = String::from_utf8_lossy(&grid.stderr);
+    assert!(
+        !grid.status.success() && err.contains("--marker-radius"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
