@@ -308,3 +308,47 @@ fn a_heartbeat_in_the_residual_is_reported_and_noise_alone_is_not() {
     println!("false peaks in white noise: {false_peaks} of 20");
     assert!(false_peaks <= 1);
 }
+
+/// Deep breaths (each marker's motion about its mean made 4 times larger, 15-25 mm) with
+/// markers lost for 2 s (half a breath) here and there: neighbours move differently over
+/// such a gap, and no marker that comes back to its own place may be taken for a ghost.
+#[test]
+fn markers_back_from_a_gap_in_deep_breaths_are_not_ghosts() {
+    let (s, set, _) = recording(0.0);
+    let n = set.len();
+    let frames = &s.recording.frames;
+    let mean: Vec<Vector3<f64>> = (0..n)
+        .map(|p| {
+            frames
+                .iter()
+                .map(|f| f[p].unwrap().coords)
+                .sum::<Vector3<f64>>()
+                / frames.len() as f64
+        })
+        .collect();
+    let mut deep: Vec<Vec<Option<Point3<f64>>>> = frames
+        .iter()
+        .map(|f| {
+            f.iter()
+                .zip(&mean)
+                .map(|(q, m)| q.map(|q| Point3::from(m + 4.0 * (q.coords - m))))
+                .collect()
+        })
+        .collect();
+    let largest = (0..n)
+        .map(|p| {
+            deep.iter()
+                .map(|f| (f[p].unwrap().coords - mean[p]).norm())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    for (k, p) in (0..n).step_by(3).enumerate() {
+        let start = 30 + 40 * k % 400;
+        for f in deep.iter_mut().skip(start).take(60) {
+            f[p] = None;
+        }
+    }
+    let c = clean(&s.recording.times, &set.labels, &deep).unwrap();
+    println!("largest excursion {:.1} mm; {:?}", largest * 1e3, c.notes);
+    assert!(c.notes.is_empty(), "{:?}", c.notes);
+}

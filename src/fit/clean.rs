@@ -6,8 +6,9 @@
 //!   motion of its [`NEIGHBOURS`] nearest markers (tracked in both frames) is its jump:
 //!   breathing, sway and drift move neighbours alike, so the jump of a marker that stays
 //!   on its skin point is noise. A jump over the threshold (the larger of [`JUMP_M`], a
-//!   marker's diameter, and [`JUMP_NOISE`] robust standard deviations of all jumps) is an
-//!   event.
+//!   marker's diameter, and [`JUMP_NOISE`] robust standard deviations of all jumps) plus
+//!   the neighbours' own spread (the median of their motions' distances from their median
+//!   motion: across a gap during a deep breath, neighbours move differently) is an event.
 //! - **Label swaps.** Two markers jumping at the same frame, each onto where the other was
 //!   (within the threshold), swapped labels: their columns are exchanged from that frame on
 //!   (a later swap back is found the same way and exchanges them again).
@@ -64,6 +65,7 @@ struct Jump {
     from: usize,
     at: usize,
     size: f64,
+    spread: f64,
 }
 
 /// Each marker's nearest neighbours, from the first tracked position of every marker.
@@ -87,12 +89,22 @@ fn neighbours(frames: &[Vec<Option<Point3<f64>>>]) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// Every marker's motion between consecutive tracked frames less its neighbours' mean
-/// motion: (marker, previous tracked frame, frame, relative motion).
-fn relative_motions(
-    frames: &[Vec<Option<Point3<f64>>>],
-    near: &[Vec<usize>],
-) -> Vec<(usize, usize, usize, Vector3<f64>)> {
+/// One marker's motion between two tracked frames against its neighbours'.
+#[derive(Clone, Copy, Debug)]
+struct Motion {
+    marker: usize,
+    from: usize,
+    at: usize,
+    /// The marker's motion less the neighbours' median motion.
+    relative: Vector3<f64>,
+    /// How differently the neighbours moved: the median of their motions' distances from
+    /// their median motion (noise between consecutive frames; across a gap during a deep
+    /// breath, the breath's differences over the trunk).
+    spread: f64,
+}
+
+/// Every marker's motion between consecutive tracked frames against its neighbours'.
+fn relative_motions(frames: &[Vec<Option<Point3<f64>>>], near: &[Vec<usize>]) -> Vec<Motion> {
     let points = frames.first().map_or(0, Vec::len);
     let mut out = Vec::new();
     for p in 0..points {
@@ -115,7 +127,18 @@ fn relative_motions(
                 } else {
                     Vector3::from_fn(|a, _| median_signed(moved.iter().map(|v| v[a]).collect()))
                 };
-                out.push((p, j, i, (x - x0) - common));
+                let spread = if moved.is_empty() {
+                    0.0
+                } else {
+                    median_signed(moved.iter().map(|v| (v - common).norm()).collect())
+                };
+                out.push(Motion {
+                    marker: p,
+                    from: j,
+                    at: i,
+                    relative: (x - x0) - common,
+                    spread,
+                });
             }
             last = Some(i);
         }
@@ -143,10 +166,13 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The jump threshold of `frames` (see the module doc).
-fn threshold(motions: &[(usize, usize, usize, Vector3<f64>)]) -> f64 {
+fn threshold(motions: &[Motion]) -> f64 {
     let components: Vec<f64> = motions
         .iter()
-        .flat_map(|m| [m.3.x.abs(), m.3.y.abs(), m.3.z.abs()])
+        .flat_map(|m| {
+            let r = m.relative;
+            [r.x.abs(), r.y.abs(), r.z.abs()]
+        })
         .collect();
     let sigma = 1.4826 * median(components);
     if sigma.is_finite() {
@@ -176,12 +202,13 @@ pub fn clean(
         let motions = relative_motions(&out, &near);
         let jumps: Vec<Jump> = motions
             .iter()
-            .filter(|m| m.3.norm() > limit)
+            .filter(|m| m.relative.norm() > limit + m.spread)
             .map(|m| Jump {
-                marker: m.0,
-                from: m.1,
-                at: m.2,
-                size: m.3.norm(),
+                marker: m.marker,
+                from: m.from,
+                at: m.at,
+                size: m.relative.norm(),
+                spread: m.spread,
             })
             .collect();
         let mut found = None;
@@ -196,7 +223,8 @@ pub fn clean(
                 else {
                     continue;
                 };
-                if (xa - yb).norm() < limit && (xb - ya).norm() < limit {
+                let near_enough = limit + a.spread.max(b.spread);
+                if (xa - yb).norm() < near_enough && (xb - ya).norm() < near_enough {
                     found = Some((pa, pb, i, a.size.max(b.size)));
                     break 'search;
                 }
@@ -221,12 +249,16 @@ pub fn clean(
     // Ghosts: what is left of the jumps, marker by marker.
     let motions = relative_motions(&out, &near);
     let mut per_marker: Vec<Vec<Jump>> = vec![Vec::new(); points];
-    for m in motions.iter().filter(|m| m.3.norm() > limit) {
-        per_marker[m.0].push(Jump {
-            marker: m.0,
-            from: m.1,
-            at: m.2,
-            size: m.3.norm(),
+    for m in motions
+        .iter()
+        .filter(|m| m.relative.norm() > limit + m.spread)
+    {
+        per_marker[m.marker].push(Jump {
+            marker: m.marker,
+            from: m.from,
+            at: m.at,
+            size: m.relative.norm(),
+            spread: m.spread,
         });
     }
     let mut ghosts = Vec::new();
