@@ -129,6 +129,24 @@ pub struct FitArgs {
     /// breaths apart, in closed form at each evaluation (docs/fit_report.md).
     #[arg(long)]
     pub no_drift: bool,
+    /// Keep the whole trunk's sway in the recording. By default a named marker set with
+    /// markers over the back (more than 6 markers, at least 3 of them facing backwards on
+    /// the registered skin) has the trunk's rigid motion removed first: the back markers'
+    /// per-frame rigid registration to their mean shape, its part slower than the breath
+    /// (docs/recordings.md, "Sway"). The grid and front-only sets get none, and the report
+    /// says so.
+    #[arg(long)]
+    pub no_sway: bool,
+    /// Labels of quasi-rigid markers (over the spine, the back, the pelvis), comma separated:
+    /// the sway's reference instead of the markers over the back.
+    #[arg(long, value_delimiter = ',', conflicts_with = "no_sway")]
+    pub reference: Vec<String>,
+    /// Marker radius [mm] of a named marker set: each recorded marker's centre stands this
+    /// far off the skin along the skin's outward normal (half the marker's diameter plus
+    /// its base; 5-7 mm for 10-14 mm markers). Default 0: the recorded points are taken as
+    /// skin points, and the report says so.
+    #[arg(long, default_value_t = 0.0)]
+    pub marker_radius: f64,
     /// Labels of markers on the front of the trunk, comma separated (a named marker set):
     /// the pose is the one that puts them on the skin facing forwards, rather than the one
     /// the breathing motion points to (docs/recordings.md, "The pose of a marker set").
@@ -282,6 +300,8 @@ pub struct FitFlags {
     pub no_fit_size: bool,
     /// Keep each marker's drift in the cost (`--no-drift`).
     pub no_drift: bool,
+    /// Keep the trunk's sway in the recording (`--no-sway`).
+    pub no_sway: bool,
     /// What the user says of a named marker set's pose (`--anterior`).
     pub pose: PoseOptions,
 }
@@ -422,12 +442,40 @@ pub fn fit_file_observed(
         ForFit::Grid(_) if !size_given => Some("no --stature or --mass was given"),
         ForFit::Grid(_) => None,
     };
+    if matches!(recording, ForFit::Grid(_)) && options.marker_radius != 0.0 {
+        return Err(Error::invalid(
+            "--marker-radius",
+            options.marker_radius * 1e3,
+            "0 for the grid (its points are on the skin surface itself)",
+        ));
+    }
+    if matches!(recording, ForFit::Grid(_)) && !options.reference.is_empty() {
+        return Err(Error::invalid(
+            "--reference",
+            options.reference.join(","),
+            "labels of a named marker set's markers (the grid covers the front only: no sway is removed from it)",
+        ));
+    }
     let options = &FitOptions {
         marker_offsets: about_means.is_some(),
         drift: about_means.is_some() && !flags.no_drift,
+        sway: !flags.no_sway,
         ..options.clone()
     };
+    let radius_assumption = if options.marker_radius > 0.0 {
+        format!(
+            "each marker's centre taken {:.1} mm off its skin point along the rest skin's outward normal there, the same in every frame (--marker-radius)",
+            options.marker_radius * 1e3
+        )
+    } else if matches!(recording, ForFit::Grid(_)) {
+        "0: the grid's points are on the skin surface".to_string()
+    } else {
+        "0: the recorded points are taken as skin points (a motion-capture marker's centre stands half its diameter and its base off the skin, 5-7 mm for 10-14 mm markers; --marker-radius MM says so)".to_string()
+    };
+    println!("marker radius         {radius_assumption}");
     let cost_json = serde_json::json!({
+        "marker_radius_m": options.marker_radius,
+        "marker_radius_assumption": radius_assumption,
         "about_marker_means": about_means.is_some(),
         "drift_removed": options.drift,
         "why": about_means.unwrap_or("the grid of a given subject: the thesis's eq. 3.1 after one rigid pose correction"),
@@ -673,6 +721,8 @@ pub fn main(args: &FitArgs) -> Result<()> {
         threads: args.threads.unwrap_or_else(default_threads),
         inspiratory_fraction: inspiratory_fraction(&args.ti_ttot)?,
         marker_offsets: args.marker_offsets,
+        reference: args.reference.clone(),
+        marker_radius: args.marker_radius * 1e-3,
         ..FitOptions::default()
     };
     if !(1..=2).contains(&options.threads) {
@@ -690,6 +740,7 @@ pub fn main(args: &FitArgs) -> Result<()> {
             fit_size: args.fit_size,
             no_fit_size: args.no_fit_size,
             no_drift: args.no_drift,
+            no_sway: args.no_sway,
             pose: PoseOptions {
                 anterior: args.anterior.clone(),
             },

@@ -102,6 +102,12 @@ impl DriftBasis {
             .collect()
     }
 
+    /// The least-squares fit of the spline to one series (per frame, `None` where
+    /// missing), at every frame (zero with fewer samples than knots).
+    pub fn fit_series(&self, values: &[Option<f64>]) -> Vec<f64> {
+        self.fit_one(values)
+    }
+
     /// The drift of every marker fitted to recorded minus model (per frame, per marker),
     /// per frame and marker [m].
     pub fn drift(

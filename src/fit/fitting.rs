@@ -112,6 +112,21 @@ pub struct FitOptions {
     /// (variable projection); implies comparing each marker about its own mean. The fit
     /// then reports each drive parameter's sensitivity before and after the projection.
     pub drift: bool,
+    /// Remove the whole trunk's sway before the fit, for a recording of a named marker set
+    /// ([`super::named::fit_any_markers`]): the rigid motion of quasi-rigid reference
+    /// markers, its part slower than the breath ([`super::sway`]). The grid and sets
+    /// without reference markers get none, and the fit's `sway` says why.
+    pub sway: bool,
+    /// Labels of the sway's reference markers (`--reference`); empty: the markers over the
+    /// back, found from the registered pose.
+    pub reference: Vec<String>,
+    /// Find and repair label swaps and ghost markers before the fit ([`super::clean`]);
+    /// gaps longer than a breath are left out of the breath detection either way.
+    pub clean: bool,
+    /// Marker radius [m] of a named marker set: each recorded marker's centre stands this
+    /// far off its skin point along the skin's outward normal
+    /// ([`super::named::bind_with_radius`]); 0 takes the recorded points as skin points.
+    pub marker_radius: f64,
 }
 
 impl Default for FitOptions {
@@ -129,6 +144,10 @@ impl Default for FitOptions {
             threads: 1,
             marker_offsets: false,
             drift: false,
+            sway: false,
+            reference: Vec::new(),
+            clean: true,
+            marker_radius: 0.0,
         }
     }
 }
@@ -187,6 +206,33 @@ pub struct Fit {
     /// Each drive parameter's sensitivity at the optimum, before and after the drift is
     /// projected out (empty without drift).
     pub sensitivity: Vec<Sensitivity>,
+    /// The sway removed before the fit, or why none was (None: not asked for).
+    pub sway: Option<super::sway::Sway>,
+    /// What was repaired or left out of the recording, one sentence each: label swaps,
+    /// ghost markers ([`super::clean`]), gaps longer than a breath.
+    pub repairs: Vec<String>,
+    /// Gaps longer than a breath, left out of the breath detection and never
+    /// interpolated: (marker, first missing frame, frame after the last), 0-based.
+    pub long_gaps: Vec<(usize, usize, usize)>,
+}
+
+impl Fit {
+    /// Adds a sentence per gap longer than a breath to [`Fit::repairs`], naming each
+    /// marker by `labels`.
+    pub fn note_long_gaps(&mut self, labels: &[String]) {
+        let breath = 1.0 / self.drive.frequency;
+        for &(p, a, b) in &self.long_gaps {
+            let label = labels.get(p).map_or("?", String::as_str);
+            let end = (b.max(1) - 1).min(self.times.len().saturating_sub(1));
+            self.repairs.push(format!(
+                "marker {label}: untracked from frame {} to frame {b} ({:.2}-{:.2} s), longer than a breath ({breath:.2} s): \
+                 left out there (not interpolated) and out of the breath detection",
+                a + 1,
+                self.times[a.min(end)],
+                self.times[end],
+            ));
+        }
+    }
 }
 
 /// How much a drive parameter moves the markers at the fit's optimum: the root mean square
@@ -730,7 +776,21 @@ pub fn fit_recording(
 ) -> Result<Fit> {
     recording.validate()?;
     check_grid(recording.grid, model.grid())?;
-    fit_marker_frames(model, recording, options, progress)
+    if !options.clean {
+        return fit_marker_frames(model, recording, options, progress);
+    }
+    let labels: Vec<String> = (0..recording.points())
+        .map(super::markers::grid_label)
+        .collect();
+    let cleaned = super::clean::clean(&recording.times, &labels, &recording.frames)?;
+    let repaired = Recording {
+        frames: cleaned.frames,
+        ..recording.clone()
+    };
+    let mut fit = fit_marker_frames(model, &repaired, options, progress)?;
+    fit.repairs.splice(0..0, cleaned.notes);
+    fit.note_long_gaps(&labels);
+    Ok(fit)
 }
 
 /// The fit of [`fit_recording`] for a recording of any marker set: its points are the
@@ -781,8 +841,23 @@ pub fn fit_marker_frames(
         units: recording.units,
         provenance: recording.provenance.clone(),
     };
-    let pd = principal_displacement(&registered)?;
-    let frequency = estimate_frequency(&pd.signal, recording.rate())?;
+    let mut pd = principal_displacement(&registered)?;
+    let mut frequency = estimate_frequency(&pd.signal, recording.rate())?;
+    // Gaps longer than a breath are not interpolated: their markers are left out of the
+    // breath detection (the cost compares tracked samples only).
+    let mut long_gaps = Vec::new();
+    let gaps = super::clean::long_gaps(
+        &recording.times,
+        &recording.frames,
+        1.0 / frequency.frequency_hz,
+    );
+    if !gaps.is_empty() {
+        let mut left_out: Vec<usize> = gaps.iter().map(|g| g.0).collect();
+        left_out.dedup();
+        pd = super::principal::principal_displacement_without(&registered, &left_out)?;
+        frequency = estimate_frequency(&pd.signal, recording.rate())?;
+        long_gaps = gaps;
+    }
     let f = frequency.frequency_hz;
     crate::model::check(
         "drive.frequency (estimated from the recording)",
@@ -1040,6 +1115,15 @@ pub fn fit_marker_frames(
         breathing,
         drift_knots: drift_basis.map(|b| b.knots),
         sensitivity,
+        sway: options.sway.then(|| {
+            super::sway::Sway::none(
+                "the recording is the SLP grid, over the front only: forward sway and breathing are the same signal there",
+                Vec::new(),
+                "none",
+            )
+        }),
+        repairs: Vec::new(),
+        long_gaps,
     })
 }
 

@@ -11,6 +11,8 @@
 //! | [`quality`] | what a fit's figures mean: noise floor (local cubic fits, pre-filter check), motion explained, bounds, verdict |
 //! | [`breathing`] | breath-by-breath Ti, Te, Ttot of a recording from its principal displacement |
 //! | [`clinical`] | per-breath report of the fitted model: Ti, Te, IE50, VT, rib-cage share, phase angle |
+//! | [`clean`] | label swaps and ghost markers (jumps against neighbours) repaired, gaps over a breath left out |
+//! | [`sway`] | the whole trunk's sway: rigid motion of reference markers, its part slower than the breath removed |
 //! | [`drift`] | each marker's slow drift (linear spline, knots three breaths apart) projected out of the cost |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
 //! | [`orient`] | the pose of a marker set on the body: shape candidates, front from the breathing motion, short fits |
@@ -24,6 +26,7 @@
 //! | [`report`] | result JSON with FMI names, fitted lung-volume CSV, PNG report |
 
 pub mod breathing;
+pub mod clean;
 pub mod clinical;
 pub mod drift;
 pub mod figure;
@@ -39,12 +42,13 @@ pub mod recording;
 pub mod report;
 pub mod size;
 pub mod source;
+pub mod sway;
 pub mod sweep;
 pub mod synth;
 
 pub use fitting::{Fit, FitOptions, Method, fit_marker_frames, fit_recording};
 pub use markers::{Format, Markers, ReadOptions};
-pub use named::{BoundRecording, MarkerSetFit, bind_recording, fit_any_markers};
+pub use named::{BoundRecording, MarkerSetFit, bind_recording, bind_with_radius, fit_any_markers};
 pub use orient::{Orientation, PoseOptions};
 pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};

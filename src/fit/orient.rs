@@ -10,7 +10,10 @@
 //!    fitting). Nothing is assumed of the laboratory's axes: Y-up, Z-up or X-up, standing
 //!    or supine (the lab's vertical the body's antero-posterior axis) are all among the
 //!    starts.
-//! 2. **Front from the breathing motion.** The recording's principal displacement (the
+//! 2. **Front from the breathing motion.** The breathing frequency is estimated with each
+//!    frame's rigid motion of the whole set taken out, and the motion kept is the breathing
+//!    band ([`super::sway::breathing_band`]: each marker coordinate's part slower than the
+//!    breath, the trunk's sway and drift, removed). Its principal displacement (the
 //!    motion common to all markers, [`principal_displacement`]) is signed, in each pose, so
 //!    that the markers move out of the skin on inspiration (the front and sides expand,
 //!    the back barely moves); the inspiratory motion then points to the front, and
@@ -38,7 +41,6 @@ use crate::anatomy::skin::{
     MIN_SURFACE_MARKERS, MarkerSet, Skin, SurfaceOptions, SurfaceRegistration, register_candidates,
 };
 use crate::model::{Torso, Wave};
-use crate::stats::frequency::estimate_frequency;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use std::sync::Arc;
@@ -170,10 +172,19 @@ pub fn orient(
             format!("at least {MIN_SURFACE_MARKERS} markers on the trunk"),
         ));
     }
+    // The breathing frequency with each frame's rigid motion of the whole set taken out,
+    // and the motion's direction from the breathing band alone: the trunk's sway (slower
+    // than the breath, super::sway) would otherwise pass for the breath.
+    let f = super::sway::breathing_frequency(&markers.times, &markers.frames)?;
+    crate::model::check(
+        "drive.frequency (estimated from the recording)",
+        f,
+        (0.05, 2.0),
+    )?;
     let all = Recording {
         grid: (markers.markers(), 1),
         times: markers.times.clone(),
-        frames: markers.frames.clone(),
+        frames: super::sway::breathing_band(&markers.times, &markers.frames, f),
         units: markers.units,
         provenance: Vec::new(),
     };
@@ -184,12 +195,6 @@ pub fn orient(
         &markers.frames[0],
         Some(&pd.loadings),
         surface,
-    )?;
-    let f = estimate_frequency(&pd.signal, markers.rate())?.frequency_hz;
-    crate::model::check(
-        "drive.frequency (estimated from the recording)",
-        f,
-        (0.05, 2.0),
     )?;
     // One model carrying every candidate's bound markers: two basis runs serve them all.
     let mut labels = Vec::new();
@@ -223,7 +228,7 @@ pub fn orient(
     let mut candidates = Vec::with_capacity(registrations.len());
     for (r, range) in registrations.into_iter().zip(ranges) {
         let columns: Vec<usize> = range.collect();
-        let recorded: Vec<Vec<Option<Point3<f64>>>> = markers
+        let recorded: Vec<Vec<Option<Point3<f64>>>> = all
             .frames
             .iter()
             .map(|frame| {

@@ -55,10 +55,21 @@ fn fill(times: &[f64], values: &[Option<f64>]) -> Option<Vec<f64>> {
 
 /// The principal displacement of `recording` (see the module doc).
 pub fn principal_displacement(recording: &Recording) -> Result<PrincipalDisplacement> {
+    principal_displacement_without(recording, &[])
+}
+
+/// [`principal_displacement`] leaving out the points `left_out` (e.g. those with a gap
+/// longer than a breath, which interpolation would draw a line across); their loadings
+/// are zero. When that leaves no point, none is left out.
+pub fn principal_displacement_without(
+    recording: &Recording,
+    left_out: &[usize],
+) -> Result<PrincipalDisplacement> {
     let nf = recording.frames.len();
     let np = recording.points();
+    let left_out: &[usize] = if left_out.len() >= np { &[] } else { left_out };
     let mut columns: Vec<(usize, usize, Vec<f64>)> = Vec::new();
-    for p in 0..np {
+    for p in (0..np).filter(|p| !left_out.contains(p)) {
         for axis in 0..3 {
             let values: Vec<Option<f64>> = recording
                 .frames

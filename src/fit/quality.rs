@@ -19,8 +19,19 @@
 //!   fitted markers' motion (about theirs) explains: overall, per marker, and above the
 //!   noise (the noise's 3 sigma^2 per sample taken out of both sums). When the fit removed
 //!   each marker's drift ([`super::drift`]), the drift's share of the motion is reported and
-//!   the drive's share is of the motion left after the drift; sway is not removed by this
-//!   fit (null).
+//!   the drive's share is of the motion left after the drift. When the trunk's sway was
+//!   removed before the fit ([`super::sway`]), its share of the recorded motion is reported
+//!   beside them (null when none was removed, with the reason in the notes).
+//! - **Cardiac motion** ([`cardiac_peak`]): the heartbeat moves the chest wall by a few
+//!   tenths of a millimetre at 0.8-2.5 Hz (48-150 beats/min). It is not fitted; it is
+//!   reported when the residual (recorded minus fitted, after the drift) has a spectral peak
+//!   there: the residual's periodogram summed over every marker coordinate, each bin against
+//!   the mean of the band's other bins, is an F(2M, 2M(K - 1)) variate for white noise (M
+//!   coordinates, K bins); a peak whose probability times K (Bonferroni) is under 1 % is
+//!   reported. Bins within one frequency step of a harmonic h of the breath, widened by h
+//!   times the recording's breath-to-breath variation of period (the coefficient of
+//!   variation of its breaths' Ttot), are left out: the fitted breath's harmonics differ
+//!   from a varying recorded one's, and the difference spreads over that band.
 //! - **Verdict.** When the drive explains under half of the motion above the noise left
 //!   after the drift, the report says "the model does not explain this recording";
 //!   "converged" describes the search only.
@@ -226,6 +237,138 @@ pub fn explained(
     }
 }
 
+/// The band searched for a cardiac peak [Hz]: 48-150 beats/min, resting to exercising
+/// adults.
+pub const CARDIAC_BAND_HZ: (f64, f64) = (0.8, 2.5);
+/// False-alarm probability of a reported cardiac peak over the whole band.
+pub const CARDIAC_FALSE_ALARM: f64 = 0.01;
+
+/// A spectral peak of the residual in the cardiac band.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CardiacPeak {
+    /// Frequency of the peak [Hz].
+    pub frequency_hz: f64,
+    /// Root mean square over the markers of the 3-D amplitude of the residual at the peak
+    /// [m].
+    pub amplitude_rms_m: f64,
+    /// Largest 3-D amplitude of one marker at the peak [m] and that marker (index).
+    pub amplitude_max_m: f64,
+    /// Index of the marker with the largest amplitude.
+    pub marker: usize,
+    /// The peak bin's power over the mean of the band's other bins.
+    pub ratio: f64,
+    /// Probability of so high a bin in white noise, times the number of bins.
+    pub false_alarm: f64,
+}
+
+/// The cardiac peak of `residual` (per frame, per marker; `times` from the first frame),
+/// with the breath at `breathing` Hz varying from breath to breath by `spread` (coefficient
+/// of variation of the breath's period); None when there is none (see the module doc), or
+/// the recording is too short or too slowly sampled, or the breath's spread harmonics cover
+/// the band (fewer than 4 bins left).
+pub fn cardiac_peak(
+    times: &[f64],
+    residual: &[Vec<Option<Vector3<f64>>>],
+    breathing: f64,
+    spread: f64,
+) -> Option<CardiacPeak> {
+    let n = times.len();
+    if n < 16 {
+        return None;
+    }
+    let span = times[n - 1] - times[0];
+    let rate = (n - 1) as f64 / span;
+    let step = 1.0 / span;
+    let (lo, hi) = CARDIAC_BAND_HZ;
+    let hi = hi.min(0.45 * rate);
+    let bins: Vec<f64> = ((lo / step).ceil() as usize..=(hi / step).floor() as usize)
+        .map(|k| k as f64 * step)
+        .filter(|f| {
+            // Every harmonic h of the breath, spread by h times the breath-to-breath
+            // variation of the breathing frequency, and one step either side.
+            (1..=(f / breathing * (1.0 + spread) + 1.0) as usize).all(|h| {
+                let fh = h as f64 * breathing;
+                (f - fh).abs() > step + fh * spread
+            })
+        })
+        .collect();
+    if bins.len() < 4 {
+        return None;
+    }
+    let points = residual.first().map_or(0, Vec::len);
+    // Each coordinate about its mean over its tracked samples.
+    let mut columns: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
+    for p in 0..points {
+        for a in 0..3 {
+            let v: Vec<(f64, f64)> = residual
+                .iter()
+                .zip(times)
+                .filter_map(|(r, &t)| r[p].map(|d| (t - times[0], d[a])))
+                .collect();
+            if v.len() < n / 2 {
+                continue;
+            }
+            let mean = v.iter().map(|x| x.1).sum::<f64>() / v.len() as f64;
+            columns.push((p, v.into_iter().map(|(t, x)| (t, x - mean)).collect()));
+        }
+    }
+    let m = columns.len();
+    if m == 0 {
+        return None;
+    }
+    // Per bin: the summed power and each marker's squared amplitude.
+    let mut power = vec![0.0; bins.len()];
+    let mut amplitude2 = vec![vec![0.0; points]; bins.len()];
+    for (p, v) in &columns {
+        for (b, f) in bins.iter().enumerate() {
+            let w = 2.0 * std::f64::consts::PI * f;
+            let (mut re, mut im) = (0.0, 0.0);
+            for (t, x) in v {
+                re += x * (w * t).cos();
+                im += x * (w * t).sin();
+            }
+            let x2 = re * re + im * im;
+            power[b] += x2 / v.len() as f64;
+            amplitude2[b][*p] += 4.0 * x2 / (v.len() * v.len()) as f64;
+        }
+    }
+    let k = bins.len();
+    let (best, &top) = power.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let others = (power.iter().sum::<f64>() - top) / (k - 1) as f64;
+    if others <= 0.0 {
+        return None;
+    }
+    let ratio = top / others;
+    let d1 = 2.0 * m as f64;
+    let false_alarm =
+        (crate::stats::special::f_sf(ratio, d1, d1 * (k - 1) as f64) * k as f64).min(1.0);
+    if false_alarm >= CARDIAC_FALSE_ALARM {
+        return None;
+    }
+    let amps: Vec<f64> = amplitude2[best].iter().map(|a| a.sqrt()).collect();
+    let (marker, &amax) = amps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let tracked: Vec<f64> = columns
+        .iter()
+        .map(|c| c.0)
+        .fold(Vec::new(), |mut u, p| {
+            if !u.contains(&p) {
+                u.push(p);
+            }
+            u
+        })
+        .into_iter()
+        .map(|p| amplitude2[best][p])
+        .collect();
+    Some(CardiacPeak {
+        frequency_hz: bins[best],
+        amplitude_rms_m: (tracked.iter().sum::<f64>() / tracked.len().max(1) as f64).sqrt(),
+        amplitude_max_m: amax,
+        marker,
+        ratio,
+        false_alarm,
+    })
+}
+
 /// Share of the motion above the noise under which the report says the model does not
 /// explain the recording (the issue's half).
 pub const EXPLAINS_AT_LEAST: f64 = 0.5;
@@ -240,6 +383,11 @@ pub struct Quality {
     pub explained: Explained,
     /// With drift removed: the drift's share of the motion about the means.
     pub drift_share: Option<f64>,
+    /// With sway removed: the sway's share of the recorded motion about the means (before
+    /// the sway was removed).
+    pub sway_share: Option<f64>,
+    /// A spectral peak of the residual in the cardiac band, reported, not fitted.
+    pub cardiac: Option<CardiacPeak>,
     /// With drift removed: the shares of the motion left after the drift that the drive
     /// explains.
     pub after_drift: Option<Explained>,
@@ -258,11 +406,43 @@ const AT_BOUND: f64 = 1e-3;
 pub fn quality(fit: &Fit) -> Quality {
     let noise = noise_floor(&fit.times, &fit.recorded, fit.drive.frequency);
     let whole = explained(&fit.recorded, &fit.fitted.markers, noise.sigma_m);
-    let (drift_share, after_drift) = match &fit.drift_knots {
+    let basis = fit
+        .drift_knots
+        .as_ref()
+        .map(|_| super::drift::DriftBasis::new(&fit.times, fit.drive.frequency));
+    let drift_of = basis
+        .as_ref()
+        .map(|b| b.drift(&fit.fitted.markers, &fit.recorded));
+    let residual: Vec<Vec<Option<Vector3<f64>>>> = fit
+        .recorded
+        .iter()
+        .zip(&fit.fitted.markers)
+        .enumerate()
+        .map(|(i, (r, m))| {
+            r.iter()
+                .zip(m)
+                .enumerate()
+                .map(|(p, (q, a))| {
+                    q.map(|q| {
+                        let d = drift_of.as_ref().map_or(Vector3::zeros(), |d| d[i][p]);
+                        q - a - d
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    let periods: Vec<f64> = fit.breathing.breaths.iter().map(|b| b.ttot).collect();
+    let spread = if periods.len() > 1 {
+        let m = periods.iter().sum::<f64>() / periods.len() as f64;
+        let v = periods.iter().map(|p| (p - m).powi(2)).sum::<f64>() / (periods.len() - 1) as f64;
+        v.sqrt() / m
+    } else {
+        0.0
+    };
+    let cardiac = cardiac_peak(&fit.times, &residual, fit.drive.frequency, spread);
+    let (drift_share, after_drift) = match drift_of {
         None => (None, None),
-        Some(_) => {
-            let basis = super::drift::DriftBasis::new(&fit.times, fit.drive.frequency);
-            let drift = basis.drift(&fit.fitted.markers, &fit.recorded);
+        Some(drift) => {
             let less: Vec<Vec<Option<Point3<f64>>>> = fit
                 .recorded
                 .iter()
@@ -301,19 +481,39 @@ pub fn quality(fit: &Fit) -> Quality {
         judged.overall
     };
     let explains = share >= EXPLAINS_AT_LEAST;
+    let sway_share = fit.sway.as_ref().filter(|s| s.removed).map(|s| s.share);
     let mut notes = Vec::new();
     if !explains {
         notes.push(format!(
             "the model does not explain this recording: the drive explains {:.0} % of the markers' \
-             motion above the noise{} (under {:.0} %); sway is not removed by this fit",
+             motion above the noise{} (under {:.0} %); {}",
             100.0 * share,
             if after_drift.is_some() {
                 " left after the drift"
             } else {
                 " (drift not removed)"
             },
-            100.0 * EXPLAINS_AT_LEAST
+            100.0 * EXPLAINS_AT_LEAST,
+            if sway_share.is_some() {
+                "the trunk's sway was removed before"
+            } else {
+                "sway is not removed by this fit"
+            }
         ));
+    }
+    if let Some(c) = &cardiac {
+        notes.push(format!(
+            "cardiac motion: a peak of the residual at {:.2} Hz ({:.0} beats/min), {:.3} mm rms over the markers \
+             (largest {:.3} mm), {:.1} x the band's other bins: reported, not fitted",
+            c.frequency_hz,
+            60.0 * c.frequency_hz,
+            c.amplitude_rms_m * 1e3,
+            c.amplitude_max_m * 1e3,
+            c.ratio
+        ));
+    }
+    if let Some(s) = fit.sway.as_ref().filter(|s| !s.removed) {
+        notes.push(format!("sway not removed: {}", s.note));
     }
     if noise.prefiltered {
         notes.push(format!(
@@ -333,6 +533,8 @@ pub fn quality(fit: &Fit) -> Quality {
         noise,
         explained,
         drift_share,
+        sway_share,
+        cardiac,
         after_drift,
         at_bounds,
         explains,

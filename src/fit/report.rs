@@ -149,6 +149,8 @@ pub fn fit_json(
             "after_drift_projection_m": p.projected_m,
             "kept_by_projection": p.projected_m / p.raw_m,
         })).collect::<Vec<_>>(),
+        "sway": fit.sway.as_ref().map(|s| s.json()),
+        "repairs": fit.repairs,
         "initial_cost_m": fit.initial_cost_m,
         "skin_fit_error_m": match fit.skin_fit {
             Some((before, after)) => json!({"before": before, "after": after, "skin_fitted": true}),
@@ -233,17 +235,35 @@ pub fn quality_json(q: &super::quality::Quality) -> Value {
                     "drift": finite(*d),
                     "drive": finite(a.above_noise),
                     "drive_overall": finite(a.overall),
-                    "sway": Value::Null,
-                    "note": "drift: its share of the motion about the means; drive: its share of the motion left after the drift, above the noise; sway is not removed by this fit",
+                    "sway": q.sway_share.map(finite),
+                    "note": if q.sway_share.is_some() {
+                        "sway: its share of the recorded motion about the means, removed before the fit; drift: its share of the motion (after the sway) about the means; drive: its share of the motion left after the drift, above the noise"
+                    } else {
+                        "drift: its share of the motion about the means; drive: its share of the motion left after the drift, above the noise; sway is not removed by this fit (see sway)"
+                    },
                 }),
                 _ => json!({
                     "drive": finite(q.explained.above_noise),
-                    "sway": Value::Null,
+                    "sway": q.sway_share.map(finite),
                     "drift": Value::Null,
-                    "note": "sway and drift are not removed by this fit: the drive's share is of all the motion above the noise",
+                    "note": if q.sway_share.is_some() {
+                        "sway: its share of the recorded motion about the means, removed before the fit; drift is not removed: the drive's share is of the motion after the sway, above the noise"
+                    } else {
+                        "sway and drift are not removed by this fit: the drive's share is of all the motion above the noise"
+                    },
                 }),
             },
         },
+        "cardiac": q.cardiac.map(|c| json!({
+            "method": "periodogram of the residual (recorded minus fitted, after the drift) summed over the marker coordinates, 0.8-2.5 Hz, each bin against the mean of the others (F test, Bonferroni over the bins, 1 %); reported, not fitted",
+            "frequency_hz": c.frequency_hz,
+            "beats_per_min": 60.0 * c.frequency_hz,
+            "amplitude_rms_m": c.amplitude_rms_m,
+            "amplitude_max_m": c.amplitude_max_m,
+            "marker_index": c.marker,
+            "power_ratio": c.ratio,
+            "false_alarm_probability": c.false_alarm,
+        })),
         "drive_parameters_at_bounds": q.at_bounds,
         "explains_recording": q.explains,
         "notes": q.notes,
@@ -388,16 +408,23 @@ pub fn truth_json(
 pub fn summary(fit: &Fit) -> String {
     let d = &fit.drive;
     let q = super::quality::quality(fit);
+    let sway = match q.sway_share {
+        Some(s) => format!(
+            "sway removed before, {:.0} % of the recorded motion",
+            100.0 * s
+        ),
+        None => "sway not removed".to_string(),
+    };
     let explained = if let (Some(d), Some(a)) = (q.drift_share, &q.after_drift) {
         format!(
-            "{:.0} % of the markers' motion about their means is drift; the drive explains {:.0} % of the rest ({:.0} % above the noise; sway not removed)",
+            "{:.0} % of the markers' motion about their means is drift; the drive explains {:.0} % of the rest ({:.0} % above the noise; {sway})",
             100.0 * d,
             100.0 * a.overall,
             100.0 * a.above_noise
         )
     } else if q.explained.above_noise.is_finite() {
         format!(
-            "{:.0} % of the markers' motion about their means ({:.0} % above the noise; sway and drift not removed)",
+            "{:.0} % of the markers' motion about their means ({:.0} % above the noise; {sway}, drift not removed)",
             100.0 * q.explained.overall,
             100.0 * q.explained.above_noise
         )
@@ -423,6 +450,13 @@ pub fn summary(fit: &Fit) -> String {
         .iter()
         .map(|n| format!("\nquality               {n}"))
         .collect();
+    for r in &fit.repairs {
+        notes.push_str(&format!("\nrepaired              {r}"));
+    }
+    if let Some(sway) = fit.sway.as_ref().filter(|s| s.removed) {
+        notes.push('\n');
+        notes.push_str(&sway.summary());
+    }
     for p in &fit.sensitivity {
         notes.push_str(&format!(
             "\nsensitivity           {}: {:.2} mm per unit, {:.2} after the drift is projected out ({:.0} % kept)",
