@@ -44,9 +44,58 @@ impl Section {
     }
 
     /// Distance from the axis point (axis_x, 0) to the boundary along the direction at angle
-    /// `theta` (0 anterior, pi/2 right), by bisection; the section is convex and contains
-    /// the axis point, so the implicit function grows monotonically along the ray.
+    /// `theta` (0 anterior, pi/2 right). The section is convex and contains the axis point,
+    /// so the implicit function grows monotonically along the ray and its level 1 is crossed
+    /// once in [0, 2] m: found by regula falsi with the Illinois modification (Dowell &
+    /// Jarratt 1971), which keeps the bracket and converges superlinearly (about 10
+    /// evaluations to 1e-15 m, where bisection took 60; the skin generator asks this for
+    /// every vertex of every model build, and `powf` dominated a fit's size search).
     pub fn radius(&self, axis_x: f64, theta: f64) -> f64 {
+        let (s, c) = theta.sin_cos();
+        let f = |r: f64| self.implicit(axis_x + r * c, r * s) - 1.0;
+        let (mut a, mut b) = (0.0, 2.0);
+        let (mut fa, mut fb) = (f(a), f(b));
+        if !(fa < 0.0 && fb > 0.0) {
+            // outside the convex case (not a section the skin generator makes): bisection's
+            // answer, the bracket's end nearer the crossing
+            return if fa >= 0.0 { a } else { b };
+        }
+        let mut side = 0i8;
+        let mut x = a;
+        for _ in 0..200 {
+            let next = (a * fb - b * fa) / (fb - fa);
+            let done = (next - x).abs() <= 1e-15 || b - a <= 1e-15;
+            x = next;
+            if done {
+                break;
+            }
+            let fx = f(x);
+            if fx == 0.0 {
+                break;
+            }
+            if fx < 0.0 {
+                a = x;
+                fa = fx;
+                if side == -1 {
+                    fb *= 0.5; // the Illinois step: the stale end's value halved
+                }
+                side = -1;
+            } else {
+                b = x;
+                fb = fx;
+                if side == 1 {
+                    fa *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        x
+    }
+
+    /// [`Section::radius`] by bisection to the last bit (60 halvings of [0, 2] m): the
+    /// reference the tests hold the faster search to.
+    #[cfg(test)]
+    fn radius_by_bisection(&self, axis_x: f64, theta: f64) -> f64 {
         let (s, c) = theta.sin_cos();
         let (mut lo, mut hi) = (0.0, 2.0);
         for _ in 0..60 {
@@ -155,6 +204,38 @@ impl Pchip {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The regula falsi agrees with bisection to 1e-12 m on sections of every shape the
+    /// trunk has (exponents 1.5-4, the widest point anywhere, the axis off the centre),
+    /// in every direction.
+    #[test]
+    fn radius_matches_bisection() {
+        let mut state = 12345u64;
+        let mut uniform = |lo: f64, hi: f64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        let mut worst = 0.0f64;
+        for _ in 0..200 {
+            let s = Section {
+                x_back: uniform(-0.2, -0.05),
+                depth: uniform(0.15, 0.35),
+                half_breadth: uniform(0.1, 0.2),
+                post_frac: uniform(0.2, 0.8),
+                n_front: uniform(1.5, 4.0),
+                n_back: uniform(1.5, 4.0),
+            };
+            let axis = s.x_back + s.depth * uniform(0.3, 0.7);
+            for k in 0..64 {
+                let theta = k as f64 * std::f64::consts::TAU / 64.0;
+                let d = (s.radius(axis, theta) - s.radius_by_bisection(axis, theta)).abs();
+                worst = worst.max(d);
+            }
+        }
+        assert!(worst < 1e-12, "largest difference {worst:e} m");
+    }
 
     #[test]
     fn ellipse_radius_and_perimeter() {
