@@ -635,7 +635,7 @@ struct Interrupted(PyErr);
 /// Fits the recording at `path` as `torso fit` does, writing the result JSON at `out` (with
 /// its CSV and figure beside it); returns the JSON's path.
 #[pyfunction]
-#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None))]
+#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -657,6 +657,9 @@ fn fit(
     marker_offsets: bool,
     fit_size: Option<bool>,
     drift: bool,
+    sway: bool,
+    reference: Vec<String>,
+    marker_radius: f64,
     anterior: Vec<String>,
     ti_ttot: Option<f64>,
     progress: Option<Py<PyAny>>,
@@ -685,8 +688,17 @@ fn fit(
         threads: threads.unwrap_or_else(default_threads),
         inspiratory_fraction: ti_ttot,
         marker_offsets,
+        reference,
+        marker_radius: marker_radius * 1e-3,
         ..FitOptions::default()
     };
+    if !(marker_radius.is_finite() && marker_radius >= 0.0) {
+        return Err(to_py(Error::invalid(
+            "marker_radius",
+            marker_radius,
+            "a finite distance >= 0 mm",
+        )));
+    }
     if !(1..=2).contains(&options.threads) {
         return Err(to_py(Error::invalid("threads", options.threads, "1 or 2")));
     }
@@ -695,6 +707,7 @@ fn fit(
         fit_size: fit_size == Some(true),
         no_fit_size: fit_size == Some(false),
         no_drift: !drift,
+        no_sway: !sway,
         pose: PoseOptions { anterior },
     };
     // Called on this thread at every evaluation the search reports: the GIL is taken back

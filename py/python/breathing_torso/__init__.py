@@ -313,6 +313,9 @@ def fit(
     marker_offsets: bool = False,
     fit_size: Optional[bool] = None,
     drift: bool = True,
+    sway: bool = True,
+    reference: Sequence[str] = (),
+    marker_radius: float = 0.0,
     anterior: Sequence[str] = (),
     ti_ttot: Optional[float] = 0.5,
     progress: Optional[Callable[[int, float], Any]] = None,
@@ -342,6 +345,10 @@ def fit(
             ``torso fit``'s rule.
         drift: remove each marker's slow drift when markers are compared about their means
             (False: ``--no-drift``).
+        sway: remove the trunk's sway, estimated from the markers over the back, from a
+            named set (False: ``--no-sway``); ``reference`` names the markers to take it
+            from instead (``--reference``).
+        marker_radius: the markers' distance from the skin [mm] (``--marker-radius``).
         ti_ttot: the drive's inspiratory fraction held by the search, or None for the
             recording's median (``--ti-ttot auto``).
         progress: called as ``progress(evaluations, best_cost_m)`` at every evaluation the
@@ -382,6 +389,9 @@ def fit(
             bool(marker_offsets),
             fit_size,
             bool(drift),
+            bool(sway),
+            [str(r) for r in reference],
+            float(marker_radius),
             [str(a) for a in anterior],
             ti_ttot,
             progress,
