@@ -205,29 +205,7 @@ impl Scene {
 
 /// The columns of a simulation, as `torso simulate` writes them.
 fn frame_columns() -> Vec<String> {
-    let mut names = vec!["time".to_string()];
-    names.extend(
-        MuscleGroup::ALL
-            .iter()
-            .map(|g| format!("activation.{}", g.name())),
-    );
-    names.extend(
-        [
-            "volume.lung",
-            "volume.thorax",
-            "volume.abdomen",
-            "volume.trunk",
-            "volume.rib_cage_displaced",
-            "volume.abdomen_displaced",
-            "pressure.abdomen",
-            "diaphragm.displacement",
-            "sternum.displacement.x",
-            "sternum.displacement.y",
-            "sternum.displacement.z",
-        ]
-        .map(String::from),
-    );
-    names
+    breathing_torso::cli::simulate::frame_columns()
 }
 
 /// One frame's values in [`frame_columns`] order.

@@ -190,11 +190,9 @@ fn print_summary(summary: &crate::model::run::BreathSummary, frc_ecsc: f64) {
     );
 }
 
-/// Writes frames as CSV.
-pub fn write_csv(path: &std::path::Path, frames: &[crate::model::run::Frame]) -> Result<()> {
-    prepare_output_file(path)?;
-    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut w = std::io::BufWriter::new(file);
+/// The columns [`write_csv`] writes, in order: time, the eight activations, the volumes,
+/// the abdominal pressure and the displacements (also the Python package's `simulate`).
+pub fn frame_columns() -> Vec<String> {
     let mut header = vec!["time".to_string()];
     header.extend(
         MuscleGroup::ALL
@@ -217,6 +215,15 @@ pub fn write_csv(path: &std::path::Path, frames: &[crate::model::run::Frame]) ->
         ]
         .map(String::from),
     );
+    header
+}
+
+/// Writes frames as CSV.
+pub fn write_csv(path: &std::path::Path, frames: &[crate::model::run::Frame]) -> Result<()> {
+    prepare_output_file(path)?;
+    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+    let mut w = std::io::BufWriter::new(file);
+    let header = frame_columns();
     let io = |e| Error::io(path, e);
     writeln!(w, "{}", header.join(",")).map_err(io)?;
     for f in frames {
