@@ -210,21 +210,7 @@ fn frame_columns() -> Vec<String> {
 
 /// One frame's values in [`frame_columns`] order.
 fn frame_row(f: &Frame, row: &mut Vec<f64>) {
-    row.push(f.time);
-    row.extend(f.activation);
-    row.extend([
-        f.lung,
-        f.thorax,
-        f.abdomen,
-        f.trunk,
-        f.rib_cage_displaced,
-        f.abdomen_displaced,
-        f.pressure,
-        f.diaphragm,
-        f.sternum[0],
-        f.sternum[1],
-        f.sternum[2],
-    ]);
+    breathing_torso::cli::simulate::frame_values(f, row);
 }
 
 /// The muscle group named `name` (`diaphragm`, `external_intercostals`, ...).

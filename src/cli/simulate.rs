@@ -218,6 +218,25 @@ pub fn frame_columns() -> Vec<String> {
     header
 }
 
+/// Appends one frame's values in [`frame_columns`] order to `row`.
+pub fn frame_values(f: &crate::model::run::Frame, row: &mut Vec<f64>) {
+    row.push(f.time);
+    row.extend(f.activation);
+    row.extend([
+        f.lung,
+        f.thorax,
+        f.abdomen,
+        f.trunk,
+        f.rib_cage_displaced,
+        f.abdomen_displaced,
+        f.pressure,
+        f.diaphragm,
+        f.sternum[0],
+        f.sternum[1],
+        f.sternum[2],
+    ]);
+}
+
 /// Writes frames as CSV.
 pub fn write_csv(path: &std::path::Path, frames: &[crate::model::run::Frame]) -> Result<()> {
     prepare_output_file(path)?;
@@ -227,21 +246,8 @@ pub fn write_csv(path: &std::path::Path, frames: &[crate::model::run::Frame]) ->
     let io = |e| Error::io(path, e);
     writeln!(w, "{}", header.join(",")).map_err(io)?;
     for f in frames {
-        let mut row = vec![f.time];
-        row.extend(f.activation);
-        row.extend([
-            f.lung,
-            f.thorax,
-            f.abdomen,
-            f.trunk,
-            f.rib_cage_displaced,
-            f.abdomen_displaced,
-            f.pressure,
-            f.diaphragm,
-            f.sternum[0],
-            f.sternum[1],
-            f.sternum[2],
-        ]);
+        let mut row = Vec::with_capacity(header.len());
+        frame_values(f, &mut row);
         let cells: Vec<String> = row.iter().map(|v| format!("{v}")).collect();
         writeln!(w, "{}", cells.join(",")).map_err(io)?;
     }
