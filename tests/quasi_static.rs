@@ -299,3 +299,88 @@ fn an_input_set_between_steps_acts_from_the_next_step() {
         next_read - without
     );
 }
+
+/// Scene 35 of the random soak (`torso bench soak --scenes 40 --seconds 20 --solver
+/// quasi-static`, seed 2011): a 1.48 m, 45 kg woman standing, the rib drive at 0.99 of its
+/// range at 1.1 Hz. Its inspiration drives the chest wall's equilibrium to a loss of
+/// stability (docs/dynamics.md: the softest eigenvalue of the stiffness with the lungs
+/// attached crosses zero near 0.363 s). The quasi-static mode must stop there with an error
+/// that says the chest wall buckles or its equilibrium path folds (and so would snap
+/// through), names subject, posture and activations, and keep
+/// the last good state, not pass over to another branch.
+#[test]
+fn a_buckling_chest_wall_is_a_clear_error_and_keeps_the_last_good_state() {
+    use breathing_torso::Error;
+    use breathing_torso::anatomy::{Posture, Sex, Subject};
+    use breathing_torso::model::Wave;
+    let mut c = config(
+        0,
+        Method::QuasiStatic,
+        Drive {
+            frequency: 1.1087322289538222,
+            ribs: Wave {
+                amplitude: 0.9888127133082364,
+                phase: -1.5816767960755342,
+            },
+            diaphragm: Wave {
+                amplitude: 0.07729889918172239,
+                phase: -1.8306063318322954,
+            },
+            abdominals: Wave {
+                amplitude: 0.5457829972439472,
+                phase: 4.573349062818499,
+            },
+            ..Drive::default()
+        },
+    );
+    c.subject = Subject {
+        sex: Sex::Female,
+        age: 46.79979085894516,
+        stature: 1.4782456174406253,
+        mass: 45.34328870522832,
+        breast_size: 0.8641515740383998,
+        posture: Posture::Standing,
+    };
+    c.gain_left = 1.4821413192867987;
+    c.gain_right = 1.1255222846607567;
+    let mut t = Torso::new(c).unwrap();
+    let mut failure = None;
+    let mut last_good = (0.0, lung(&mut t));
+    for k in 1..=56 {
+        match t.advance_to(k as f64 * FRAME) {
+            Ok(_) => last_good = (t.time(), lung(&mut t)),
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        }
+    }
+    let e = failure.expect("the rib drive buckles the chest wall within the first second");
+    let Error::Numerical { time, reason } = &e else {
+        panic!("expected a numerical error, got {e}");
+    };
+    println!("{e}");
+    // a loss of definiteness at an equilibrium, or a path whose stiffness along it falls
+    // to zero (a fold), whichever the failed solve met first
+    assert!(
+        reason.contains("buckled") || reason.contains("the path folds"),
+        "{reason}"
+    );
+    for word in [
+        "snap through",
+        "Female",
+        "Standing",
+        "external_intercostals",
+        "solver.method 0",
+    ] {
+        assert!(reason.contains(word), "{word:?} missing from: {reason}");
+    }
+    // the instance stays at its last good time, with its state
+    assert_eq!(t.time(), *time);
+    assert!(t.time() >= last_good.0 && t.time() < last_good.0 + FRAME);
+    let v = lung(&mut t);
+    assert!(v.is_finite());
+    if t.time() == last_good.0 {
+        assert_eq!(v, last_good.1);
+    }
+}

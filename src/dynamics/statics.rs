@@ -36,12 +36,17 @@
 //! and the border is eliminated by two solves with its factorisation (dP = (u_T^T a + c) /
 //! (u_T^T b), a = J_aug^-1 (-R + rho u_T c), b = J_aug^-1 u_T, dz = a - dP b). The
 //! factorisation (the block LU of [`crate::solver::sparse`], minimum-degree ordered, with the
-//! Woodbury correction for the rank-two part) is kept from solve to solve while the
-//! iterations contract (modified Newton); the first iteration of a solve from the last
-//! solution is the tangent predictor. A solve that contracts slowly takes a fresh
-//! Jacobian; one that still fails is retried from the last solution with the activations and
-//! the volume stepped there gradually (continuation); a solve that fails then is an error,
-//! and the last solution is kept.
+//! Woodbury correction for the rank-two part) is kept from solve to solve while each
+//! correction is at most half the one before (modified Newton); the first iteration of a
+//! solve from the last solution is the tangent predictor. A kept factorisation that fails
+//! that test is taken again at the failed step's start, and one whose contraction cannot
+//! reach the tolerance in the iterations left is taken again at once; a step with a fresh
+//! one that fails the restricted monotonicity test (Deuflhard 2004, *Newton Methods for
+//! Nonlinear Problems*, sec. 3.3: the next correction at most 1 - lambda/2 of this one) is
+//! halved. A solve that still fails is retried from the last solution with the activations
+//! and the volume stepped there gradually (continuation); a solve that fails then is an
+//! error, and the last solution is kept. Where the continuation stops part of the way, the
+//! error says how far and whether the path folds ([`StaticsError::PathEnds`]).
 //!
 //! **Stability, checked at every factorisation.** By Haynsworth's inertia additivity, the
 //! number of positive eigenvalues of J_aug = S + U C U^T (C = diag(P_A', -rho), both
@@ -62,8 +67,8 @@ use serde::{Deserialize, Serialize};
 /// Newton iterations allowed in one attempt at a solve.
 const MAX_ITERATIONS: u32 = 16;
 
-/// Contraction rate of the iterations above which a stale factorisation is replaced.
-const SLOW_CONTRACTION: f64 = 0.5;
+/// Smallest damping of a Newton step (four halvings) before the attempt is given up.
+const MIN_DAMPING: f64 = 1.0 / 16.0;
 
 /// The stiffness floor, as a fraction of the largest diagonal stiffness: modes softer than
 /// it count as mechanisms of slack elements, not as buckling (module doc). The measured
@@ -88,6 +93,20 @@ const HISTORY_SPAN: f64 = 0.5;
 /// rib lengths of 0.15-0.3 m).
 pub(crate) const LEVER: f64 = 0.2;
 
+/// Halvings of the continuation's failed step that locate where the equilibrium path ends:
+/// 6 resolve it to 1/1024 of the way from the last solution to the activations asked.
+const BISECTIONS: u32 = 6;
+
+/// A path whose stiffness along it has fallen below this fraction of its value at the
+/// path's start is reported as folding. Near a fold at s* the stiffness along the path goes
+/// to zero like sqrt(s* - s); the continuation's path starts at s = 0 and, where a fold
+/// stops it (s* >= 1/16 of the way), ends within 1/1024 of it after the halvings, so its
+/// stiffness there is at most sqrt((1/1024) / (1/16)) = 0.125 of the start's to leading
+/// order; twice that leaves room for the higher orders. The path that stopped without
+/// softening in the soak kept 90 % (`torso bench soak --scenes 40 --seconds 20 --solver
+/// quasi-static`, scene 5: -333 to -300 N/m).
+const FOLD_FRACTION: f64 = 0.25;
+
 /// Why a static solve failed.
 #[derive(Clone, Debug, PartialEq)]
 pub enum StaticsError {
@@ -102,6 +121,20 @@ pub enum StaticsError {
         /// The last correction's size [m].
         correction: f64,
     },
+    /// The equilibrium path from the last solution could be followed only part of the way
+    /// to the activations asked: the chest wall's stiffness along the path tends to zero
+    /// where it folds (a snap-through, which a quasi-static formulation cannot follow).
+    PathEnds {
+        /// How far the path was followed, as a fraction of the way from the last solution's
+        /// activations and volume to those asked.
+        reached: f64,
+        /// The stiffness along the path at its start [N/m] (negative: stable).
+        stiffness_start: f64,
+        /// The stiffness along the path at the last equilibrium reached [N/m].
+        stiffness_end: f64,
+        /// The last correction's size there [m].
+        correction: f64,
+    },
     /// A non-finite value appeared (the factorisation failed or a force overflowed).
     NonFinite,
 }
@@ -109,10 +142,35 @@ pub enum StaticsError {
 impl std::fmt::Display for StaticsError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            StaticsError::Unstable { reason } => write!(f, "the chest wall buckled: {reason}"),
+            StaticsError::Unstable { reason } => write!(
+                f,
+                "the chest wall buckled: {reason} (it would snap through to another \
+                 equilibrium, which the quasi-static formulation cannot follow; the inertial \
+                 one, solver.method 0, can)"
+            ),
             StaticsError::NotConverged { correction } => write!(
                 f,
                 "the static equilibrium did not converge (last correction {correction:.3e} m)"
+            ),
+            StaticsError::PathEnds {
+                reached,
+                stiffness_start,
+                stiffness_end,
+                correction,
+            } => write!(
+                f,
+                "the static equilibrium could be followed only {:.1} % of the way to these \
+                 activations (last correction {correction:.3e} m); the chest wall's stiffness \
+                 along the path went from {stiffness_start:.3e} N/m to {stiffness_end:.3e} N/m \
+                 there{}",
+                100.0 * reached,
+                if stiffness_end.abs() < FOLD_FRACTION * stiffness_start.abs() {
+                    " (the path folds: the chest wall would snap through, which the \
+                     quasi-static formulation cannot follow; the inertial one, solver.method 0, \
+                     can)"
+                } else {
+                    ""
+                }
             ),
             StaticsError::NonFinite => write!(f, "a non-finite value in the static equilibrium"),
         }
@@ -207,6 +265,11 @@ pub struct Statics {
     rho: f64,
     dy: Vec<f64>,
     ytmp: Vec<f64>,
+    /// The last Newton step's start (state, pleural pressure) and full correction.
+    y_back: Vec<f64>,
+    pleural_back: f64,
+    r_back: Vec<f64>,
+    dp_back: f64,
     /// The current iterate / last solution (full state layout, velocities zero).
     y: Vec<f64>,
     /// The last solution, kept while a solve iterates (a failed solve returns to it).
@@ -288,6 +351,10 @@ impl Statics {
             rho: 0.0,
             dy: vec![0.0; l.len],
             ytmp: vec![0.0; l.len],
+            y_back: vec![0.0; l.len],
+            pleural_back: 0.0,
+            r_back: vec![0.0; m],
+            dp_back: 0.0,
             y_good: y.clone(),
             volume_good: volume_of(model, &y),
             y,
@@ -627,11 +694,18 @@ impl Statics {
         target: f64,
         tol: f64,
     ) -> Result<(), StaticsError> {
+        // size of the last step's full correction, its damping, and whether its Jacobian
+        // was taken at its start (a fresh one) or before (a kept one)
         let mut prev = f64::INFINITY;
-        let mut fresh = false;
+        let mut lambda = 1.0;
+        let mut step_fresh = false;
+        // corrections since the kept factorisation was taken at the iterate
+        let mut age = usize::MAX;
         let mut theta = self.theta;
         let mut last = f64::INFINITY;
-        for _ in 0..MAX_ITERATIONS {
+        let l = self.l;
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        for k in 0..MAX_ITERATIONS {
             let (_, vt) = self.residual(model, data, act, self.pleural);
             let c = vt - target;
             if !c.is_finite() || self.dy.iter().any(|v| !v.is_finite()) {
@@ -640,15 +714,13 @@ impl Statics {
             if self.factored_at.is_none() {
                 let y = self.y.clone();
                 self.factor_at(model, data, &y, self.pleural, act)?;
-                fresh = true;
+                age = 0;
             }
-            let l = self.l;
             // a = J_aug^-1 (-R + rho u_T c)
             for (i, a) in self.a.iter_mut().enumerate() {
                 *a = -self.dy[l.theta_dot + i] + self.rho * self.ut[i] * c;
             }
             self.solver.solve(&mut self.a);
-            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
             let dp = (dot(&self.ut, &self.a) + c) / dot(&self.ut, &self.b);
             for (r, (a, b)) in self.r.iter_mut().zip(self.a.iter().zip(&self.b)) {
                 *r = a - dp * b;
@@ -656,33 +728,73 @@ impl Statics {
             if !dp.is_finite() || self.r.iter().any(|v| !v.is_finite()) {
                 return Err(StaticsError::NonFinite);
             }
-            let size = correction_size(&self.r);
-            apply(&l, &mut self.y, &self.r);
-            self.pleural += dp;
             self.stats.iterations += 1;
+            let size = correction_size(&self.r);
             last = size;
             if prev.is_finite() {
-                theta = size / prev;
+                // restricted monotonicity (Deuflhard 2004, sec. 3.3): the correction at the
+                // new iterate must have shrunk by 1 - lambda / 2 of the last one
+                if size > (1.0 - 0.5 * lambda) * prev {
+                    if !step_fresh {
+                        // a kept Jacobian that no longer contracts: back to the step's
+                        // start, refactor there
+                        self.y.copy_from_slice(&self.y_back);
+                        self.pleural = self.pleural_back;
+                        self.factored_at = None;
+                        prev = f64::INFINITY;
+                        lambda = 1.0;
+                        continue;
+                    }
+                    if lambda * 0.5 < MIN_DAMPING || k + 1 == MAX_ITERATIONS {
+                        break;
+                    }
+                    // a fresh Jacobian overshoots (the forces bend within the step):
+                    // halve the step from its start
+                    lambda *= 0.5;
+                    self.y.copy_from_slice(&self.y_back);
+                    self.pleural = self.pleural_back + lambda * self.dp_back;
+                    let r = std::mem::take(&mut self.r_back);
+                    self.r.iter_mut().zip(&r).for_each(|(x, v)| *x = lambda * v);
+                    self.r_back = r;
+                    apply(&l, &mut self.y, &self.r);
+                    continue;
+                }
+                if lambda == 1.0 {
+                    theta = size / prev;
+                }
             }
             // error after this step about theta / (1 - theta) of it (Hairer & Wanner IV.8)
             if size <= tol || (theta < 1.0 && theta / (1.0 - theta) * size <= tol) {
+                apply(&l, &mut self.y, &self.r);
+                self.pleural += dp;
                 self.theta = theta.clamp(1e-3, 0.9);
                 return Ok(());
             }
-            if prev.is_finite() && theta > SLOW_CONTRACTION {
-                if fresh && theta >= 1.0 {
-                    break;
-                }
-                if !fresh {
-                    // refactor at the current iterate and go on
-                    let y = self.y.clone();
-                    self.factor_at(model, data, &y, self.pleural, act)?;
-                    fresh = true;
-                    prev = f64::INFINITY;
-                    continue;
-                }
+            // a kept Jacobian whose contraction cannot reach the tolerance in the
+            // iterations left: refactor here
+            let left = (MAX_ITERATIONS - k - 1) as i32;
+            if age > 0 && prev.is_finite() && theta.powi(left) * size > tol {
+                self.factored_at = None;
+                prev = f64::INFINITY;
+                continue;
             }
+            self.y_back.copy_from_slice(&self.y);
+            self.pleural_back = self.pleural;
+            self.r_back.copy_from_slice(&self.r);
+            self.dp_back = dp;
+            step_fresh = age == 0;
+            lambda = if prev.is_finite() {
+                (2.0 * lambda).min(1.0)
+            } else {
+                lambda
+            };
+            if lambda < 1.0 {
+                self.r.iter_mut().for_each(|x| *x *= lambda);
+            }
+            apply(&l, &mut self.y, &self.r);
+            self.pleural += lambda * dp;
             prev = size;
+            age = age.saturating_add(1);
         }
         Err(StaticsError::NotConverged { correction: last })
     }
@@ -836,7 +948,10 @@ impl Statics {
     }
 
     /// From the last solution to (act, target) in 4, then 16 equal steps of the activations
-    /// and the volume, each solved from the one before with a fresh Jacobian.
+    /// and the volume, each solved from the one before with a fresh Jacobian. Where the
+    /// 16 steps fail past the first, the failed step is halved ([`BISECTIONS`] times) to find
+    /// how far the path goes, and the error says how far and how stiff the chest wall was
+    /// along the path at its start and at its last equilibrium ([`StaticsError::PathEnds`]).
     fn continuation(
         &mut self,
         model: &Model,
@@ -851,23 +966,28 @@ impl Statics {
             Some(i) => (self.history_act[i], self.history[i].3),
             None => (self.act_good, self.volume_good),
         };
+        let along = |s: f64| {
+            let mut a = *act;
+            for (g, sides) in a.level.iter_mut().enumerate() {
+                for (i, x) in sides.iter_mut().enumerate() {
+                    *x = a0.level[g][i] + s * (act.level[g][i] - a0.level[g][i]);
+                }
+            }
+            a.airway_opening = a0.airway_opening + s * (act.airway_opening - a0.airway_opening);
+            (a, v0 + s * (target - v0))
+        };
         let mut error = StaticsError::NotConverged {
             correction: f64::INFINITY,
         };
         for steps in [4u32, 16] {
             self.start_at(origin);
             self.factored_at = None;
+            // the converged points of this pass: (s, state, pleural pressure)
+            let mut path = vec![(0.0, self.y.clone(), self.pleural)];
             let mut ok = true;
             for k in 1..=steps {
                 let s = f64::from(k) / f64::from(steps);
-                let mut a = *act;
-                for (g, sides) in a.level.iter_mut().enumerate() {
-                    for (i, x) in sides.iter_mut().enumerate() {
-                        *x = a0.level[g][i] + s * (act.level[g][i] - a0.level[g][i]);
-                    }
-                }
-                a.airway_opening = a0.airway_opening + s * (act.airway_opening - a0.airway_opening);
-                let v = v0 + s * (target - v0);
+                let (a, v) = along(s);
                 let before = self.stats.iterations;
                 if let Err(e) = self.iterate(model, data, &a, v, tol) {
                     // unstable at the origin's own equilibrium (the first factorisation of
@@ -881,8 +1001,13 @@ impl Statics {
                     if at_origin {
                         return Err(error);
                     }
+                    if steps == 16 && matches!(error, StaticsError::NotConverged { .. }) {
+                        error =
+                            self.path_end(model, data, &along, &mut path, tol, 1.0 / 16.0, error);
+                    }
                     break;
                 }
+                path.push((s, self.y.clone(), self.pleural));
             }
             if ok {
                 return Ok(());
@@ -891,6 +1016,110 @@ impl Statics {
         Err(error)
     }
 
+    /// Where the continuation's `path` (its converged points, the last at s) stops: the step
+    /// `ds` after it, which failed, is halved [`BISECTIONS`] times, each half solved from the
+    /// last point reached; then the stiffness along the path ([`Statics::path_stiffness`])
+    /// at its first and its last secant. Returns [`StaticsError::PathEnds`], or `failure`
+    /// if the path has fewer than two points to take a secant from.
+    #[allow(clippy::too_many_arguments)]
+    fn path_end(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        along: &dyn Fn(f64) -> (Activations, f64),
+        path: &mut Vec<(f64, Vec<f64>, f64)>,
+        tol: f64,
+        ds: f64,
+        failure: StaticsError,
+    ) -> StaticsError {
+        let correction = match failure {
+            StaticsError::NotConverged { correction } => correction,
+            _ => return failure,
+        };
+        let mut ds = ds;
+        for _ in 0..BISECTIONS {
+            ds *= 0.5;
+            let (s, y, p) = path.last().cloned().expect("the origin is on the path");
+            self.y.copy_from_slice(&y);
+            self.pleural = p;
+            self.factored_at = None;
+            let (a, v) = along(s + ds);
+            if self.iterate(model, data, &a, v, tol).is_ok() {
+                path.push((s + ds, self.y.clone(), self.pleural));
+            }
+        }
+        if path.len() < 2 {
+            return failure;
+        }
+        let n = path.len();
+        let (a_start, _) = along(path[0].0);
+        let start = self.path_stiffness(model, data, &a_start, &path[0].1, &path[1].1, path[0].2);
+        let (a_end, _) = along(path[n - 1].0);
+        let end = self.path_stiffness(
+            model,
+            data,
+            &a_end,
+            &path[n - 1].1,
+            &path[n - 2].1,
+            path[n - 1].2,
+        );
+        let (_, y, p) = path.last().cloned().expect("two points");
+        self.y.copy_from_slice(&y);
+        self.pleural = p;
+        StaticsError::PathEnds {
+            reached: path[n - 1].0,
+            stiffness_start: start,
+            stiffness_end: end,
+            correction,
+        }
+    }
+
+    /// The stiffness of the chest wall with the lungs attached along the direction from
+    /// state `from` to state `at` (a secant of the equilibrium path), at `at`: the Rayleigh
+    /// quotient t^T J_aug t / t^T t of the unit direction t, J_aug t by a difference of the
+    /// residual at the pleural pressure `pleural` (the lungs' part -rho (u^T t)^2 from the
+    /// thoracic volumes) [N/m]; rotations count times [`LEVER`]. Negative where stable; it
+    /// tends to zero where the path folds, as the secant turns into the softening mode.
+    fn path_stiffness(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        act: &Activations,
+        at: &[f64],
+        from: &[f64],
+        pleural: f64,
+    ) -> f64 {
+        let l = self.l;
+        let mut t = difference(&l, self.m, from, at);
+        for (i, v) in t.iter_mut().enumerate() {
+            if i < RIBS || (RIBS + 3..RIBS + 6).contains(&i) {
+                *v *= LEVER;
+            }
+        }
+        let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm == 0.0 || !norm.is_finite() {
+            return f64::NAN;
+        }
+        // back to the state's units, as a unit displacement of EPS metres
+        const EPS: f64 = 1e-7;
+        for (i, v) in t.iter_mut().enumerate() {
+            *v *= EPS / norm;
+            if i < RIBS || (RIBS + 3..RIBS + 6).contains(&i) {
+                *v /= LEVER;
+            }
+        }
+        self.y.copy_from_slice(at);
+        let (_, v0) = self.residual(model, data, act, pleural);
+        self.f0
+            .copy_from_slice(&self.dy[l.theta_dot..l.theta_dot + self.m]);
+        apply(&l, &mut self.y, &t);
+        let (_, v1) = self.residual(model, data, act, pleural);
+        let work: f64 = (0..self.m)
+            .map(|i| (self.dy[l.theta_dot + i] - self.f0[i]) * t[i])
+            .sum();
+        let rho = model.pleural.slope(v0);
+        (work - rho * (v1 - v0) * (v1 - v0)) / (EPS * EPS)
+    }
     /// The latest solution at or before `time` ([`Statics::solve`]'s starting point).
     fn origin(&self, time: f64) -> Option<usize> {
         (0..self.history.len())
@@ -974,6 +1203,29 @@ pub(crate) fn apply(l: &Layout, y: &mut [f64], dz: &[f64]) {
     for (i, d) in dz[RIBS + 6..].iter().enumerate() {
         y[l.vertex_x + i] += d;
     }
+}
+
+/// The increment that takes state `from` to state `to` ([`apply`]'s inverse), of `m`
+/// unknowns.
+fn difference(l: &Layout, m: usize, from: &[f64], to: &[f64]) -> Vec<f64> {
+    let mut dz = vec![0.0; m];
+    for r in 0..RIBS {
+        dz[r] = to[l.theta + r] - from[l.theta + r];
+    }
+    for k in 0..3 {
+        dz[RIBS + k] = to[l.sternum_x + k] - from[l.sternum_x + k];
+    }
+    let quat = |y: &[f64]| {
+        let q = l.sternum_q;
+        UnitQuaternion::from_quaternion(Quaternion::new(y[q], y[q + 1], y[q + 2], y[q + 3]))
+    };
+    let phi = (quat(to) * quat(from).inverse()).scaled_axis();
+    dz[RIBS + 3..RIBS + 6].copy_from_slice(phi.as_slice());
+    let n = dz.len() - RIBS - 6;
+    for i in 0..n {
+        dz[RIBS + 6 + i] = to[l.vertex_x + i] - from[l.vertex_x + i];
+    }
+    dz
 }
 
 /// The largest displacement a correction makes [m] (rotations times [`LEVER`]).

@@ -650,7 +650,11 @@ impl Torso {
         self.at_start = false;
         result.map_err(|e| {
             let why = match &failure {
-                Some(f) => format!("{e} ({f}; {})", self.describe_scene()),
+                Some(f) => format!(
+                    "the quasi-static step failed and shorter steps did not help (state kept \
+                     at the last accepted step): {f}; {}",
+                    self.describe_scene()
+                ),
                 None => e.to_string(),
             };
             Error::Numerical {
