@@ -13,6 +13,15 @@ use nalgebra::{Point3, Vector3};
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_PI_2, PI};
 
+/// Thickness of the ventral and lateral abdominal wall (muscle and fat) between the skin's
+/// waist and the cavity: (base [m], growth per kg of body mass above the threshold [m/kg],
+/// threshold [kg]): 2 cm up to 50 kg, 3 cm at 75 kg.
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a). Literature:
+/// rectus abdominis alone is 14.7 +- 2.9 mm thick (ultrasound, 120 adults; Egwu et al. 2014,
+/// Studia Medyczne 30:180), to which the subcutaneous fat adds; not checked against a measured
+/// whole-wall thickness.
+pub const ABDOMINAL_WALL_THICKNESS: (f64, f64, f64) = (0.02, 0.0004, 50.0);
+
 /// Role of an abdominal-surface vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VertexRole {
@@ -30,6 +39,9 @@ pub enum VertexRole {
 /// anterior end [m] at end-expiration, by posture. Lying supine, the weight of the abdominal
 /// contents pushes the relaxed diaphragm cranially (the supine FRC is about 20 % lower than
 /// the upright one), lengthening its fibres.
+/// Calibrated: the posture-dependent dome height was set by hand in commit aeb7bbe against
+/// `tests/physiology.rs` (tidal volumes, diaphragm excursion, rib-cage share); no command
+/// reproduces a fit, and no measured cranial shift of the relaxed dome by posture was found.
 fn apex_rise(posture: super::Posture) -> f64 {
     match posture {
         super::Posture::Standing => 0.04,
@@ -40,12 +52,16 @@ fn apex_rise(posture: super::Posture) -> f64 {
 
 /// Inset of the diaphragm's insertions from the costal-margin centrelines toward the cavity
 /// axis [m] (half a rib's thickness).
+/// Unsourced: no source: chosen as half a rib's thickness, itself not sourced.
 const MARGIN_INSET: f64 = 0.008;
 
 /// Exponent below 1 that fills out the dome's shoulders (a rounder, fuller dome).
+/// Unsourced: no source: chosen by eye for the dome's shape.
 const DOME_FULLNESS: f64 = 0.7;
 
 /// Height of the dome/wall boundary on the unit sphere (u_y above it: dome).
+/// Numerical: a parametrisation of the icosphere; the dome's physical extent is set by the
+/// costal margin it spans.
 const DOME_CUT: f64 = 0.2;
 
 /// Chords by which the smooth dome's arc over one edge is measured ([`Abdomen::dome_arc`]).
@@ -438,7 +454,8 @@ fn build_sampled(
     };
     // Cavity cross-section at the waist: the skin's waist less the abdominal wall (about 2.5 cm
     // of muscle and fat ventrally and laterally, more for heavier subjects).
-    let wall = 0.02 + 0.0004 * (subject.mass - 50.0).max(0.0);
+    let (wall_base, wall_per_kg, wall_from) = ABDOMINAL_WALL_THICKNESS;
+    let wall = wall_base + wall_per_kg * (subject.mass - wall_from).max(0.0);
     let half_breadth = 0.5 * waist("waistbreadth").unwrap_or(0.30) - wall;
     let x_back = -0.06 * scale.x;
     let x_front = sternum.xiphisternal.x - 0.005;

@@ -4,14 +4,25 @@
 use std::collections::HashMap;
 
 /// Right rib centrelines [mm]: per rib level 1..12, 11 stations head -> costochondral junction.
+/// Source: the generic ribs and spine of the Bruno/Schmid thoracolumbar OpenSim models (Bruno,
+/// Bouxsein & Anderson 2015, J Biomech Eng 137:081003); data/anatomy/README.md.
 const RIB_CENTRELINES: &str = include_str!("../../data/anatomy/rib_centerlines_right_mm.csv");
 /// Costovertebral joints [mm]: rib head, hinge axis, rib end per level.
+/// Source: the generic ribs and spine of the Bruno/Schmid thoracolumbar OpenSim models (Bruno,
+/// Bouxsein & Anderson 2015, J Biomech Eng 137:081003); data/anatomy/README.md.
 const RIB_JOINTS: &str = include_str!("../../data/anatomy/rib_joints_right_mm.csv");
 /// Spine joint offsets [mm] and sagittal angles [deg].
+/// Source: the generic ribs and spine of the Bruno/Schmid thoracolumbar OpenSim models (Bruno,
+/// Bouxsein & Anderson 2015, J Biomech Eng 137:081003); data/anatomy/README.md.
 const SPINE_SEGMENTS: &str = include_str!("../../data/anatomy/spine_segments.csv");
 /// ANSUR II torso regressions.
+/// Source: ANSUR II (Gordon et al. 2014, 2012 Anthropometric Survey of U.S. Army Personnel),
+/// least-squares fits on 4082 men and 1986 women of the public release (the fitting script is
+/// not in the repository; the file's header names the data).
 const ANSUR2: &str = include_str!("../../data/anatomy/torso_anthropometry_ansur2.csv");
 /// Seed thesis Table 1.1 masses [kg].
+/// Source: Maldonado 2011 (seed thesis), Table 1.1, after the Breathe Easy model (agrees:
+/// copied): sternum 0.58 kg, costal cartilages, abdominal contents 8 kg, vertebrae.
 const BODY_MASSES: &str = include_str!("../../data/anatomy/body_masses_thesis.csv");
 
 /// Data rows of an embedded CSV: comment lines and the header skipped, cells split on commas.

@@ -47,6 +47,8 @@ pub struct Joint {
 /// Obliquity of the intercostal fibres: the arc-length fraction of the rib separating a
 /// fibre's two attachments (external fibres run caudally and ventrally, internal fibres
 /// caudally and dorsally).
+/// Unsourced: no source: chosen by hand in commit 16087cb; the fibres' measured angle to the
+/// ribs was not looked up.
 pub const OBLIQUITY: f64 = 0.2;
 
 /// Maximal active tension of an intercostal layer per metre of interspace [N/m]. 29 N/cm^2
@@ -54,15 +56,27 @@ pub const OBLIQUITY: f64 = 0.2;
 /// value of the model's first calibration, with which the drive amplitudes of
 /// [`crate::model::Drive::quiet`] and every documented figure were calibrated, so changing it
 /// is a recalibration, not a correction.
+/// Calibrated: the first calibration's value, no command reproduces it. Literature: 29 N/cm^2
+/// (De Troyer 1998) over a 3 mm layer, 870 N/m; ours 1200 N/m: disagrees (x1.38).
 pub const INTERCOSTAL_TENSION: f64 = 1200.0;
 /// Maximal force of the scalenes on one side [N]: anterior 139 + medius 101 + posterior 77
 /// (Mortensen 2014).
+/// Source: Mortensen 2014's neck model, maximal forces 139 + 101 + 77 N (agrees: their sum).
 pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
 /// Maximal total force of the diaphragm's fibres [N]: a transdiaphragmatic pressure of about
 /// 150 cmH2O (maximal combined efforts) over about 0.04 m^2 of dome.
+/// Unsourced: the pressure is cited (maximal combined efforts 150-180 cmH2O, physiology
+/// reference), the 0.04 m^2 is not. Literature: the diaphragm's muscle area at necropsy is
+/// 647 +- 160 cm^2 (18 adults with COPD, within 8 % of 22 without; Arora & Rochester 1987,
+/// PMID 3568775); 150 cmH2O over 0.065 m^2 is 950 N against ours 600 N (an area measured
+/// along the curved sheet overstates the area the pressure acts on, so this bounds ours from
+/// above rather than refuting it).
 pub const DIAPHRAGM_FORCE: f64 = 600.0;
 /// Maximal forces of the abdominal wall muscles, both sides together [N] (about 25 N/cm^2 over
 /// the physiological cross-sections): rectus, transversus, external and internal obliques.
+/// Unsourced: 25 N/cm^2 is inside the 20-35 N/cm^2 commonly taken for skeletal muscle's
+/// specific tension (physiology reference), but the cross-sections it implies (both sides:
+/// rectus 20, transversus 16, obliques 20 and 16 cm^2) are not sourced.
 pub const ABDOMINAL_FORCES: [(MuscleGroup, f64); 4] = [
     (MuscleGroup::RectusAbdominis, 500.0),
     (MuscleGroup::TransversusAbdominis, 400.0),
@@ -417,6 +431,12 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
 }
 
 /// Height on the unit sphere above which the dome is central tendon (no muscle fibres).
+/// Unsourced: no source: chosen by hand in commit 16087cb. On the unit sphere the cap above
+/// 0.85 is 0.15 / 0.65 = 23 % of the muscular band between `anatomy::abdomen`'s dome cut
+/// (0.2) and it (a zone's area is proportional to its height); in 104 adult diaphragms the
+/// tendon-to-muscle area ratio was 10-15 % in the commonest class (56.7 % of specimens; "The
+/// clinical anatomy of the musculotendinous part of the diaphragm", 2016): ours is larger
+/// (parametric areas; the deformed dome's were not measured).
 pub const CENTRAL_TENDON: f64 = 0.85;
 
 /// The mirror image (z -> -z) of anchor `n`: for a vertex of the abdominal surface, the

@@ -14,6 +14,8 @@ pub const RINGS: usize = 7;
 
 /// Inward offset of the lining from the rib centrelines [m]: half a rib's thickness plus the
 /// intercostal layer and parietal pleura.
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a); only the
+/// intercostal layer's 3 mm (De Troyer 1998) is cited elsewhere.
 pub const WALL_THICKNESS: f64 = 0.015;
 
 /// One ring: anchors going dorsal midline -> right side -> sternum -> left side.

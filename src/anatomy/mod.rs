@@ -53,6 +53,7 @@ pub struct Anchor {
 /// vertices).
 pub const LOD_SUBDIVISIONS: [u32; 3] = [2, 3, 4];
 /// Muscle element counts per level of detail, as fractions of the thesis's.
+/// Numerical: a resolution setting.
 pub const LOD_MUSCLE_FRACTION: [f64; 3] = [0.25, 0.5, 1.0];
 
 /// The subject's anatomy in the rest pose.

@@ -33,17 +33,21 @@ use std::path::{Path, PathBuf};
 /// margin: about the width of the diaphragm's costal insertion band on the inner face of the
 /// lower ribs and cartilages (2-3 cm), so that a cavity segmented a little inside or outside
 /// the rib centrelines still finds its insertions.
+/// Numerical: a matching tolerance for a segmented cavity, not a property of the body.
 pub const INSERTION_REACH: f64 = 0.03;
 
 /// Largest and smallest plausible extent of a trunk skin [m]: outside it the file is almost
 /// certainly in other units (millimetres) or not a trunk.
+/// Numerical: an input check.
 const SKIN_EXTENT: (f64, f64) = (0.2, 3.0);
 
 /// Search window [m] along a projection ray on either side of the template vertex, before
 /// falling back to a search over the whole surface.
+/// Numerical: a search window.
 const RAY_WINDOW: f64 = 0.1;
 
 /// Distance [m] the skin's projection centres stay inside its ends.
+/// Numerical: a projection setting.
 const SKIN_END_INSET: f64 = 0.1;
 
 /// The name users see for the directory (the FMI parameter).

@@ -48,6 +48,9 @@ pub struct Scale {
 }
 
 /// Reference body the rib-cage data were measured on: a 1.75 m, 75 kg, 30-year-old man.
+/// Unsourced: the rib and spine tables' source subject is about 1.68-1.75 m tall
+/// (data/anatomy/*.csv headers); its mass and age are not stated there, and 75 kg and 30 y are
+/// chosen as the default subject.
 pub const REFERENCE_BODY: (f64, f64, f64) = (1.75, 75.0, 30.0);
 
 impl Scale {
@@ -280,24 +283,48 @@ pub fn build_spine(scale: &Scale) -> Spine {
 }
 
 /// Linear density of rib bone [kg/m] for a 75 kg adult (about 0.7 kg for all 24 ribs).
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a).
 pub const RIB_BONE_DENSITY: f64 = 0.11;
 /// Fraction of body mass carried by the ribs as chest-wall soft tissue (intercostal and
 /// pectoral muscle, fat, skin) moving with them: about 3 kg for a 75 kg adult. Table 1.1 of
 /// the thesis gives the bony and cartilage masses only; the wall's own inertia rides on the ribs.
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a).
 pub const CHEST_WALL_MASS_FRACTION: f64 = 0.04;
 
 /// Costal cartilage mass [kg] of rib `level` (thesis Table 1.1: ribs 2-5 individually, the
 /// "lower rib cartilage" 0.47 kg shared by the cartilages of ribs 6-10 on both sides; rib 1's
-/// short cartilage, not listed, is taken as 0.02 kg).
+/// short cartilage, not listed, is [`RIB1_CARTILAGE_MASS`]).
+/// Source: seed thesis Table 1.1 (data/anatomy/body_masses_thesis.csv; agrees: read from it).
 fn cartilage_mass(level: usize, masses: &HashMap<String, f64>) -> f64 {
     let get = |k: &str, default: f64| masses.get(k).copied().unwrap_or(default);
     match level {
-        1 => 0.02,
+        1 => RIB1_CARTILAGE_MASS,
         2..=5 => get(&format!("rib{level}_cartilage"), 0.05),
         6..=10 => get("lower_rib_cartilage", 0.47) / 10.0,
         _ => 0.0,
     }
 }
+
+/// Mass of the first rib's costal cartilage [kg], which Table 1.1 of the seed thesis does not
+/// list.
+/// Unsourced: no source: chosen below rib 2's 0.03 kg, its cartilage being the shortest.
+pub const RIB1_CARTILAGE_MASS: f64 = 0.02;
+
+/// Lengths of the manubrium and the sternal body and the stature they are scaled from, men
+/// then women: (manubrium [m], body [m], stature [m]).
+/// Source: multidetector CT of 200 adults (PMID 29345718, 2018): manubrium 51.2 +- 6 mm in
+/// men and 46.7 +- 5.1 mm in women, body 102.4 +- 13.3 and 86.6 +- 9.7 mm (agrees: rounded).
+/// The reference statures 1.75 m and 1.63 m are the default man and woman, not that cohort's.
+pub const STERNUM_LENGTHS: [(f64, f64, f64); 2] = [(0.051, 0.102, 1.75), (0.047, 0.087, 1.63)];
+
+/// Sternal angle, between the manubrium and the body [deg].
+/// Source: the same CT study (PMID 29345718): 162.2 +- 6.2 deg in men, 163.8 +- 5.8 deg in
+/// women; ours 162 for both (agrees).
+pub const STERNAL_ANGLE_DEG: f64 = 162.0;
+
+/// Inclination of the sternal body from the vertical, lower end ventral [deg].
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a).
+pub const STERNUM_BODY_TILT_DEG: f64 = 15.0;
 
 /// Length of a polyline.
 pub fn polyline_length(points: &[Point3<f64>]) -> f64 {
@@ -324,14 +351,14 @@ pub fn build_sternum(subject: &Subject, scale: &Scale, masses: &HashMap<String, 
     let joints = data::rib_joints();
     let e1 = scale.point(joints[0].end);
     let (manubrium, body, ref_stature) = match subject.sex {
-        Sex::Male => (0.051, 0.102, 1.75),
-        Sex::Female => (0.047, 0.087, 1.63),
+        Sex::Male => STERNUM_LENGTHS[0],
+        Sex::Female => STERNUM_LENGTHS[1],
     };
     let k = subject.stature / ref_stature;
-    // Body inclined 15 deg from the vertical (lower end ventral); the manubrium 18 deg more
-    // (sternal angle 162 deg).
-    let body_tilt = 15f64.to_radians();
-    let manubrium_tilt = body_tilt + 18f64.to_radians();
+    // Body inclined from the vertical (lower end ventral); the manubrium by the sternal
+    // angle's supplement more (162 deg: 18 deg).
+    let body_tilt = STERNUM_BODY_TILT_DEG.to_radians();
+    let manubrium_tilt = body_tilt + (180.0 - STERNAL_ANGLE_DEG).to_radians();
     let jugular = Point3::new(e1.x + 0.021 * scale.x, e1.y + 0.019 * scale.y, 0.0);
     let angle = jugular
         + Vector3::new(
@@ -362,6 +389,7 @@ pub fn build_sternum(subject: &Subject, scale: &Scale, masses: &HashMap<String, 
 }
 
 /// Half-width of the sternum where the cartilages join it [m].
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a).
 pub const STERNUM_HALF_WIDTH: f64 = 0.014;
 
 /// Builds the 24 ribs: bone from the reference centrelines, cartilage to the sternum (1-7) or

@@ -115,6 +115,7 @@ impl Default for Subject {
 }
 
 /// Allowed ranges of the subject's numeric fields: (FMI name, min, max).
+/// Numerical: the input domain the model accepts, not a property of a body.
 pub const SUBJECT_RANGES: [(&str, f64, f64); 4] = [
     ("subject.age", 18.0, 90.0),
     ("subject.stature", 1.40, 2.10),
@@ -147,6 +148,8 @@ impl Subject {
     }
 
     /// ECSC/ERS 1993 (Quanjer) functional residual capacity [L] for this subject.
+    /// Source: Quanjer et al. 1993, Eur Respir J 6 Suppl 16:5-40 (ECSC/ERS): men
+    /// 2.34 H + 0.009 A - 1.09, women 2.24 H + 0.001 A - 1.00 (agrees: copied).
     pub fn frc_ecsc(&self) -> f64 {
         let (h, a) = (self.stature, self.age);
         match self.sex {
@@ -156,6 +159,8 @@ impl Subject {
     }
 
     /// ECSC/ERS 1993 vital capacity [L].
+    /// Source: Quanjer et al. 1993 (ECSC/ERS): men 6.10 H - 0.028 A - 4.65, women
+    /// 4.66 H - 0.026 A - 3.28 (agrees: copied).
     pub fn vc_ecsc(&self) -> f64 {
         let (h, a) = (self.stature, self.age);
         match self.sex {
@@ -167,6 +172,7 @@ impl Subject {
     /// ECSC/ERS 1993 residual volume [L] (Quanjer et al. 1993, Eur Respir J 6 Suppl 16:5-40,
     /// stature H in m, age A in years): men 1.31 H + 0.022 A - 1.23, women
     /// 1.81 H + 0.016 A - 2.00.
+    /// Source: Quanjer et al. 1993 (ECSC/ERS), as above (agrees: copied).
     pub fn rv_ecsc(&self) -> f64 {
         let (h, a) = (self.stature, self.age);
         match self.sex {
@@ -176,6 +182,8 @@ impl Subject {
     }
 
     /// ECSC/ERS 1993 total lung capacity [L].
+    /// Source: Quanjer et al. 1993 (ECSC/ERS): men 7.99 H - 7.08, women 6.60 H - 5.79 (agrees:
+    /// copied).
     pub fn tlc_ecsc(&self) -> f64 {
         let h = self.stature;
         match self.sex {

@@ -13,6 +13,8 @@ use serde::{Deserialize, Serialize};
 /// shorten by 30-40 % (seed thesis 2.3, after Hamid, Shannon & Martin 2006, Physiologic Basis
 /// of Respiratory Disease, BC Decker); the model takes the upper end, set in the calibration
 /// commit aeb7bbe against the tidal volumes and diaphragm excursions of `tests/physiology.rs`.
+/// Source: seed thesis 2.3 after Hamid, Shannon & Martin 2006: the diaphragm shortens by
+/// 30-40 %; ours 0.4, the upper end (agrees).
 pub const DIAPHRAGM_CONTRACTION_UPRIGHT: f64 = 0.4;
 
 /// Total rest length of the diaphragm's muscle fibres at end-expiration in `posture`, relative
@@ -24,6 +26,8 @@ pub const DIAPHRAGM_CONTRACTION_UPRIGHT: f64 = 0.4;
 /// x1.138-1.160, sitting x1.022-1.026 over three subjects (1.63-1.95 m) and the three levels of
 /// detail; the values here are the default subject's at level of detail 1 (a test checks them
 /// against the geometry).
+/// Derived: measured on the model's own generated anatomy (command above), which
+/// [`crate::anatomy`]'s calibrated apex rise sets; not a physiological measurement.
 pub fn diaphragm_length_ratio(posture: Posture) -> f64 {
     match posture {
         Posture::Standing => 1.0,
@@ -55,12 +59,16 @@ pub fn diaphragm_contraction(posture: Posture) -> f64 {
 /// supine; the whole chest wall's compliance did not change. Lying down thus stiffens the rib
 /// cage (x1.60), which the model applies to the rib joints' stiffness, and softens the abdomen
 /// (x2.8; see [`SUPINE_WALL_COMPLIANCE`]).
+/// Source: Estenne, Yernault & De Troyer 1985, J Appl Physiol 59:1842, the four means above
+/// (agrees: copied).
 pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.070]];
 
 /// Abdominal wall compliance sitting relative to standing: a small factor of the model, not a
 /// measured ratio (the seed thesis 2.3 only orders the postures: supine is more compliant than
 /// seated); sitting is the reference posture of [`SEATED_SUPINE_COMPLIANCES`]. Set by hand;
 /// no source: the value of the first dynamics (commit cfbd824), unchanged since.
+/// Unsourced: no source: chosen for a small sitting/standing difference. No measured
+/// sitting-to-standing ratio of the abdominal wall's compliance was found.
 pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 
 /// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
@@ -71,24 +79,32 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// --probe 1 1.711`), so the model keeps the smaller increase. The 1.8 itself is set by hand
 /// (no source): it is the factor of the first dynamics (commit cfbd824), kept when commit
 /// a69b5a9 found the measured x2.8 unusable; it is not fitted to a measurement.
+/// Unsourced: no source: chosen for a stable forced supine breath. Literature: the
+/// diaphragm-abdomen compliance rises x2.8 from seated to supine (Estenne et al. 1985:
+/// 0.025 -> 0.070 L/cmH2O); ours rises x1.64 from sitting (1.8 / 1.1): disagrees.
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
 /// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
 /// lungs stay within 5 % of linear over a forced breath (1 L below rest, the barrier adds
 /// 0.1 cmH2O to 5 cmH2O of recoil for the default subject), large enough that the recoil
 /// passes 30 cmH2O a few percent of the way from the residual volume to rest.
+/// Numerical: a shape parameter of the barrier that keeps the lungs' volume between RV and
+/// TLC; chosen by the two measured criteria above, not a tissue property.
 pub const PLEURAL_BARRIER_PRESSURE: f64 = 0.5 * 98.0665;
 
 /// Default [`Params::pleural_barrier_margin`]: the tangent takes over 1 % of the way from
 /// each asymptote to rest, where the barrier alone is about 48 cmH2O (beyond any quiet or
 /// forced breath). With 2 % the strongest soak scene (seed 2011, scene 35) was squeezed 6 %
 /// below its residual volume along the tangent; with 1 % it stops at it.
+/// Numerical: where the barrier is continued by its tangent; chosen by the soak scene above.
 pub const PLEURAL_BARRIER_MARGIN: f64 = 0.01;
 
 /// Default [`Params::inertia_frequency`] [Hz]: ten times the fastest breathing the drive
 /// supports (2 Hz, `model::drive::FREQUENCY_RANGE`) and a little more, so that inertia changes
 /// the response to any drive by well under 1 % (the inertial force relative to the elastic one
 /// goes as (f / f_inertia)^2: (2 / 25)^2 = 0.6 % at the fastest drive, 1e-4 at quiet breathing).
+/// Numerical: selective mass scaling's target frequency, chosen by the criterion above
+/// (inertia under 1 % of the elastic force at the fastest drive).
 pub const INERTIA_FREQUENCY: f64 = 25.0;
 
 /// Default [`Params::specific_airway_conductance`] [1/(Pa s)]: 0.2 /(cmH2O s). Airway
@@ -98,12 +114,16 @@ pub const INERTIA_FREQUENCY: f64 = 25.0;
 /// functional residual capacity (3.3 L, ECSC 1993) it gives an airway resistance of
 /// 1.5 cmH2O s/L, inside the 0.5-2.5 cmH2O s/L of healthy adults (West, Respiratory
 /// Physiology).
+/// Source: Briscoe & DuBois 1958, J Clin Invest 37:1279: sGaw about 0.13-0.35 /(cmH2O s);
+/// ours 0.2 (agrees).
 pub const SPECIFIC_AIRWAY_CONDUCTANCE: f64 = 0.2 / 98.0665;
 
 /// Default [`Params::lung_recoil_at_frc`] [Pa]: 5 cmH2O. At the functional residual capacity,
 /// with no flow, the pleural pressure is minus the lungs' elastic recoil, about -5 cmH2O in
 /// upright adults (oesophageal balloon; Milic-Emili et al. 1964, J Appl Physiol 19:207;
 /// Agostoni & Hyatt 1986, Handbook of Physiology, The Respiratory System III, ch. 9).
+/// Source: Milic-Emili et al. 1964, J Appl Physiol 19:207: pleural pressure about -5 cmH2O
+/// at FRC upright; ours 5 cmH2O recoil (agrees).
 pub const LUNG_RECOIL_AT_FRC: f64 = 5.0 * 98.0665;
 
 /// Default [`Params::tension_toe`] [N]: the width of the smooth toe of the tension-only law.
@@ -111,6 +131,7 @@ pub const LUNG_RECOIL_AT_FRC: f64 = 5.0 * 98.0665;
 /// thousandths of its largest; it is measured, not cited: halving it changes the default
 /// subject's quiet tidal volume by under 0.1 % (`cargo run --release --example
 /// fast_dynamics -- toe`).
+/// Numerical: the smoothing width of the tension-only law, chosen by the measurement above.
 pub const TENSION_TOE: f64 = 0.1;
 
 /// Default [`Params::transverse_fraction`]: 0.1, the sin^2 of an 18 degree tilt. Each
@@ -121,6 +142,7 @@ pub const TENSION_TOE: f64 = 0.1;
 /// (`cargo run --release --example fast_dynamics -- 1 1e-6 tilt=F`, docs/dynamics.md): at
 /// level of detail 1, 0 leaves the step bound by the dome's central-tendon pole (29,090 RHS
 /// evaluations per 1000 frames), 0.1 frees it; it changes the quiet tidal volume by under 1 %.
+/// Numerical: chosen by the step-size measurement above.
 pub const TRANSVERSE_FRACTION: f64 = 0.1;
 
 /// Default [`Params::abdominal_wall_resistance`] [Pa s/m^3]: 1.0 cmH2O s/L. The whole
@@ -129,6 +151,9 @@ pub const TRANSVERSE_FRACTION: f64 = 0.1;
 /// man's airway resistance is 1.5 cmH2O s/L ([`SPECIFIC_AIRWAY_CONDUCTANCE`]), which leaves
 /// 0.5-1.5 cmH2O s/L to the tissues, and the model gives the middle of that to the abdominal
 /// wall (the rib cage's joints and the lungs' tissue carry their own damping).
+/// Unsourced: no source gives the abdominal wall's own tissue resistance; 1.0 cmH2O s/L is
+/// chosen inside the 0.5-1.5 cmH2O s/L left to the tissues by the cited totals above (West,
+/// Respiratory Physiology: respiratory system 2-3, airways 0.5-2.5 cmH2O s/L).
 pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
 
 fn default_abdominal_wall_resistance() -> f64 {
@@ -173,11 +198,15 @@ pub struct Params {
     /// the relaxed muscles' stiffness, F_max / (beta_max l0): doubling both betas raises the
     /// relaxed chest wall's compliance by 10 % at +5 cmH2O and 26 % at -5 cmH2O
     /// (docs/dynamics.md, "What sets the passive chest wall").
+    /// Source: seed thesis 2.4 after Klute, Czerniecki & Hannaford 2002: r in [0.7, 1.2], so
+    /// beta_max = 1 - 0.7 = 0.3 (agrees: the bound itself).
     pub beta_max: f64,
     /// The same for the diaphragm, which can shorten by 30-40 % from its upright rest length
     /// (seed thesis 2.3, after Hamid et al. 2006; [`DIAPHRAGM_CONTRACTION_UPRIGHT`]): r >= 0.6
     /// standing. In the other postures the fibres start longer and reach the same shortest
     /// length (see [`diaphragm_length_ratio`]), so their fraction is larger.
+    /// Derived: [`diaphragm_contraction`] of [`DIAPHRAGM_CONTRACTION_UPRIGHT`] and
+    /// [`diaphragm_length_ratio`].
     pub beta_max_diaphragm: f64,
     /// Damping ratio zeta of the model's inertial modes at the inertia frequency
     /// ([`Params::inertia_frequency`]): every spring-damper element, vector spring and rib
@@ -186,6 +215,8 @@ pub struct Params {
     /// critically damped elements, zeta = 1). The default 1 is that aim; the thesis set its
     /// gains empirically, to avoid oscillation when elements are activated (section 2.4). It
     /// is a numerical choice, not a tissue measurement.
+    /// Numerical: critical damping of the scaled inertial modes (thesis 2.4's aim), a solver
+    /// choice.
     pub damping_ratio: f64,
     /// Inertia frequency f_i [Hz]: the masses and inertias of the ribs, the sternum and the
     /// cavity vertices gain the local stiffness over (pi f_i)^2 (selective mass scaling,
@@ -196,6 +227,7 @@ pub struct Params {
     /// set vibration modes (80-130 Hz for single ribs and dome vertices) that breathing never
     /// excites but that would bound an explicit solver's step. Configurations written before
     /// it existed read [`INERTIA_FREQUENCY`].
+    /// Derived: default [`INERTIA_FREQUENCY`].
     #[serde(default = "default_inertia_frequency")]
     pub inertia_frequency: f64,
     /// The true masses: no selective mass scaling, so the mass matrix holds the bodies' and
@@ -210,12 +242,14 @@ pub struct Params {
     /// the mouth is 1 / (sGaw FRC) for the subject's functional residual capacity, and the
     /// pleural pressure carries the pressure drop R dV/dt of the flow through it.
     /// Configurations written before it existed read [`SPECIFIC_AIRWAY_CONDUCTANCE`].
+    /// Derived: default [`SPECIFIC_AIRWAY_CONDUCTANCE`].
     #[serde(default = "default_specific_airway_conductance")]
     pub specific_airway_conductance: f64,
     /// Width [N] of the smooth toe of the tension-only law of the muscles: the tension is
     /// eps ln(1 + exp(f / eps)) of the linear spring-damper force f (softplus), so that it is
     /// smooth where a muscle goes slack. Configurations written before it existed read
     /// [`TENSION_TOE`].
+    /// Derived: default [`TENSION_TOE`].
     #[serde(default = "default_tension_toe")]
     pub tension_toe: f64,
     /// Fraction of each two-point element's added inertia and damping given to its
@@ -224,6 +258,7 @@ pub struct Params {
     /// damping coefficient, and its ends' mass blocks carry the same fraction of its
     /// stiffness over omega_b^2 across it. Configurations written before it existed read
     /// [`TRANSVERSE_FRACTION`].
+    /// Derived: default [`TRANSVERSE_FRACTION`].
     #[serde(default = "default_transverse_fraction")]
     pub transverse_fraction: f64,
     /// Bulk modulus K of the abdominal contents [Pa] (thesis eq. 2.5: P = K (V0/V - 1)).
@@ -236,23 +271,32 @@ pub struct Params {
     /// holds 100-300 mL (thesis 2.3), so the model's contents are far softer than real ones
     /// (`cargo run --release --example chest_wall_sensitivity` prints both figures); halving
     /// it moves the relaxed chest wall's compliance by 0-2 %.
+    /// Calibrated: set by hand in commit aeb7bbe against `tests/physiology.rs`; no command
+    /// reproduces a fit. Literature: contents holding 100-300 mL of gas (thesis 2.3) in the 13.0 L
+    /// cavity, compressed isothermally at 1 atm, have K = 101.3 kPa x 13.0 / (0.1-0.3) =
+    /// 4.4e6-1.3e7 Pa; CT of 37 healthy adults found 95 (IQR 71-141) mL of gut gas (Neurogastroenterol
+    /// Motil, September 2015), 1.4e7 Pa. Ours, 3e5 Pa, is 15-46x softer: disagrees.
     pub bulk_modulus: f64,
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the lungs (the
     /// thorax's, one to one), 1 / (0.2 L/cmH2O) (lung compliance, physiology reference). The
     /// default 1 / (2.0e-6 m^3/Pa) is 1 / (0.196 L/cmH2O), which `cargo run --release
     /// --example relaxation` measures back as C_L = 0.195-0.196 L/cmH2O.
+    /// Source: lung compliance about 0.2 L/cmH2O in adults (West, Respiratory Physiology: The
+    /// Essentials); ours 0.196 L/cmH2O (agrees).
     pub lung_elastance: f64,
     /// The lungs' elastic recoil at rest, the functional residual capacity [Pa]
     /// ([`LUNG_RECOIL_AT_FRC`]): the pleural pressure read out is minus it at rest. The
     /// dynamics work with changes from rest (the chest wall's rest forces balance it), so it
     /// sets only the absolute pleural pressure. Configurations written before it existed
     /// read [`LUNG_RECOIL_AT_FRC`].
+    /// Derived: default [`LUNG_RECOIL_AT_FRC`].
     #[serde(default = "default_lung_recoil_at_frc")]
     pub lung_recoil_at_frc: f64,
     /// Barrier pressure p_b [Pa] of the pleural pressure-volume law
     /// ([`super::pleural::PleuralLaw`]): the recoil added near the residual volume (and the
     /// total lung capacity) is about p_b x0 / x at a distance x from it (x0 from rest). > 0;
     /// configurations written before it existed read [`PLEURAL_BARRIER_PRESSURE`].
+    /// Derived: default [`PLEURAL_BARRIER_PRESSURE`].
     #[serde(default = "default_pleural_barrier_pressure")]
     pub pleural_barrier_pressure: f64,
     /// Margin of the pleural pressure-volume law's barriers, as a fraction of the distance
@@ -260,6 +304,7 @@ pub struct Params {
     /// above): within it the law follows its tangent (see [`super::pleural::PleuralLaw`]), so
     /// that it is finite for every volume an overshooting solver stage may probe. In (0, 0.5);
     /// configurations written before it existed read [`PLEURAL_BARRIER_MARGIN`].
+    /// Derived: default [`PLEURAL_BARRIER_MARGIN`].
     #[serde(default = "default_pleural_barrier_margin")]
     pub pleural_barrier_margin: f64,
     /// Stiffness of a cartilage ball joint [N/m]: the zero-length spring that joins the end
@@ -270,6 +315,7 @@ pub struct Params {
     /// chest wall is 0.050 L/cmH2O at -5 cmH2O and 0.086 at +5 against about 0.2 in adults;
     /// halving this constant raises it by 13 % and 3 % (docs/dynamics.md, "What sets the
     /// passive chest wall").
+    /// Unsourced: no source: chosen by hand in commit 16087cb (see above).
     pub cartilage_stiffness: f64,
     /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
     /// [N m/rad]. Default 2 N m/rad upright, set by hand; no source: 20 in the first dynamics
@@ -278,29 +324,42 @@ pub struct Params {
     /// (x1.60, `SEATED_SUPINE_COMPLIANCES`). The model's relaxed chest wall is 0.050
     /// L/cmH2O at -5 cmH2O and 0.086 at +5 against about 0.2 in adults; halving this constant
     /// raises it by only 6 % and 2 % (docs/dynamics.md, "What sets the passive chest wall").
+    /// Unsourced: no source: chosen by hand in commit 16087cb. Literature, for the isolated
+    /// costovertebral articulation: +-0.1 N m turned it by a median 13.2 deg (6.4-20.9 deg; Lebschy
+    /// et al. 2024, J Biomech 163:111923), a secant stiffness of 0.87 (0.55-1.8) N m/rad; ours, 2
+    /// N m/rad, also carries a share of the chest wall's recoil, so it is not the same quantity.
     pub rib_joint_stiffness: f64,
     /// In-plane stiffness of an abdominal membrane edge [N/m] (2D modulus about 1.15 k).
     /// Default 400 N/m, set by hand; no source (the value of the first dynamics, commit
     /// cfbd824): the in-plane tension of the abdominal wall's surface, in parallel with the
     /// wall's foundation ([`Params::abdominal_wall_compliance`]). Halving it raises the
     /// relaxed chest wall's compliance by 10 % at +5 cmH2O and 3 % at -5 cmH2O.
+    /// Unsourced: no source: chosen by hand in commit cfbd824. Literature: at 20 kPa of abdominal
+    /// pressure the wall near the linea alba carries 3.4 N/mm transversely and 1.5 N/mm
+    /// longitudinally at about 6 % strain (Foerstemann et al. 2011, J Biomech), a secant 2D
+    /// modulus of 25,000-57,000 N/m against ours, about 460 N/m: disagrees by two orders of
+    /// magnitude at that load (breathing loads the wall far less, in its softer toe region, where
+    /// no in-plane modulus was found).
     pub membrane_stiffness: f64,
     /// In-plane stiffness of a membrane edge of the diaphragm dome [N/m]: the dome's passive
     /// stiffness is low along its fibres, so that their shortening can lower it like a piston.
     /// Default 40 N/m (a tenth of the abdominal membrane's), set by hand; no source (first
     /// calibration, commit 16087cb). Halving it raises the relaxed chest wall's compliance by
     /// 2-3 %.
+    /// Unsourced: no source: chosen by hand in commit 16087cb.
     pub dome_membrane_stiffness: f64,
     /// In-plane stiffness of a membrane edge of the central tendon [N/m] (stiff: it carries the
     /// radial fibres' pull across the top of the dome). Default 2000 N/m (fifty times the
     /// muscular dome's), set by hand; no source (first calibration, commit 16087cb). Halving it
     /// lowers the relaxed chest wall's compliance by 3 % at +5 cmH2O and raises it by 2 % at
     /// -5 cmH2O.
+    /// Unsourced: no source: chosen by hand in commit 16087cb.
     pub tendon_stiffness: f64,
     /// Horizontal support of the diaphragm dome by the rib cage and lungs [N/m^3] (foundation
     /// stiffness per area of dome). Default 2e5 N/m^3, set by hand; no source (first
     /// calibration, commit 16087cb). Halving it raises the relaxed chest wall's compliance by
     /// 15 % at -5 cmH2O and 3 % at +5 cmH2O.
+    /// Unsourced: no source: chosen by hand in commit 16087cb.
     pub dome_support: f64,
     /// Compliance of the abdominal wall [m^3/Pa] (elastic support of the wall by its muscles,
     /// fascia and skin), spread over the free wall vertices as a foundation stiffness.
@@ -313,11 +372,14 @@ pub struct Params {
     /// model's wall has its membrane and relaxed muscles in parallel with this foundation.
     /// Doubling it raises the relaxed chest wall's compliance by 31 % at +5 cmH2O and 5 % at
     /// -5 cmH2O, the largest effect at +5 cmH2O of any single passive constant.
+    /// Calibrated: set by hand in commit aeb7bbe against `tests/physiology.rs`; no command
+    /// reproduces a fit, and no measurement of the same quantity was found (see above).
     pub abdominal_wall_compliance: f64,
     /// Tissue resistance of the abdominal wall [Pa s/m^3]: the viscous counterpart of its
     /// compliance, spread over the free wall vertices the same way (a uniform pressure P moves
     /// the wall's volume at P / R_w). Configurations written before it existed read
     /// [`ABDOMINAL_WALL_RESISTANCE`].
+    /// Derived: default [`ABDOMINAL_WALL_RESISTANCE`].
     #[serde(default = "default_abdominal_wall_resistance")]
     pub abdominal_wall_resistance: f64,
     /// Gravitational acceleration [m/s^2]. Default 9.81: standard gravity, 9.80665 m/s^2
@@ -325,6 +387,7 @@ pub struct Params {
     /// rest pose against it (the rest state is the generated anatomy, not an equilibrium
     /// found under gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture
     /// effects come from the tables above.
+    /// Source: standard gravity 9.80665 m/s^2 (3rd CGPM, 1901); ours 9.81 (agrees).
     pub gravity: f64,
 }
 

@@ -42,6 +42,9 @@ use crate::anatomy::Subject;
 /// scaled to the model's own FRC, whatever the generated geometry's size. The lung volume is
 /// the thoracic volume less the constant non-lung volume, so the model places them on the
 /// thoracic mesh at that volume plus each limit (`dynamics::Model::set_lung_fraction`).
+/// Source: Quanjer et al. 1993 (ECSC/ERS), the RV, FRC and TLC equations of
+/// [`Subject`] (agrees: the ratios are theirs; the clamps below are numerical guards that the
+/// declared subject ranges never reach).
 pub fn capacity_ratios(subject: &Subject) -> (f64, f64) {
     let frc = subject.frc_ecsc();
     let rv = subject.rv_ecsc() / frc;

@@ -20,6 +20,8 @@ struct Regression {
 }
 
 /// ANSUR II regressions for men (n = 4082).
+/// Source: ANSUR II (Gordon et al. 2014); the coefficients of
+/// data/anatomy/torso_anthropometry_ansur2.csv.
 const MALE: [Regression; 20] = [
     Regression {
         dimension: "chestcircumference",
@@ -183,6 +185,8 @@ const MALE: [Regression; 20] = [
     },
 ];
 /// ANSUR II regressions for women (n = 1986).
+/// Source: ANSUR II (Gordon et al. 2014); the coefficients of
+/// data/anatomy/torso_anthropometry_ansur2.csv.
 const FEMALE: [Regression; 20] = [
     Regression {
         dimension: "chestcircumference",

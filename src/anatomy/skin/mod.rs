@@ -43,6 +43,7 @@ use std::f64::consts::TAU;
 
 /// Reach [m] of the smooth widening around a bone the trunk shape leaves too little room
 /// for (1.75 m subject): about half a chest depth, so the widening spreads like soft tissue.
+/// Numerical: a smoothing reach of the skin generator.
 const ENCLOSE_REACH: f64 = 0.08;
 
 /// Resolution and enclosure settings of the skin generator.

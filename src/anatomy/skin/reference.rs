@@ -10,6 +10,7 @@ use crate::anatomy::{Anatomy, VertexRole};
 use nalgebra::{Point3, Vector3};
 
 /// Stature [m] of the subject the reference spine profile was placed for.
+/// Derived: the stature of `anatomy::skeleton::REFERENCE_BODY`.
 pub const REFERENCE_STATURE: f64 = 1.75;
 
 /// Vertebral body centres (x, y) [mm] of the reference spine, caudal to cranial.
@@ -17,6 +18,9 @@ pub const REFERENCE_STATURE: f64 = 1.75;
 /// OpenSim model (rib_joints_right_mm.csv); lumbar and cervical centres placed with that
 /// model's segment lengths and sagittal angles (spine_segments.csv: lumbar lordosis about
 /// 43 deg, cervical column leaning forward).
+/// Source: T1-T12 copied from rib_joints_right_mm.csv (Bruno, Bouxsein & Anderson 2015, J
+/// Biomech Eng 137:081003); the lumbar and cervical centres are placed from spine_segments.csv
+/// of the same model.
 pub const SPINE_CENTRES_MM: [(f64, f64); 24] = [
     (-40.0, 900.0),    // S1 plateau
     (-22.0, 940.0),    // L5
@@ -46,14 +50,19 @@ pub const SPINE_CENTRES_MM: [(f64, f64); 24] = [
 
 /// Radial room [m] kept between the skin and a bone centreline: rib half-thickness (about
 /// 6 mm) plus the thinnest soft tissue over the ribs and sternum (about 12 mm).
+/// Unsourced: no source: chosen by hand (commit 85fbc4f).
 pub const BONE_CLEARANCE: f64 = 0.018;
 
 /// Radial room [m] kept between the skin and the abdominal cavity's wall: the thinnest
 /// abdominal wall (muscle, fascia, fat and skin, about 10 mm in lean adults).
+/// Unsourced: no source: chosen by hand (commit 85fbc4f). Literature: the rectus abdominis
+/// alone is 14.7 +- 2.9 mm thick (Egwu et al. 2014), so 10 mm is thinner than a lean
+/// adult's ventral wall (a lower bound, not a typical value).
 pub const WALL_CLEARANCE: f64 = 0.010;
 
 /// Spinous tip offset from a vertebral joint centre (x, y) [m] for a 1.75 m subject: body,
 /// canal, lamina and process about 70 mm dorsal, the process sloping 12 mm caudally.
+/// Unsourced: no source: chosen by hand (commit 85fbc4f).
 const SPINOUS_OFFSET: (f64, f64) = (-0.070, -0.012);
 
 /// Names of the thoracic and lumbar levels of [`crate::anatomy::Spine::joints`].

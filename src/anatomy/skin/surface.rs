@@ -48,6 +48,7 @@ pub const MIN_SURFACE_MARKERS: usize = 12;
 /// Poses whose rotations differ by less than this are one pose [deg]: the principal-axes
 /// starts are a sixth of a turn (60 degrees) or a quarter turn apart, and a converged
 /// registration is within 2 degrees of the truth (tests/marker_registration.rs).
+/// Numerical: a registration setting.
 pub const DISTINCT_POSE_DEG: f64 = 20.0;
 
 /// Settings of [`register_to_surface`].
