@@ -715,6 +715,10 @@ impl Statics {
                 let y = self.y.clone();
                 self.factor_at(model, data, &y, self.pleural, act)?;
                 age = 0;
+                // the factorisation's differences use `dy` as scratch (the last, the residual
+                // at 1 Pa more pleural pressure); its base point is this residual
+                let th = l.theta_dot;
+                self.dy[th..th + self.m].copy_from_slice(&self.f0);
             }
             // a = J_aug^-1 (-R + rho u_T c)
             for (i, a) in self.a.iter_mut().enumerate() {
