@@ -28,8 +28,8 @@ the C call, so they include the finite-difference Jacobian columns; scipy's own 
 `njev` and `nlu` are recorded too.
 
     cargo build --release
-    target/release/torso bench work-precision --scenario quiet --duration 4 --out docs/bench
-    .venv/bin/python python/bench_scipy.py --dir docs/bench --scenario quiet
+    target/release/torso bench work-precision --scenario quiet --duration 4 --out out/bench
+    .venv/bin/python python/bench_scipy.py --dir out/bench --scenario quiet
 
 The script may start as soon as the reference file exists (the Rust bench writes it before its
 sweep); `--plot-only` redraws the combined plot and tables once both have finished.

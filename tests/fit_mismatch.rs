@@ -11,7 +11,7 @@
 //!
 //! The tidal volume misses its criterion in this case (measured: 0.663 L fitted against
 //! 0.791 L, -16.1 %; the full sweep finds -14.5 % and -14.7 % for the named sets fitted at
-//! level of detail 0, BENCHMARKS.md "Fits under model mismatch"), so it has its own test,
+//! level of detail 0, CHANGELOG.md, issue 19's fitting entry), so it has its own test,
 //! ignored until the fitting model meets it; the other criteria are checked on every run.
 
 use breathing_torso::fit::mismatch::{

@@ -102,7 +102,8 @@ fn set_subject(inst: &mut Instance, s: &Subject) {
     }
 }
 
-/// Scene 35 of the soak, as printed in docs/bench/soak_250_seed2011_lod0.txt.
+/// Scene 35 of the soak, as `torso bench soak --scenes 250 --seconds 60 --seed 2011 --lod 0`
+/// prints it.
 fn scene_35(inst: &mut Instance) {
     set_subject(inst, &subject_35());
     for (name, value) in [

@@ -2,7 +2,7 @@
 //! stress`: 20 Hz square waves of activation in every group, maximal activation held, quiet
 //! breathing with the end-expiratory volume of every breath, communication steps from 1e-5 s
 //! to 2 s and random step sequences against one long run. The full versions (60 s, an hour,
-//! level of detail 1) are in BENCHMARKS.md.
+//! level of detail 1) are run by `torso bench stress`; what they gave is in CHANGELOG.md.
 
 use breathing_torso::Config;
 use breathing_torso::bench::SceneOutcome;

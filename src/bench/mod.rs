@@ -6,6 +6,7 @@
 //! declared parameter ranges for the stress suite. Nothing here prints; the CLI (`src/cli/bench.rs`) formats the
 //! results and the stress tests (`tests/stress_*.rs`) assert on them.
 
+pub mod fmu;
 pub mod reduced;
 pub mod stress;
 
@@ -50,6 +51,9 @@ pub enum Reads {
 pub struct FrameRun {
     /// Wall time of the loop [s] (model build and marker-model build excluded).
     pub wall: f64,
+    /// Wall time of [`Torso::new`] before the loop [s] (the model's compilation and the
+    /// static equilibrium of the drive's start).
+    pub build: f64,
     /// Right-hand-side evaluations during the loop.
     pub rhs_evaluations: u64,
     /// Accepted steps during the loop.
@@ -64,7 +68,9 @@ pub struct FrameRun {
 /// after each. The marker model (built once per compiled model) is built before the clock
 /// starts when markers are read.
 pub fn frame_loop(config: &Config, frames: usize, reads: Reads) -> Result<FrameRun> {
+    let built = Instant::now();
     let mut torso = Torso::new(config.clone())?;
+    let build = built.elapsed().as_secs_f64();
     if reads != Reads::Volumes {
         torso.marker_model()?;
     }
@@ -99,6 +105,7 @@ pub fn frame_loop(config: &Config, frames: usize, reads: Reads) -> Result<FrameR
     let after = torso.solver_stats();
     Ok(FrameRun {
         wall,
+        build,
         rhs_evaluations: after.rhs_evaluations - before.rhs_evaluations,
         steps: after.steps - before.steps,
         rejected: after.rejected - before.rejected,

@@ -9,7 +9,9 @@
 //!   sizes; CSV (and the reference frames, for external integrators to compare against) and
 //!   a log-log PNG;
 //! - `soak`: many random scenes from the declared parameter ranges, each simulated for a
-//!   minute: no NaN, no blow-up, every numerical failure listed.
+//!   minute: no NaN, no blow-up, every numerical failure listed;
+//! - `report`: the headline figures of one run, written as BENCHMARKS.md
+//!   (`src/cli/bench_report.rs`).
 
 use crate::bench::{
     FRAME_RATE, FrameRun, Reads, RhsCost, SceneOutcome, Trajectory, TrajectoryError, frame_loop,
@@ -37,6 +39,11 @@ pub enum BenchCommand {
     Soak(SoakArgs),
     /// Square waves, held maximal activation, an hour's drift, communication steps.
     Stress(super::bench_stress::StressArgs),
+    /// What the FMU's instance adds per communication step, against the model facade.
+    Fmu(FmuArgs),
+    /// The current headline figures from one run, as a markdown file stamped with the
+    /// commit and the machine, each table with the command that reproduces it.
+    Report(super::bench_report::ReportArgs),
 }
 
 /// Options of `torso bench core`.
@@ -125,6 +132,65 @@ pub struct SoakArgs {
     pub solver: String,
 }
 
+/// Options of `torso bench fmu`.
+#[derive(Args, Debug)]
+pub struct FmuArgs {
+    /// Communication steps of 1/56 s per loop.
+    #[arg(long, default_value_t = 1000)]
+    pub frames: usize,
+    /// Loops of each kind, alternating (medians reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Level of detail.
+    #[arg(long, default_value_t = 1)]
+    pub lod: u32,
+    /// ODE solver: dopri5, bs3, high-order, rosenbrock or quasi-static.
+    #[arg(long = "solver", default_value = "dopri5")]
+    pub solver: String,
+}
+
+/// The solver named by `--solver`.
+pub fn solver_flag(name: &str) -> Result<Method> {
+    Method::from_name(name).ok_or_else(|| {
+        Error::invalid(
+            "--solver",
+            name,
+            "dopri5, bs3, high-order, rosenbrock or quasi-static",
+        )
+    })
+}
+
+fn fmu(args: &FmuArgs) -> Result<()> {
+    if args.lod > 2 {
+        return Err(Error::invalid("--lod", args.lod, "0, 1 or 2"));
+    }
+    let method = solver_flag(&args.solver)?;
+    let f = crate::bench::fmu::fmu_overhead(method, args.lod, args.frames, args.repeats)?;
+    println!(
+        "FMU instance against the model facade: default subject, quiet drive, {}, level of detail {}, {} steps of 1/56 s, {} values read per step, median of {} loops each",
+        f.method, f.level_of_detail, f.frames, f.values, f.repeats
+    );
+    println!(
+        "step          fmi do_step {:10.2} us   native advance_to {:10.2} us",
+        f.fmi_step_us, f.native_step_us
+    );
+    println!(
+        "first read    fmi get_real {:9.2} us   native reads {:15.2} us",
+        f.fmi_first_read_us, f.native_first_read_us
+    );
+    println!(
+        "read again    fmi get_real {:9.2} us   native reads {:15.2} us",
+        f.fmi_read_again_us, f.native_read_again_us
+    );
+    println!(
+        "whole loop    fmi {:.4} s   native {:.4} s   last step's values identical bit for bit: {}",
+        f.fmi_loop_s,
+        f.native_loop_s,
+        if f.identical { "yes" } else { "no" }
+    );
+    Ok(())
+}
+
 /// Runs `torso bench ...`.
 pub fn run(command: BenchCommand) -> Result<()> {
     match command {
@@ -132,31 +198,49 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::WorkPrecision(a) => work_precision(&a),
         BenchCommand::Soak(a) => soak(&a),
         BenchCommand::Stress(a) => super::bench_stress::run(&a),
+        BenchCommand::Fmu(a) => fmu(&a),
+        BenchCommand::Report(a) => super::bench_report::run(&a),
     }
 }
 
 /// Median figures of repeated frame loops.
 #[derive(Debug, Serialize)]
-struct LoopFigures {
-    reads: Reads,
-    frames: usize,
-    median_wall_s: f64,
-    min_wall_s: f64,
-    rhs_evaluations: u64,
-    steps: u64,
-    rejected: u64,
-    ns_per_rhs: f64,
+pub struct LoopFigures {
+    /// What was read after every frame.
+    pub reads: Reads,
+    /// Frames per loop.
+    pub frames: usize,
+    /// Loops timed.
+    pub runs: usize,
+    /// Median wall time of a loop [s].
+    pub median_wall_s: f64,
+    /// Shortest loop [s].
+    pub min_wall_s: f64,
+    /// Median wall time of the `Torso::new` before each loop [s].
+    pub build_median_s: f64,
+    /// Right-hand-side evaluations of the last loop (the same in every loop).
+    pub rhs_evaluations: u64,
+    /// Accepted steps of the last loop.
+    pub steps: u64,
+    /// Rejected steps of the last loop.
+    pub rejected: u64,
+    /// Median wall time per right-hand-side evaluation [ns].
+    pub ns_per_rhs: f64,
 }
 
-fn loop_figures(runs: &[FrameRun], reads: Reads, frames: usize) -> LoopFigures {
+/// The medians of repeated frame loops reading `reads`.
+pub fn loop_figures(runs: &[FrameRun], reads: Reads, frames: usize) -> LoopFigures {
     let walls: Vec<f64> = runs.iter().map(|r| r.wall).collect();
+    let builds: Vec<f64> = runs.iter().map(|r| r.build).collect();
     let last = runs.last().copied().unwrap_or_default();
     let med = median(&walls);
     LoopFigures {
         reads,
         frames,
+        runs: runs.len(),
         median_wall_s: med,
         min_wall_s: walls.iter().copied().fold(f64::INFINITY, f64::min),
+        build_median_s: median(&builds),
         rhs_evaluations: last.rhs_evaluations,
         steps: last.steps,
         rejected: last.rejected,
@@ -218,6 +302,7 @@ fn core(args: &CoreArgs) -> Result<()> {
         args.repeats
     );
     let mut figures = Vec::new();
+    let mut builds = Vec::new();
     for reads in [
         Reads::Volumes,
         Reads::VolumesAndMarkers,
@@ -226,6 +311,7 @@ fn core(args: &CoreArgs) -> Result<()> {
         let runs = (0..args.repeats)
             .map(|_| frame_loop(&config, args.frames, reads))
             .collect::<Result<Vec<_>>>()?;
+        builds.extend(runs.iter().map(|r| r.build));
         let f = loop_figures(&runs, reads, args.frames);
         println!(
             "{:<22} median {:8.4} s  min {:8.4} s  RHS {:7}  steps {:6} (+{} rejected)  {:8.0} ns/RHS (wall/RHS)",
@@ -247,6 +333,11 @@ fn core(args: &CoreArgs) -> Result<()> {
         <[LoopFigures; 3]>::try_from(figures).map_err(|_| Error::State("no runs".into()))?;
     let ratio = markers.median_wall_s / volumes.median_wall_s;
     let ratio_skin = skin.median_wall_s / volumes.median_wall_s;
+    println!(
+        "Torso::new              median {:8.4} s over {} builds (the model and its start state)",
+        median(&builds),
+        builds.len()
+    );
     println!("ratio (60 markers / volumes only): {ratio:.2}");
     println!("ratio (whole skin / volumes only): {ratio_skin:.2}");
     let mut rhs = Vec::new();

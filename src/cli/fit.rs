@@ -712,8 +712,9 @@ pub fn breath_of(config: &crate::Config, drive: Drive) -> Result<crate::model::r
     Ok(crate::model::run::summarise(&frames, period))
 }
 
-/// Runs `torso fit`.
-pub fn main(args: &FitArgs) -> Result<()> {
+/// What `torso fit`'s flags ask of the search, the reader and the fit (an error names the
+/// flag).
+pub fn fit_settings(args: &FitArgs) -> Result<(FitOptions, ReadOptions, FitFlags)> {
     let options = FitOptions {
         method: Method::from_name(&args.method)?,
         max_evals: args.max_evals,
@@ -728,25 +729,23 @@ pub fn main(args: &FitArgs) -> Result<()> {
     if !(1..=2).contains(&options.threads) {
         return Err(Error::invalid("--threads", options.threads, "1 or 2"));
     }
-    let read = args.read.options()?;
-    fit_file(
-        &args.slp,
-        &read,
-        &args.model,
-        &args.out,
-        &options,
-        &FitFlags {
-            skin_fit: args.skin_fit,
-            fit_size: args.fit_size,
-            no_fit_size: args.no_fit_size,
-            no_drift: args.no_drift,
-            no_sway: args.no_sway,
-            pose: PoseOptions {
-                anterior: args.anterior.clone(),
-            },
+    let flags = FitFlags {
+        skin_fit: args.skin_fit,
+        fit_size: args.fit_size,
+        no_fit_size: args.no_fit_size,
+        no_drift: args.no_drift,
+        no_sway: args.no_sway,
+        pose: PoseOptions {
+            anterior: args.anterior.clone(),
         },
-    )
-    .map(|_| ())
+    };
+    Ok((options, args.read.options()?, flags))
+}
+
+/// Runs `torso fit`.
+pub fn main(args: &FitArgs) -> Result<()> {
+    let (options, read, flags) = fit_settings(args)?;
+    fit_file(&args.slp, &read, &args.model, &args.out, &options, &flags).map(|_| ())
 }
 
 /// `--ti-ttot`: `auto` (None) or a number in the drive's range.

@@ -3,7 +3,7 @@
 //! same chest-wall motion on a larger trunk displaces more volume (a recording of a man 8 %
 //! taller and heavier than the model, fitted at level of detail 1 with each marker compared
 //! about its own mean, gave tidal volumes 11-13 % low with the default subject and 0-6 % low
-//! with his own; BENCHMARKS.md, "Fits under model mismatch"). When stature and mass are not
+//! with his own; CHANGELOG.md, issue 19's fitting entry). When stature and mass are not
 //! known, they are searched here: a bounded Nelder-Mead over the stature and mass factors
 //! (sex, age, breast size and posture held) minimises the rigid registration residual of the
 //! first frame to the model's rest markers (the grid: correspondence, Kabsch) or rest skin
