@@ -2,9 +2,9 @@
 """Convert public recordings of human breathing with chest markers into the CSV of named
 markers that `torso inspect` and `torso fit` read (docs/recordings.md).
 
-The recordings are not shipped with the project: each user obtains the source file from its
-publisher (data/real/README.md says where, under which licence, and the SHA-256 of the file
-this converter was checked against) and converts it here. Standard library only.
+The converted recordings are kept in data/real/ beside their licences; this converter
+reproduces them from the published source files (data/real/README.md says where, under which
+licence, and the SHA-256 of each file it was checked against). Standard library only.
 
 Two sources:
 
