@@ -10,6 +10,7 @@ pub mod reduced;
 pub mod stress;
 
 use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};
+use crate::dynamics::statics::StaticsStats;
 use crate::dynamics::{Layout, RIBS};
 use crate::model::{AdvanceOptions, Config, Drive, Quantity, Torso, Wave};
 use crate::solver::{Ode, SecondOrder, SemiImplicitEuler};
@@ -171,6 +172,8 @@ pub struct Trajectory {
     pub stiffness_detected: bool,
     /// Accepted steps at which the stiffness test fired.
     pub stiff_steps: u64,
+    /// Work counts of the static solves (quasi-static mode; `None` in the others).
+    pub statics: Option<StaticsStats>,
 }
 
 /// Runs `config` for `duration` seconds, recording lung volume and markers at
@@ -185,6 +188,7 @@ pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Tra
         markers: Vec::with_capacity(frames + 1),
         ..Trajectory::default()
     };
+    let statics_before = torso.statics_stats();
     let start = Instant::now();
     for i in 0..=frames {
         if i > 0 {
@@ -203,6 +207,17 @@ pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Tra
     out.steps = stats.steps;
     out.stiff_steps = stats.stiff_steps;
     out.stiffness_detected = torso.stiffness_detected();
+    out.statics = torso
+        .statics_stats()
+        .zip(statics_before)
+        .map(|(a, b)| StaticsStats {
+            solves: a.solves - b.solves,
+            iterations: a.iterations - b.iterations,
+            jacobians: a.jacobians - b.jacobians,
+            factorisations: a.factorisations - b.factorisations,
+            residuals: a.residuals - b.residuals,
+            continuations: a.continuations - b.continuations,
+        });
     Ok(Some(out))
 }
 

@@ -100,6 +100,11 @@ pub struct WorkPrecisionArgs {
     /// high-bulk (abdominal bulk modulus 10x) or fine-mesh (level of detail 2).
     #[arg(long, default_value = "default")]
     pub scene: String,
+    /// Formulation: inertial (every method against a high-order rtol 1e-12 reference, and
+    /// the semi-implicit Euler) or quasi-static (the quasi-static mode at rtol 1e-3 .. 1e-9
+    /// against its own rtol 1e-10 run, with the static solves' work counts).
+    #[arg(long, default_value = "inertial")]
+    pub formulation: String,
 }
 
 /// Options of `torso bench soak`.
@@ -342,6 +347,17 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     if args.scene != "default" {
         base.params = Some(params);
     }
+    match args.formulation.as_str() {
+        "inertial" => {}
+        "quasi-static" => return work_precision_quasi(args, &base),
+        other => {
+            return Err(Error::invalid(
+                "--formulation",
+                other,
+                "inertial or quasi-static",
+            ));
+        }
+    }
     let mut rc = base.clone();
     rc.solver.method = Method::HighOrder;
     rc.solver.rtol = 1e-12;
@@ -372,7 +388,13 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     })?;
     // written now, so that an external integrator can be scored while the sweep runs
     let reference_path = args.out.join(format!("{name}_reference.csv"));
-    write_reference(&reference_path, args, &base, &reference)?;
+    write_reference(
+        &reference_path,
+        args,
+        &base,
+        &reference,
+        &format!("method={} rtol=1e-12 atol=1e-14", Method::HighOrder.name()),
+    )?;
     println!("reference frames: {}", reference_path.display());
     let rtols: Vec<f64> = (3..=10).map(|k| 10f64.powi(-k)).collect();
     let mut points = Vec::new();
@@ -708,19 +730,21 @@ fn write_reference(
     args: &WorkPrecisionArgs,
     base: &Config,
     reference: &Trajectory,
+    run: &str,
 ) -> Result<()> {
     use std::fmt::Write as _;
     let markers = reference.markers.first().map_or(0, Vec::len);
     let d = &base.drive;
     let mut s = format!(
-        "# scenario={} duration={} frame_rate={} method={} rtol=1e-12 atol=1e-14 \
-         rhs_evaluations={} scene.level_of_detail={} drive.frequency={}",
+        "# scenario={} formulation={} duration={} frame_rate={} {run} \
+         rhs_evaluations={} scene.level_of_detail={} solver.method={} drive.frequency={}",
         args.scenario,
+        args.formulation,
         args.duration,
         FRAME_RATE,
-        Method::HighOrder.name(),
         reference.rhs_evaluations,
         base.scene.level_of_detail,
+        base.solver.method.code(),
         d.frequency
     );
     for (group, w) in [
@@ -820,5 +844,239 @@ fn soak(args: &SoakArgs) -> Result<()> {
             args.scenes
         )));
     }
+    Ok(())
+}
+
+/// One run of the quasi-static work-precision sweep.
+#[derive(Debug, Clone)]
+struct QuasiPoint {
+    rtol: f64,
+    /// Median wall time [s], the last run's trajectory and its errors; or why not.
+    result: std::result::Result<(f64, Trajectory, TrajectoryError), String>,
+}
+
+/// `torso bench work-precision --formulation quasi-static`: the quasi-static mode at rtol
+/// 1e-3 .. 1e-9 (atol rtol / 100, on the lung volume in litres) against its own run at rtol
+/// 1e-10 (atol 1e-12), reading the lung volume and the markers every frame; the reference's
+/// frames are written for `python/bench_scipy.py --formulation quasi-static`, which
+/// integrates the same reduced right-hand side (`bt_quasi_rate`) with scipy.
+fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
+    let mut base = base.clone();
+    base.solver.method = Method::QuasiStatic;
+    let mut rc = base.clone();
+    rc.solver.rtol = 1e-10;
+    rc.solver.atol = 1e-12;
+    rc.validate()?;
+    println!(
+        "{} breathing ({} scene), {} s, level of detail {}: reference quasi-static rtol 1e-10 atol 1e-12 ...",
+        args.scenario, args.scene, args.duration, base.scene.level_of_detail
+    );
+    let reference = trajectory(&rc, args.duration, f64::INFINITY)?
+        .ok_or_else(|| Error::State("reference run abandoned".into()))?;
+    let rs = reference.statics.unwrap_or_default();
+    println!(
+        "reference: {:.2} s, {} steps, {} RHS evaluations, {} static solves, {} Newton iterations",
+        reference.wall, reference.steps, reference.rhs_evaluations, rs.solves, rs.iterations
+    );
+    let name = if args.scene == "default" {
+        format!("work_precision_{}_quasi_static", args.scenario)
+    } else {
+        format!(
+            "work_precision_{}_{}_quasi_static",
+            args.scenario, args.scene
+        )
+    };
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
+        path: args.out.clone(),
+        source: e,
+    })?;
+    let reference_path = args.out.join(format!("{name}_reference.csv"));
+    write_reference(
+        &reference_path,
+        args,
+        &base,
+        &reference,
+        "method=quasi-static rtol=1e-10 atol=1e-12",
+    )?;
+    println!("reference frames: {}", reference_path.display());
+    println!(
+        "{:<12} {:>6} {:>9} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10} {:>11}",
+        "method",
+        "rtol",
+        "wall [s]",
+        "steps",
+        "RHS",
+        "solves",
+        "Newton",
+        "LU",
+        "lung [L]",
+        "marker [mm]"
+    );
+    let mut points = Vec::new();
+    let mut over_cap = false;
+    for rtol in (3..=9).map(|k| 10f64.powi(-k)) {
+        let mut c = base.clone();
+        c.solver.rtol = rtol;
+        c.solver.atol = rtol * 1e-2;
+        c.validate()?;
+        let result = if over_cap {
+            Err("skipped: a looser tolerance already exceeded the time cap".to_string())
+        } else {
+            let mut walls = Vec::new();
+            let mut last = None;
+            let mut failure = None;
+            for _ in 0..args.repeats {
+                match trajectory(&c, args.duration, args.cap) {
+                    Ok(Some(t)) => {
+                        walls.push(t.wall);
+                        last = Some(t);
+                    }
+                    Ok(None) => {
+                        over_cap = true;
+                        failure = Some(format!("skipped: over the {} s time cap", args.cap));
+                        break;
+                    }
+                    Err(e) => {
+                        failure = Some(format!("failed: {e}"));
+                        break;
+                    }
+                }
+            }
+            match (failure, last) {
+                (Some(reason), _) => Err(reason),
+                (None, Some(t)) => trajectory_error(&t, &reference)
+                    .map(|err| (median(&walls), t, err))
+                    .map_err(|e| e.to_string()),
+                (None, None) => Err("no run".to_string()),
+            }
+        };
+        match &result {
+            Ok((wall, t, err)) => {
+                let s = t.statics.unwrap_or_default();
+                println!(
+                    "{:<12} {:>6.0e} {:>9.4} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10.3e} {:>11.3e}",
+                    Method::QuasiStatic.name(),
+                    rtol,
+                    wall,
+                    t.steps,
+                    t.rhs_evaluations,
+                    s.solves,
+                    s.iterations,
+                    s.factorisations,
+                    err.lung,
+                    err.markers * 1e3
+                )
+            }
+            Err(reason) => println!("{:<12} {:>6.0e} {reason}", Method::QuasiStatic.name(), rtol),
+        }
+        points.push(QuasiPoint { rtol, result });
+    }
+    let mut csv = String::from(
+        "method,rtol,atol,status,wall_s,rhs_evaluations,steps,lung_error_l,marker_error_m,\
+         static_solves,newton_iterations,jacobians,factorisations,residuals,continuations\n",
+    );
+    for p in &points {
+        let atol = p.rtol * 1e-2;
+        match &p.result {
+            Ok((wall, t, err)) => {
+                let s = t.statics.unwrap_or_default();
+                csv.push_str(&format!(
+                    "{},{:e},{:e},ok,{wall},{},{},{:e},{:e},{},{},{},{},{},{}\n",
+                    Method::QuasiStatic.name(),
+                    p.rtol,
+                    atol,
+                    t.rhs_evaluations,
+                    t.steps,
+                    err.lung,
+                    err.markers,
+                    s.solves,
+                    s.iterations,
+                    s.jacobians,
+                    s.factorisations,
+                    s.residuals,
+                    s.continuations
+                ))
+            }
+            Err(reason) => csv.push_str(&format!(
+                "{},{:e},{:e},\"{}\",,,,,,,,,,,\n",
+                Method::QuasiStatic.name(),
+                p.rtol,
+                atol,
+                reason.replace('"', "'")
+            )),
+        }
+    }
+    csv.push_str(&format!(
+        "# reference: quasi-static rtol 1e-10 atol 1e-12, {} steps, {} RHS evaluations, {} static solves, {} Newton iterations\n",
+        reference.steps, reference.rhs_evaluations, rs.solves, rs.iterations
+    ));
+    let csv_path = args.out.join(format!("{name}.csv"));
+    write_text(&csv_path, &csv)?;
+    let series = |lung: bool| -> (Vec<f64>, Vec<f64>) {
+        points
+            .iter()
+            .filter_map(|p| p.result.as_ref().ok())
+            .map(|(wall, _, err)| {
+                let e = if lung { err.lung } else { err.markers * 1e3 };
+                (wall.max(1e-9).log10(), e.max(1e-16).log10())
+            })
+            .unzip()
+    };
+    let (xl, yl) = series(true);
+    let (xm, ym) = series(false);
+    fn panel<'a>(title: &str, y_label: &str, x: &'a [f64], y: &'a [f64]) -> Panel<'a> {
+        Panel {
+            title: title.to_string(),
+            x_label: "log10 wall time [s]".into(),
+            y_label: y_label.to_string(),
+            traces: vec![
+                Trace {
+                    label: Method::QuasiStatic.name().to_string(),
+                    x,
+                    y,
+                    color: BLUE,
+                    mark: Mark::Line,
+                },
+                Trace {
+                    label: String::new(),
+                    x,
+                    y,
+                    color: BLUE,
+                    mark: Mark::Points,
+                },
+            ],
+            hlines: Vec::new(),
+            bands: Vec::new(),
+        }
+    }
+    write_figure(
+        &args.out,
+        &name,
+        &[
+            panel(
+                &format!(
+                    "Work-precision, {} breathing, quasi-static: lung volume",
+                    args.scenario
+                ),
+                "log10 max |lung volume error| [L]",
+                &xl,
+                &yl,
+            ),
+            panel(
+                &format!(
+                    "Work-precision, {} breathing, quasi-static: markers",
+                    args.scenario
+                ),
+                "log10 max marker error [mm]",
+                &xm,
+                &ym,
+            ),
+        ],
+    )?;
+    println!(
+        "wrote {} and {}",
+        csv_path.display(),
+        args.out.join(format!("{name}.png")).display()
+    );
     Ok(())
 }
