@@ -33,6 +33,22 @@ the C call, so they include the finite-difference Jacobian columns; scipy's own 
 
 The script may start as soon as the reference file exists (the Rust bench writes it before its
 sweep); `--plot-only` redraws the combined plot and tables once both have finished.
+
+`--formulation quasi-static` does the same for the quasi-static mode (`solver.method` 4), whose
+state is the lung volume alone: the reference is the library's own run at rtol 1e-10
+(`work_precision_<scenario>_quasi_static_reference.csv`, from `torso bench work-precision
+--formulation quasi-static`), scipy integrates the reduced right-hand side `bt_quasi_rate`
+(one static equilibrium of the chest wall per call; a call whose equilibrium fails returns NaN,
+which makes every method shorten its step, as the library's own integrator does), and the
+markers of a frame are read off `bt_quasi_set_volume`. Each tolerance gets its own handle
+built with that `solver.rtol`, so that the static solves are converged as tightly as in the
+library's own run at the same tolerance (build time excluded from the wall time). The plot and
+the matched-error tables compare solve_ivp's wall time with the library's runs reading the lung
+volume alone (`wall_lung_only_s` of the Rust CSV): reading the markers solves one equilibrium
+per frame on either side (`frames_s`, recorded apart).
+
+    target/release/torso bench work-precision --formulation quasi-static --lod 1 --out out/bench
+    .venv/bin/python python/bench_scipy.py --formulation quasi-static --dir out/bench --rtols 1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9
 """
 
 import argparse
@@ -100,6 +116,8 @@ def load_library(path=LIB):
     lib.bt_read_markers.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
                                     ctypes.POINTER(ctypes.c_size_t)]
     lib.bt_advance_to.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p]
+    lib.bt_quasi_rate.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, DOUBLE_P]
+    lib.bt_quasi_set_volume.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double]
     return lib
 
 
@@ -168,6 +186,48 @@ class Torso:
         return v.value, xyz.reshape(-1, 3)
 
 
+BT_ERR_NUMERICAL = -3
+
+
+class QuasiTorso(Torso):
+    """A quasi-static handle (`solver.method` 4) seen as V_L' = f(t, V_L) for scipy: the state is
+    the lung volume [L] alone (`bt_quasi_rate`), and a frame is read off `bt_quasi_set_volume`."""
+
+    def __init__(self, lib, parameters):
+        super().__init__(lib, {**parameters, "solver.method": 4})
+        self.n = 1
+        self.failures = 0
+
+    def state(self):
+        """The model's current lung volume [L], as a 1-vector."""
+        v = ctypes.c_double()
+        self._check(self.lib.bt_read_by_name(self.h, b"volume.lung", ctypes.byref(v)))
+        return np.array([v.value])
+
+    def rhs(self, t, y):
+        """dV_L/dt through `bt_quasi_rate`; NaN (a rejected step) when the equilibrium fails."""
+        if time.perf_counter() > self.deadline:
+            raise OverCap()
+        rate = ctypes.c_double()
+        rc = self.lib.bt_quasi_rate(self.h, float(t), float(y[0]), ctypes.byref(rate))
+        self.calls += 1
+        if rc == BT_ERR_NUMERICAL:
+            self.failures += 1
+            return np.array([math.nan])
+        if rc != 0:
+            self._check(rc)
+        return np.array([rate.value])
+
+    def read_frame(self, t, y):
+        """Lung volume [L] and markers [m] (m x 3) of lung volume y[0] at time t."""
+        self._check(self.lib.bt_quasi_set_volume(self.h, float(t), float(y[0])))
+        v = ctypes.c_double()
+        self._check(self.lib.bt_read_by_name(self.h, b"volume.lung", ctypes.byref(v)))
+        xyz = np.empty(3 * self.markers_n)
+        self._check(self.lib.bt_read_markers(self.h, xyz.ctypes.data, xyz.size, None))
+        return v.value, xyz.reshape(-1, 3)
+
+
 def load_reference(path):
     """(scene dict, frame times, lung volumes, markers[frame, marker, 3]) of a reference CSV."""
     with open(path) as f:
@@ -210,7 +270,7 @@ def run_scipy(torso, method, rtol, t_eval, cap):
     return wall, torso.calls, sol
 
 
-NATIVE = {"dopri5": 0, "bs3": 1, "high-order": 2}
+NATIVE = {"dopri5": 0, "bs3": 1, "high-order": 2, "quasi-static": 4}
 
 
 def run_native(lib, parameters, method, rtol, t_eval, cap):
@@ -280,7 +340,9 @@ def measure(torso, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
         cpus.append(run_scipy.cpu)
         if wall > 5.0:
             break
+    start = time.perf_counter()
     lung_err, marker_err = errors(torso, t_eval, sol.y, ref_lung, ref_markers)
+    row["frames_s"] = time.perf_counter() - start
     row.update(status="ok", wall_s=statistics.median(walls), cpu_s=statistics.median(cpus), runs=len(walls),
                rhs_evaluations=calls,
                nfev=sol.nfev, njev=sol.njev, nlu=sol.nlu, lung_error_l=lung_err,
@@ -304,8 +366,10 @@ def series(rows, label_key="method"):
         if r.get("status") != "ok":
             continue
         setting = r.get("rtol") or r.get("step_s")
+        # the quasi-static bench's own runs: the wall time reading the lung volume alone, as
+        # solve_ivp's is measured (the markers are read outside its clock)
         out.setdefault(r[label_key], []).append(
-            (float(r["wall_s"]), float(r["rhs_evaluations"]), float(r["lung_error_l"]),
+            (float(r.get("wall_lung_only_s") or r["wall_s"]), float(r["rhs_evaluations"]), float(r["lung_error_l"]),
              float(r["marker_error_m"]), setting, float(r.get("cpu_s") or "nan")))
     return out
 
@@ -375,19 +439,27 @@ def main(argv=None):
     ap.add_argument("--sparsity", action="store_true", help="measure the Jacobian's fill at the rest state")
     ap.add_argument("--plot-only", action="store_true",
                     help="run nothing: redraw the plot and tables from the CSVs already in --dir")
+    ap.add_argument("--formulation", default="inertial", choices=["inertial", "quasi-static"],
+                    help="quasi-static: scipy on the reduced right-hand side bt_quasi_rate, against the "
+                         "quasi-static reference (--native defaults to none; quasi-static runs it from here)")
     args = ap.parse_args(argv)
+    quasi = args.formulation == "quasi-static"
+    if quasi and args.native == "dopri5":
+        # the Rust bench's rows are the library's own runs, timed reading the lung volume alone
+        args.native = ""
+    suffix = "_quasi_static" if quasi else ""
     if args.plot_only:
-        name = f"work_precision_{args.scenario}"
+        name = f"work_precision_{args.scenario}{suffix}"
         out = pathlib.Path(args.dir)
         with open(out / f"{name}_reference.csv") as f:
             scene = dict(kv.split("=", 1) for kv in f.readline()[1:].split())
         return report(out, name, args, scene, read_rows(out / f"{name}_scipy.csv"))
 
     out = pathlib.Path(args.dir)
-    name = f"work_precision_{args.scenario}"
+    name = f"work_precision_{args.scenario}{suffix}"
     scene, t_eval, ref_lung, ref_markers = load_reference(out / f"{name}_reference.csv")
     lib = load_library(args.lib)
-    torso = Torso(lib, scene_parameters(scene))
+    torso = (QuasiTorso if quasi else Torso)(lib, scene_parameters(scene))
     print(f"{args.scenario} breathing, {scene['duration']} s, level of detail "
           f"{scene['scene.level_of_detail']}, state length {torso.n}, {len(t_eval)} frames; "
           f"reference {scene['method']} rtol {scene['rtol']} from {out / (name + '_reference.csv')}")
@@ -406,6 +478,17 @@ def main(argv=None):
             elif kind == "native":
                 row = measure_native(lib, scene_parameters(scene), method, rtol, t_eval, ref_lung, ref_markers,
                                      args.repeats, args.cap)
+            elif quasi:
+                # the static solves' tolerance follows the handle's solver.rtol: one handle per rtol
+                handle = QuasiTorso(lib, {**scene_parameters(scene), "solver.rtol": rtol,
+                                          "solver.atol": rtol * 1e-2})
+                try:
+                    row = measure(handle, method, rtol, t_eval, ref_lung, ref_markers, args.repeats, args.cap)
+                    row["failed_rhs"] = handle.failures
+                finally:
+                    handle.close()
+                if row["status"] != "ok":
+                    skip = "skipped: a looser tolerance did not finish"
             else:
                 row = measure(torso, method, rtol, t_eval, ref_lung, ref_markers, args.repeats, args.cap)
                 if row["status"] != "ok":
@@ -426,7 +509,7 @@ def main(argv=None):
 def report(out, name, args, scene, rows):
     """Writes the scipy CSV, the combined plot and prints the matched-error tables."""
     fields = ["method", "rtol", "atol", "status", "wall_s", "cpu_s", "runs", "rhs_evaluations", "nfev", "njev", "nlu",
-              "lung_error_l", "marker_error_m"]
+              "lung_error_l", "marker_error_m", "failed_rhs", "frames_s"]
     csv_path = out / f"{name}_scipy.csv"
     with open(csv_path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
@@ -438,9 +521,15 @@ def report(out, name, args, scene, rows):
     all_series.update(series(read_rows(out / f"{name}_fixed.csv")))
     all_series.update(series([{**r, "rtol": f"{float(r['rtol']):g}"} for r in rows]))
     png = out / f"{name}_combined.png"
-    plot(all_series, png, f"Work-precision, {args.scenario} breathing, level of detail "
-                          f"{scene['scene.level_of_detail']}: our solvers, scipy solve_ivp on the same RHS "
-                          f"(C ABI), semi-implicit Euler")
+    if args.formulation == "quasi-static":
+        title = (f"Work-precision, {args.scenario} breathing, quasi-static, level of detail "
+                 f"{scene['scene.level_of_detail']}: our Dormand-Prince 5(4), scipy solve_ivp on the same "
+                 f"reduced RHS (bt_quasi_rate)")
+    else:
+        title = (f"Work-precision, {args.scenario} breathing, level of detail "
+                 f"{scene['scene.level_of_detail']}: our solvers, scipy solve_ivp on the same RHS "
+                 f"(C ABI), semi-implicit Euler")
+    plot(all_series, png, title)
     print(f"wrote {csv_path} and {png}")
 
     for target in (float(x) for x in args.targets.split(",")):
@@ -455,7 +544,7 @@ def report(out, name, args, scene, rows):
             print(f"{s_name:<20} {fast[4]:>17} {fast[0]:>9.3f} {fast[5]:>8.3f} {fast[1]:>9.0f}   "
                   f"{few[4]:>20} {few[1]:>9.0f} "
                   f"{few[0]:>9.3f}")
-        for base in ("dopri5", "native-dopri5"):
+        for base in ("dopri5", "native-dopri5", "quasi-static", "native-quasi-static"):
             ours = table.get(base, (None, None, None))
             if ours[0] is None:
                 continue

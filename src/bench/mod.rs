@@ -221,6 +221,24 @@ pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Tra
     Ok(Some(out))
 }
 
+/// Wall time [s] of [`trajectory`]'s frame loop reading the lung volume alone (no markers),
+/// and its right-hand-side evaluations: in quasi-static mode no position is solved then,
+/// so this is the integration's own cost, as an external integrator's is measured.
+pub fn lung_loop(config: &Config, duration: f64) -> Result<(f64, u64)> {
+    let mut torso = Torso::new(config.clone())?;
+    let frames = (duration * FRAME_RATE).round() as usize;
+    let before = torso.solver_stats().rhs_evaluations;
+    let start = Instant::now();
+    let mut checksum = torso.read(Quantity::LungVolume)?;
+    for i in 1..=frames {
+        torso.advance_to(i as f64 / FRAME_RATE)?;
+        checksum += torso.read(Quantity::LungVolume)?;
+    }
+    let wall = start.elapsed().as_secs_f64();
+    black_box(checksum);
+    Ok((wall, torso.solver_stats().rhs_evaluations - before))
+}
+
 /// The torso seen as a second-order system for [`SemiImplicitEuler`]: the configuration is
 /// rib angles, sternum position and quaternion, free vertex positions (the first
 /// `Layout::theta_dot` entries of the state), the rest are velocities; the right-hand side is
