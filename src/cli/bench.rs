@@ -852,8 +852,24 @@ fn soak(args: &SoakArgs) -> Result<()> {
 struct QuasiPoint {
     rtol: f64,
     /// Median wall times [s] with the markers read every frame and with the lung volume
-    /// alone, the last run's trajectory and its errors; or why not.
-    result: std::result::Result<(f64, f64, Trajectory, TrajectoryError), String>,
+    /// alone, the last run's trajectory, its errors over every frame and over the frames
+    /// from [`SETTLED`] s on; or why not.
+    result: std::result::Result<(f64, f64, Trajectory, TrajectoryError, TrajectoryError), String>,
+}
+
+/// Time [s] after which the quasi-static sweep also reports the errors: the first step's
+/// error decays with the airway time constant (about 0.1 s), so from 0.5 s on what is left is
+/// the integration's along the breath.
+const SETTLED: f64 = 0.5;
+
+/// The frames of `t` from [`SETTLED`] s on.
+fn settled(t: &Trajectory) -> Trajectory {
+    let first = ((SETTLED * FRAME_RATE).round() as usize).min(t.lung.len());
+    Trajectory {
+        lung: t.lung[first..].to_vec(),
+        markers: t.markers[first.min(t.markers.len())..].to_vec(),
+        ..Trajectory::default()
+    }
 }
 
 /// `torso bench work-precision --formulation quasi-static`: the quasi-static mode at rtol
@@ -901,17 +917,20 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
     )?;
     println!("reference frames: {}", reference_path.display());
     println!(
-        "{:<12} {:>6} {:>9} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10} {:>11}",
+        "{:<12} {:>6} {:>9} {:>9} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10} {:>11} {:>10} {:>11}",
         "method",
         "rtol",
         "wall [s]",
+        "lung-only",
         "steps",
         "RHS",
         "solves",
         "Newton",
         "LU",
         "lung [L]",
-        "marker [mm]"
+        "marker [mm]",
+        "from 0.5 s",
+        "from 0.5 s"
     );
     let mut points = Vec::new();
     let mut over_cap = false;
@@ -958,16 +977,19 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
             match (failure, last) {
                 (Some(reason), _) => Err(reason),
                 (None, Some(t)) => trajectory_error(&t, &reference)
-                    .map(|err| (median(&walls), median(&lung_walls), t, err))
+                    .and_then(|err| {
+                        let late = trajectory_error(&settled(&t), &settled(&reference))?;
+                        Ok((median(&walls), median(&lung_walls), t, err, late))
+                    })
                     .map_err(|e| e.to_string()),
                 (None, None) => Err("no run".to_string()),
             }
         };
         match &result {
-            Ok((wall, lung_wall, t, err)) => {
+            Ok((wall, lung_wall, t, err, late)) => {
                 let s = t.statics.unwrap_or_default();
                 println!(
-                    "{:<12} {:>6.0e} {:>9.4} {:>9.4} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10.3e} {:>11.3e}",
+                    "{:<12} {:>6.0e} {:>9.4} {:>9.4} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10.3e} {:>11.3e} {:>10.3e} {:>11.3e}",
                     Method::QuasiStatic.name(),
                     rtol,
                     wall,
@@ -978,7 +1000,9 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
                     s.iterations,
                     s.factorisations,
                     err.lung,
-                    err.markers * 1e3
+                    err.markers * 1e3,
+                    late.lung,
+                    late.markers * 1e3
                 )
             }
             Err(reason) => println!("{:<12} {:>6.0e} {reason}", Method::QuasiStatic.name(), rtol),
@@ -987,16 +1011,16 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
     }
     let mut csv = String::from(
         "method,rtol,atol,status,wall_s,wall_lung_only_s,rhs_evaluations,steps,lung_error_l,\
-         marker_error_m,static_solves,newton_iterations,jacobians,factorisations,residuals,\
-         continuations\n",
+         marker_error_m,lung_error_settled_l,marker_error_settled_m,static_solves,\
+         newton_iterations,jacobians,factorisations,residuals,continuations\n",
     );
     for p in &points {
         let atol = p.rtol * 1e-2;
         match &p.result {
-            Ok((wall, lung_wall, t, err)) => {
+            Ok((wall, lung_wall, t, err, late)) => {
                 let s = t.statics.unwrap_or_default();
                 csv.push_str(&format!(
-                    "{},{:e},{:e},ok,{wall},{lung_wall},{},{},{:e},{:e},{},{},{},{},{},{}\n",
+                    "{},{:e},{:e},ok,{wall},{lung_wall},{},{},{:e},{:e},{:e},{:e},{},{},{},{},{},{}\n",
                     Method::QuasiStatic.name(),
                     p.rtol,
                     atol,
@@ -1004,6 +1028,8 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
                     t.steps,
                     err.lung,
                     err.markers,
+                    late.lung,
+                    late.markers,
                     s.solves,
                     s.iterations,
                     s.jacobians,
@@ -1013,7 +1039,7 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
                 ))
             }
             Err(reason) => csv.push_str(&format!(
-                "{},{:e},{:e},\"{}\",,,,,,,,,,,,\n",
+                "{},{:e},{:e},\"{}\",,,,,,,,,,,,,,\n",
                 Method::QuasiStatic.name(),
                 p.rtol,
                 atol,
@@ -1031,7 +1057,7 @@ fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
         points
             .iter()
             .filter_map(|p| p.result.as_ref().ok())
-            .map(|(wall, _, _, err)| {
+            .map(|(wall, _, _, err, _)| {
                 let e = if lung { err.lung } else { err.markers * 1e3 };
                 (wall.max(1e-9).log10(), e.max(1e-16).log10())
             })
