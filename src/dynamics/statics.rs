@@ -632,16 +632,20 @@ impl Statics {
         let mut theta = self.theta;
         let mut last = f64::INFINITY;
         for _ in 0..MAX_ITERATIONS {
-            let (_, vt) = self.residual(model, data, act, self.pleural);
-            let c = vt - target;
-            if !c.is_finite() || self.dy.iter().any(|v| !v.is_finite()) {
+            let (_, mut vt) = self.residual(model, data, act, self.pleural);
+            if !vt.is_finite() || self.dy.iter().any(|v| !v.is_finite()) {
                 return Err(StaticsError::NonFinite);
             }
             if self.factored_at.is_none() {
                 let y = self.y.clone();
                 self.factor_at(model, data, &y, self.pleural, act)?;
                 fresh = true;
+                // the factorisation's differences use `dy` as scratch and leave there the
+                // residual at the pleural pressure plus 1 Pa (the unit-pressure column):
+                // evaluated again, or the step would set the pressure 1 Pa low
+                (_, vt) = self.residual(model, data, act, self.pleural);
             }
+            let c = vt - target;
             let l = self.l;
             // a = J_aug^-1 (-R + rho u_T c)
             for (i, a) in self.a.iter_mut().enumerate() {
