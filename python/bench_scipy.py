@@ -382,11 +382,14 @@ def measure_quasi(lib, parameters, method, rtol, t_eval, ref_lung, ref_markers, 
             except OverCap:
                 row["status"] = f"skipped: over the {cap:g} s time cap"
                 return row
-            except RuntimeError as e:
+            except (RuntimeError, ValueError) as e:  # a C ABI error; NaN in a Jacobian (BDF, Radau)
                 row["status"] = f"failed: {e}"
                 return row
             if sol.status != 0:
                 row["status"] = f"failed: {sol.message}"
+                return row
+            if not np.all(np.isfinite(sol.y)):
+                row["status"] = f"failed: non-finite lung volume ({handle.failures} failed right-hand sides)"
                 return row
             walls.append(wall)
             cpus.append(run_scipy.cpu)
