@@ -492,7 +492,9 @@ int bt_reset(struct BtTorso *h);
 /**
  * For external integrators: the dimension n of the model's first-order state y (layout in
  * the crate's `dynamics::Layout`: rib angles and rates, sternum pose and velocity, abdominal
- * vertex positions and velocities).
+ * vertex positions and velocities). In quasi-static mode (`solver_method` 4) y holds the
+ * positions of the last equilibrium solved and `bt_rhs` is not available: the integrated
+ * state is the lung volume alone (`bt_quasi_rate`, `bt_quasi_set_volume`).
  *
  * # Safety
  * `h` must be NULL or a live handle; `n` NULL or writable.
@@ -529,6 +531,36 @@ int bt_set_state(struct BtTorso *h, double t, const double *y, size_t n);
  * writable doubles.
  */
 int bt_rhs(struct BtTorso *h, double t, const double *y, double *dydt, size_t n);
+
+/**
+ * For external integrators in quasi-static mode (`solver_method` 4), the reduced
+ * right-hand side: the airflow into the lungs dV_L/dt [L/s] at time `t` and lung volume
+ * `lung_volume` [L] (the mode's only state; start from `bt_read(h, BT_VR_VOLUME_LUNG, ..)`),
+ * with the current activation inputs plus the built-in drive at `t`: the function the
+ * library's own integrator steps (docs/dynamics.md, "Quasi-static mechanics"). Each call
+ * solves the static equilibrium of the chest wall holding that volume, warm-started from the
+ * last one solved. The model's time, lung volume and inputs do not change. Returns
+ * `BT_ERR_STATE` in the other modes (their state is `bt_state_dim` long: use `bt_rhs`),
+ * `BT_ERR_INVALID` for a non-finite `t` or a volume not above 0, and `BT_ERR_NUMERICAL` when
+ * the equilibrium cannot be solved (the message names the reason, subject, posture and
+ * activations; `rate` is then not written).
+ *
+ * # Safety
+ * `h` must be NULL or a live handle; `rate` NULL or writable.
+ */
+int bt_quasi_rate(struct BtTorso *h, double t, double lung_volume, double *rate);
+
+/**
+ * For external integrators in quasi-static mode (`solver_method` 4): sets the model to time
+ * `t` and lung volume `lung_volume` [L], so that what is read afterwards (`bt_read`,
+ * `bt_read_markers`) is that of the chest wall's equilibrium holding that volume under the
+ * activations applied at `t` (solved when first read), and the next `bt_advance_to`
+ * continues from it. Errors as `bt_quasi_rate`'s; on error nothing changes.
+ *
+ * # Safety
+ * `h` must be NULL or a live handle.
+ */
+int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 
 #ifdef __cplusplus
 }  // extern "C"

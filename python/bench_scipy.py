@@ -33,6 +33,23 @@ the C call, so they include the finite-difference Jacobian columns; scipy's own 
 
 The script may start as soon as the reference file exists (the Rust bench writes it before its
 sweep); `--plot-only` redraws the combined plot and tables once both have finished.
+
+`--formulation quasi-static` does the same for the quasi-static mode (`solver.method` 4), whose
+state is the lung volume alone: the reference is the library's own run at rtol 1e-10
+(`work_precision_<scenario>_quasi_static_reference.csv`, from `torso bench work-precision
+--formulation quasi-static`), scipy integrates the reduced right-hand side `bt_quasi_rate`
+(one static equilibrium of the chest wall per call; a call whose equilibrium fails returns NaN,
+which makes every method shorten its step, as the library's own integrator does), and the
+markers of a frame are read off `bt_quasi_set_volume`. Each run gets a fresh handle built with
+that `solver.rtol`, so that the static solves are converged as tightly as in the library's own
+run at the same tolerance and start from the same state (the static solver warm-starts from the
+handle's history; build time excluded from the wall time). The plot and
+the matched-error tables compare solve_ivp's wall time with the library's runs reading the lung
+volume alone (`wall_lung_only_s` of the Rust CSV): reading the markers solves one equilibrium
+per frame on either side (`frames_s`, recorded apart).
+
+    target/release/torso bench work-precision --formulation quasi-static --lod 1 --out out/bench
+    .venv/bin/python python/bench_scipy.py --formulation quasi-static --dir out/bench --rtols 1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9
 """
 
 import argparse
@@ -100,6 +117,8 @@ def load_library(path=LIB):
     lib.bt_read_markers.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
                                     ctypes.POINTER(ctypes.c_size_t)]
     lib.bt_advance_to.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p]
+    lib.bt_quasi_rate.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, DOUBLE_P]
+    lib.bt_quasi_set_volume.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double]
     return lib
 
 
@@ -168,6 +187,52 @@ class Torso:
         return v.value, xyz.reshape(-1, 3)
 
 
+BT_ERR_NUMERICAL = -3
+
+
+class QuasiTorso(Torso):
+    """A quasi-static handle (`solver.method` 4) seen as V_L' = f(t, V_L) for scipy: the state is
+    the lung volume [L] alone (`bt_quasi_rate`), and a frame is read off `bt_quasi_set_volume`."""
+
+    def __init__(self, lib, parameters):
+        super().__init__(lib, {**parameters, "solver.method": 4})
+        self.n = 1
+        self.failures = 0
+
+    def state(self):
+        """The model's current lung volume [L], as a 1-vector."""
+        v = ctypes.c_double()
+        self._check(self.lib.bt_read_by_name(self.h, b"volume.lung", ctypes.byref(v)))
+        return np.array([v.value])
+
+    def rhs(self, t, y):
+        """dV_L/dt through `bt_quasi_rate`; NaN (a rejected step) when the equilibrium fails or a
+        stage's volume is not a volume (after a NaN stage, or an excursion below zero)."""
+        if time.perf_counter() > self.deadline:
+            raise OverCap()
+        if not (math.isfinite(y[0]) and y[0] > 0.0):
+            self.failures += 1
+            return np.array([math.nan])
+        rate = ctypes.c_double()
+        rc = self.lib.bt_quasi_rate(self.h, float(t), float(y[0]), ctypes.byref(rate))
+        self.calls += 1
+        if rc == BT_ERR_NUMERICAL:
+            self.failures += 1
+            return np.array([math.nan])
+        if rc != 0:
+            self._check(rc)
+        return np.array([rate.value])
+
+    def read_frame(self, t, y):
+        """Lung volume [L] and markers [m] (m x 3) of lung volume y[0] at time t."""
+        self._check(self.lib.bt_quasi_set_volume(self.h, float(t), float(y[0])))
+        v = ctypes.c_double()
+        self._check(self.lib.bt_read_by_name(self.h, b"volume.lung", ctypes.byref(v)))
+        xyz = np.empty(3 * self.markers_n)
+        self._check(self.lib.bt_read_markers(self.h, xyz.ctypes.data, xyz.size, None))
+        return v.value, xyz.reshape(-1, 3)
+
+
 def load_reference(path):
     """(scene dict, frame times, lung volumes, markers[frame, marker, 3]) of a reference CSV."""
     with open(path) as f:
@@ -184,13 +249,21 @@ def scene_parameters(scene):
     return {k: float(v) for k, v in scene.items() if "." in k}
 
 
+SETTLED = 0.5  # [s]: the errors are also reported from here on (as the Rust quasi-static sweep does)
+
+
 def errors(torso, t_eval, ys, ref_lung, ref_markers):
-    """Max over frames of |lung - reference| [L] and of the marker distance [m]."""
-    lung_err = marker_err = 0.0
+    """Max over frames of |lung - reference| [L] and of the marker distance [m]; the same from
+    SETTLED s on are kept in `errors.settled`."""
+    lung_err = marker_err = late_lung = late_marker = 0.0
     for i, t in enumerate(t_eval):
         lung, markers = torso.read_frame(t, ys[:, i])
-        lung_err = max(lung_err, abs(lung - ref_lung[i]))
-        marker_err = max(marker_err, float(np.max(np.linalg.norm(markers - ref_markers[i], axis=1))))
+        dl = abs(lung - ref_lung[i])
+        dm = float(np.max(np.linalg.norm(markers - ref_markers[i], axis=1)))
+        lung_err, marker_err = max(lung_err, dl), max(marker_err, dm)
+        if t >= SETTLED - 1e-9:
+            late_lung, late_marker = max(late_lung, dl), max(late_marker, dm)
+    errors.settled = (late_lung, late_marker)
     return lung_err, marker_err
 
 
@@ -210,7 +283,7 @@ def run_scipy(torso, method, rtol, t_eval, cap):
     return wall, torso.calls, sol
 
 
-NATIVE = {"dopri5": 0, "bs3": 1, "high-order": 2}
+NATIVE = {"dopri5": 0, "bs3": 1, "high-order": 2, "quasi-static": 4}
 
 
 def run_native(lib, parameters, method, rtol, t_eval, cap):
@@ -273,6 +346,9 @@ def measure(torso, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
         except OverCap:
             row["status"] = f"skipped: over the {cap:g} s time cap"
             return row
+        except RuntimeError as e:  # a C ABI error (e.g. a NaN time after a failed first equilibrium)
+            row["status"] = f"failed: {e}"
+            return row
         if sol.status != 0:
             row["status"] = f"failed: {sol.message}"
             return row
@@ -280,11 +356,55 @@ def measure(torso, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
         cpus.append(run_scipy.cpu)
         if wall > 5.0:
             break
+    start = time.perf_counter()
     lung_err, marker_err = errors(torso, t_eval, sol.y, ref_lung, ref_markers)
+    row["frames_s"] = time.perf_counter() - start
+    row["lung_error_settled_l"], row["marker_error_settled_m"] = errors.settled
     row.update(status="ok", wall_s=statistics.median(walls), cpu_s=statistics.median(cpus), runs=len(walls),
                rhs_evaluations=calls,
                nfev=sol.nfev, njev=sol.njev, nlu=sol.nlu, lung_error_l=lung_err,
                marker_error_m=marker_err)
+    return row
+
+
+def measure_quasi(lib, parameters, method, rtol, t_eval, ref_lung, ref_markers, repeats, cap):
+    """A CSV row (dict) for scipy's `method` on the reduced right-hand side at `rtol`: every repeat
+    on a fresh handle built with that `solver.rtol` (the static solver's warm start is the
+    handle's history, so a second run on the same handle would start from the first's end), the
+    errors read off the last."""
+    row = {"method": f"scipy-{method}", "rtol": rtol, "atol": rtol * 1e-2}
+    walls, cpus, failures = [], [], 0
+    for k in range(repeats):
+        handle = QuasiTorso(lib, {**parameters, "solver.rtol": rtol, "solver.atol": rtol * 1e-2})
+        try:
+            try:
+                wall, calls, sol = run_scipy(handle, method, rtol, t_eval, cap)
+            except OverCap:
+                row["status"] = f"skipped: over the {cap:g} s time cap"
+                return row
+            except (RuntimeError, ValueError) as e:  # a C ABI error; NaN in a Jacobian (BDF, Radau)
+                row["status"] = f"failed: {e}"
+                return row
+            if sol.status != 0:
+                row["status"] = f"failed: {sol.message}"
+                return row
+            if not np.all(np.isfinite(sol.y)):
+                row["status"] = f"failed: non-finite lung volume ({handle.failures} failed right-hand sides)"
+                return row
+            walls.append(wall)
+            cpus.append(run_scipy.cpu)
+            failures = handle.failures
+            if k == repeats - 1 or wall > 5.0:
+                start = time.perf_counter()
+                lung_err, marker_err = errors(handle, t_eval, sol.y, ref_lung, ref_markers)
+                row["frames_s"] = time.perf_counter() - start
+                row["lung_error_settled_l"], row["marker_error_settled_m"] = errors.settled
+                break
+        finally:
+            handle.close()
+    row.update(status="ok", wall_s=statistics.median(walls), cpu_s=statistics.median(cpus), runs=len(walls),
+               rhs_evaluations=calls, nfev=sol.nfev, njev=sol.njev, nlu=sol.nlu, lung_error_l=lung_err,
+               marker_error_m=marker_err, failed_rhs=failures)
     return row
 
 
@@ -304,8 +424,10 @@ def series(rows, label_key="method"):
         if r.get("status") != "ok":
             continue
         setting = r.get("rtol") or r.get("step_s")
+        # the quasi-static bench's own runs: the wall time reading the lung volume alone, as
+        # solve_ivp's is measured (the markers are read outside its clock)
         out.setdefault(r[label_key], []).append(
-            (float(r["wall_s"]), float(r["rhs_evaluations"]), float(r["lung_error_l"]),
+            (float(r.get("wall_lung_only_s") or r["wall_s"]), float(r["rhs_evaluations"]), float(r["lung_error_l"]),
              float(r["marker_error_m"]), setting, float(r.get("cpu_s") or "nan")))
     return out
 
@@ -375,19 +497,27 @@ def main(argv=None):
     ap.add_argument("--sparsity", action="store_true", help="measure the Jacobian's fill at the rest state")
     ap.add_argument("--plot-only", action="store_true",
                     help="run nothing: redraw the plot and tables from the CSVs already in --dir")
+    ap.add_argument("--formulation", default="inertial", choices=["inertial", "quasi-static"],
+                    help="quasi-static: scipy on the reduced right-hand side bt_quasi_rate, against the "
+                         "quasi-static reference (--native defaults to none; quasi-static runs it from here)")
     args = ap.parse_args(argv)
+    quasi = args.formulation == "quasi-static"
+    if quasi and args.native == "dopri5":
+        # the Rust bench's rows are the library's own runs, timed reading the lung volume alone
+        args.native = ""
+    suffix = "_quasi_static" if quasi else ""
     if args.plot_only:
-        name = f"work_precision_{args.scenario}"
+        name = f"work_precision_{args.scenario}{suffix}"
         out = pathlib.Path(args.dir)
         with open(out / f"{name}_reference.csv") as f:
             scene = dict(kv.split("=", 1) for kv in f.readline()[1:].split())
         return report(out, name, args, scene, read_rows(out / f"{name}_scipy.csv"))
 
     out = pathlib.Path(args.dir)
-    name = f"work_precision_{args.scenario}"
+    name = f"work_precision_{args.scenario}{suffix}"
     scene, t_eval, ref_lung, ref_markers = load_reference(out / f"{name}_reference.csv")
     lib = load_library(args.lib)
-    torso = Torso(lib, scene_parameters(scene))
+    torso = (QuasiTorso if quasi else Torso)(lib, scene_parameters(scene))
     print(f"{args.scenario} breathing, {scene['duration']} s, level of detail "
           f"{scene['scene.level_of_detail']}, state length {torso.n}, {len(t_eval)} frames; "
           f"reference {scene['method']} rtol {scene['rtol']} from {out / (name + '_reference.csv')}")
@@ -406,6 +536,13 @@ def main(argv=None):
             elif kind == "native":
                 row = measure_native(lib, scene_parameters(scene), method, rtol, t_eval, ref_lung, ref_markers,
                                      args.repeats, args.cap)
+            elif quasi:
+                row = measure_quasi(lib, scene_parameters(scene), method, rtol, t_eval, ref_lung, ref_markers,
+                                    args.repeats, args.cap)
+                # a failure at one tolerance (the start's equilibrium at rtol 1e-3) says nothing of
+                # the tighter ones; a run over the cap does
+                if row["status"].startswith("skipped"):
+                    skip = "skipped: a looser tolerance did not finish"
             else:
                 row = measure(torso, method, rtol, t_eval, ref_lung, ref_markers, args.repeats, args.cap)
                 if row["status"] != "ok":
@@ -426,7 +563,8 @@ def main(argv=None):
 def report(out, name, args, scene, rows):
     """Writes the scipy CSV, the combined plot and prints the matched-error tables."""
     fields = ["method", "rtol", "atol", "status", "wall_s", "cpu_s", "runs", "rhs_evaluations", "nfev", "njev", "nlu",
-              "lung_error_l", "marker_error_m"]
+              "lung_error_l", "marker_error_m", "lung_error_settled_l", "marker_error_settled_m", "failed_rhs",
+              "frames_s"]
     csv_path = out / f"{name}_scipy.csv"
     with open(csv_path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
@@ -438,9 +576,15 @@ def report(out, name, args, scene, rows):
     all_series.update(series(read_rows(out / f"{name}_fixed.csv")))
     all_series.update(series([{**r, "rtol": f"{float(r['rtol']):g}"} for r in rows]))
     png = out / f"{name}_combined.png"
-    plot(all_series, png, f"Work-precision, {args.scenario} breathing, level of detail "
-                          f"{scene['scene.level_of_detail']}: our solvers, scipy solve_ivp on the same RHS "
-                          f"(C ABI), semi-implicit Euler")
+    if args.formulation == "quasi-static":
+        title = (f"Work-precision, {args.scenario} breathing, quasi-static, level of detail "
+                 f"{scene['scene.level_of_detail']}: our Dormand-Prince 5(4), scipy solve_ivp on the same "
+                 f"reduced RHS (bt_quasi_rate)")
+    else:
+        title = (f"Work-precision, {args.scenario} breathing, level of detail "
+                 f"{scene['scene.level_of_detail']}: our solvers, scipy solve_ivp on the same RHS "
+                 f"(C ABI), semi-implicit Euler")
+    plot(all_series, png, title)
     print(f"wrote {csv_path} and {png}")
 
     for target in (float(x) for x in args.targets.split(",")):
@@ -455,7 +599,7 @@ def report(out, name, args, scene, rows):
             print(f"{s_name:<20} {fast[4]:>17} {fast[0]:>9.3f} {fast[5]:>8.3f} {fast[1]:>9.0f}   "
                   f"{few[4]:>20} {few[1]:>9.0f} "
                   f"{few[0]:>9.3f}")
-        for base in ("dopri5", "native-dopri5"):
+        for base in ("dopri5", "native-dopri5", "quasi-static", "native-quasi-static"):
             ours = table.get(base, (None, None, None))
             if ours[0] is None:
                 continue

@@ -75,6 +75,7 @@ fn committed_header_is_current() {
         "bt_advance_to",
         "bt_read_markers",
         "bt_rhs",
+        "bt_quasi_rate",
         "BT_VR_VOLUME_LUNG",
         "BT_VR_MARKER(i, axis)",
     ] {

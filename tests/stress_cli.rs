@@ -118,6 +118,60 @@ fn bench_work_precision_writes_every_combination_and_a_plot() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// The quasi-static sweep: one row per tolerance with the static solves' counts, the
+/// reference's frames with the scene (`solver.method=4`) for external integrators, a plot.
+#[test]
+fn bench_work_precision_quasi_static_writes_every_tolerance() {
+    let dir = scratch("wpq");
+    torso(&[
+        "bench",
+        "work-precision",
+        "--formulation",
+        "quasi-static",
+        "--duration",
+        "0.25",
+        "--repeats",
+        "1",
+        "--lod",
+        "0",
+        "--out",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    let csv =
+        std::fs::read_to_string(dir.join("work_precision_quiet_quasi_static.csv")).expect("csv");
+    let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 7, "rtol 1e-3 .. 1e-9:\n{csv}");
+    for row in rows.iter().filter(|r| r[col("status")] == "ok") {
+        let solves: u64 = row[col("static_solves")].parse().expect("solves");
+        let rhs: u64 = row[col("rhs_evaluations")].parse().expect("rhs");
+        // every right-hand side is a static solve, and every frame read one more
+        assert!(solves >= rhs, "{row:?}");
+        let lung: f64 = row[col("lung_error_l")].parse().expect("lung error");
+        assert!(lung.is_finite() && lung >= 0.0, "{row:?}");
+    }
+    let tightest = &rows[6];
+    assert_eq!(tightest[col("status")], "ok", "{tightest:?}");
+    let reference =
+        std::fs::read_to_string(dir.join("work_precision_quiet_quasi_static_reference.csv"))
+            .expect("reference");
+    assert!(
+        reference
+            .lines()
+            .next()
+            .expect("scene")
+            .contains("solver.method=4")
+    );
+    assert!(dir.join("work_precision_quiet_quasi_static.png").exists());
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn bench_rejects_bad_arguments() {
     let out = Command::new(env!("CARGO_BIN_EXE_torso"))
@@ -138,6 +192,16 @@ fn bench_rejects_bad_arguments() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("--scene") && err.contains("stiff-cartilage"),
+        "{err}"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "work-precision", "--formulation", "lagrangian"])
+        .output()
+        .expect("torso runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--formulation") && err.contains("quasi-static"),
         "{err}"
     );
 }

@@ -8,9 +8,11 @@
 
 pub mod fmu;
 pub mod reduced;
+pub mod relaxation;
 pub mod stress;
 
 use crate::anatomy::{MuscleGroup, Posture, SUBJECT_RANGES, Sex, Subject};
+use crate::dynamics::statics::StaticsStats;
 use crate::dynamics::{Layout, RIBS};
 use crate::model::{AdvanceOptions, Config, Drive, Quantity, Torso, Wave};
 use crate::solver::{Ode, SecondOrder, SemiImplicitEuler};
@@ -178,6 +180,8 @@ pub struct Trajectory {
     pub stiffness_detected: bool,
     /// Accepted steps at which the stiffness test fired.
     pub stiff_steps: u64,
+    /// Work counts of the static solves (quasi-static mode; `None` in the others).
+    pub statics: Option<StaticsStats>,
 }
 
 /// Runs `config` for `duration` seconds, recording lung volume and markers at
@@ -192,6 +196,7 @@ pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Tra
         markers: Vec::with_capacity(frames + 1),
         ..Trajectory::default()
     };
+    let statics_before = torso.statics_stats();
     let start = Instant::now();
     for i in 0..=frames {
         if i > 0 {
@@ -210,7 +215,36 @@ pub fn trajectory(config: &Config, duration: f64, cap: f64) -> Result<Option<Tra
     out.steps = stats.steps;
     out.stiff_steps = stats.stiff_steps;
     out.stiffness_detected = torso.stiffness_detected();
+    out.statics = torso
+        .statics_stats()
+        .zip(statics_before)
+        .map(|(a, b)| StaticsStats {
+            solves: a.solves - b.solves,
+            iterations: a.iterations - b.iterations,
+            jacobians: a.jacobians - b.jacobians,
+            factorisations: a.factorisations - b.factorisations,
+            residuals: a.residuals - b.residuals,
+            continuations: a.continuations - b.continuations,
+        });
     Ok(Some(out))
+}
+
+/// Wall time [s] of [`trajectory`]'s frame loop reading the lung volume alone (no markers),
+/// and its right-hand-side evaluations: in quasi-static mode no position is solved then,
+/// so this is the integration's own cost, as an external integrator's is measured.
+pub fn lung_loop(config: &Config, duration: f64) -> Result<(f64, u64)> {
+    let mut torso = Torso::new(config.clone())?;
+    let frames = (duration * FRAME_RATE).round() as usize;
+    let before = torso.solver_stats().rhs_evaluations;
+    let start = Instant::now();
+    let mut checksum = torso.read(Quantity::LungVolume)?;
+    for i in 1..=frames {
+        torso.advance_to(i as f64 / FRAME_RATE)?;
+        checksum += torso.read(Quantity::LungVolume)?;
+    }
+    let wall = start.elapsed().as_secs_f64();
+    black_box(checksum);
+    Ok((wall, torso.solver_stats().rhs_evaluations - before))
 }
 
 /// The torso seen as a second-order system for [`SemiImplicitEuler`]: the configuration is

@@ -7,15 +7,19 @@
 //!   volume, marker positions) for every method and tolerance, against a high-order
 //!   reference at rtol 1e-12, and for a fixed-step semi-implicit Euler at a range of step
 //!   sizes; CSV (and the reference frames, for external integrators to compare against) and
-//!   a log-log PNG;
+//!   a log-log PNG; with `--formulation quasi-static`, the quasi-static mode at rtol 1e-3 ..
+//!   1e-9 against its own rtol 1e-10 run, with the static solves' work counts;
 //! - `soak`: many random scenes from the declared parameter ranges, each simulated for a
 //!   minute: no NaN, no blow-up, every numerical failure listed;
+//! - `relaxation`: the relaxed chest wall's and respiratory system's static pressure-volume
+//!   curves from RV to TLC, their compliances over the tidal range and relaxation volumes,
+//!   beside the cited adult figures;
 //! - `report`: the headline figures of one run, written as BENCHMARKS.md
 //!   (`src/cli/bench_report.rs`).
 
 use crate::bench::{
     FRAME_RATE, FrameRun, Reads, RhsCost, SceneOutcome, Trajectory, TrajectoryError, frame_loop,
-    median, random_scene, rhs_cost, stress_scene, trajectory, trajectory_error,
+    lung_loop, median, random_scene, rhs_cost, stress_scene, trajectory, trajectory_error,
     trajectory_semi_implicit,
 };
 use crate::model::{Config, Drive};
@@ -41,6 +45,8 @@ pub enum BenchCommand {
     Stress(super::bench_stress::StressArgs),
     /// What the FMU's instance adds per communication step, against the model facade.
     Fmu(FmuArgs),
+    /// The relaxed chest wall's and respiratory system's pressure-volume curves.
+    Relaxation(RelaxationArgs),
     /// The current headline figures from one run, as a markdown file stamped with the
     /// commit and the machine, each table with the command that reproduces it.
     Report(super::bench_report::ReportArgs),
@@ -107,6 +113,11 @@ pub struct WorkPrecisionArgs {
     /// high-bulk (abdominal bulk modulus 10x) or fine-mesh (level of detail 2).
     #[arg(long, default_value = "default")]
     pub scene: String,
+    /// Formulation: inertial (every method against a high-order rtol 1e-12 reference, and
+    /// the semi-implicit Euler) or quasi-static (the quasi-static mode at rtol 1e-3 .. 1e-9
+    /// against its own rtol 1e-10 run, with the static solves' work counts).
+    #[arg(long, default_value = "inertial")]
+    pub formulation: String,
 }
 
 /// Options of `torso bench soak`.
@@ -147,6 +158,82 @@ pub struct FmuArgs {
     /// ODE solver: dopri5, bs3, high-order, rosenbrock or quasi-static.
     #[arg(long = "solver", default_value = "dopri5")]
     pub solver: String,
+}
+
+/// Options of `torso bench relaxation`.
+#[derive(Args, Debug)]
+pub struct RelaxationArgs {
+    /// Level of detail.
+    #[arg(long, default_value_t = 1)]
+    pub lod: u32,
+    /// Postures, comma-separated: standing, sitting, supine.
+    #[arg(long, default_value = "standing,supine")]
+    pub posture: String,
+    /// Volumes from RV to TLC.
+    #[arg(long, default_value_t = 25)]
+    pub points: usize,
+    /// Print every point of the curves.
+    #[arg(long)]
+    pub curves: bool,
+}
+
+/// Runs `torso bench relaxation`: the default subject's curves in each posture.
+fn relaxation(args: &RelaxationArgs) -> Result<()> {
+    use crate::anatomy::Posture;
+    use crate::bench::relaxation::{CMH2O, TIDAL_RANGE, relaxation};
+    if args.lod > 2 {
+        return Err(Error::invalid("--lod", args.lod, "0, 1 or 2"));
+    }
+    println!(
+        "relaxed chest wall (pleural pressure, airway shut) and respiratory system (alveolar \
+         pressure), default subject, level of detail {}, quasi-static equilibria; compliance \
+         over FRC to FRC + {TIDAL_RANGE} L; adult figures: chest wall 0.2 L/cmH2O (Agostoni & \
+         Mead 1964; Estenne et al. 1985: 0.166 seated, 0.158 supine), system about 0.1 \
+         L/cmH2O, chest wall relaxed near 55-60 % of vital capacity, pleural pressure about \
+         -5 cmH2O at FRC",
+        args.lod
+    );
+    for name in args.posture.split(',') {
+        let posture = Posture::from_name(name.trim())
+            .map_err(|_| Error::invalid("--posture", name, "standing, sitting or supine"))?;
+        let mut config = Config::default();
+        config.scene.level_of_detail = args.lod;
+        config.subject.posture = posture;
+        let r = relaxation(&config, args.points)?;
+        let pct = |f: Option<f64>| f.map_or("none".to_string(), |f| format!("{:.1} %", 100.0 * f));
+        println!(
+            "{posture:?}: RV {:.3} L, FRC {:.3} L, TLC {:.3} L; C_cw {:.4} L/cmH2O, C_rs {:.4} \
+             L/cmH2O; chest wall relaxed at {} of VC, system at {} of VC; pleural pressure at \
+             FRC {:.2} cmH2O; curve {:.3}-{:.3} L ({} points){}",
+            r.rv,
+            r.frc,
+            r.tlc,
+            r.chest_wall_compliance,
+            r.system_compliance,
+            pct(r.chest_wall_relaxation),
+            pct(r.system_relaxation),
+            r.pleural_at_frc / CMH2O,
+            r.points.first().map_or(f64::NAN, |p| p.lung),
+            r.points.last().map_or(f64::NAN, |p| p.lung),
+            r.points.len(),
+            r.failed
+                .iter()
+                .map(|(v, e)| format!("; no equilibrium at {v:.3} L: {e}"))
+                .collect::<String>()
+        );
+        if args.curves {
+            println!("  lung [L]   P_cw [cmH2O]   P_rs [cmH2O]");
+            for p in &r.points {
+                println!(
+                    "  {:8.3}   {:12.3}   {:12.3}",
+                    p.lung,
+                    p.chest_wall / CMH2O,
+                    p.system / CMH2O
+                );
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The solver named by `--solver`.
@@ -199,6 +286,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Soak(a) => soak(&a),
         BenchCommand::Stress(a) => super::bench_stress::run(&a),
         BenchCommand::Fmu(a) => fmu(&a),
+        BenchCommand::Relaxation(a) => relaxation(&a),
         BenchCommand::Report(a) => super::bench_report::run(&a),
     }
 }
@@ -433,6 +521,17 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     if args.scene != "default" {
         base.params = Some(params);
     }
+    match args.formulation.as_str() {
+        "inertial" => {}
+        "quasi-static" => return work_precision_quasi(args, &base),
+        other => {
+            return Err(Error::invalid(
+                "--formulation",
+                other,
+                "inertial or quasi-static",
+            ));
+        }
+    }
     let mut rc = base.clone();
     rc.solver.method = Method::HighOrder;
     rc.solver.rtol = 1e-12;
@@ -463,7 +562,13 @@ fn work_precision(args: &WorkPrecisionArgs) -> Result<()> {
     })?;
     // written now, so that an external integrator can be scored while the sweep runs
     let reference_path = args.out.join(format!("{name}_reference.csv"));
-    write_reference(&reference_path, args, &base, &reference)?;
+    write_reference(
+        &reference_path,
+        args,
+        &base,
+        &reference,
+        &format!("method={} rtol=1e-12 atol=1e-14", Method::HighOrder.name()),
+    )?;
     println!("reference frames: {}", reference_path.display());
     let rtols: Vec<f64> = (3..=10).map(|k| 10f64.powi(-k)).collect();
     let mut points = Vec::new();
@@ -799,19 +904,21 @@ fn write_reference(
     args: &WorkPrecisionArgs,
     base: &Config,
     reference: &Trajectory,
+    run: &str,
 ) -> Result<()> {
     use std::fmt::Write as _;
     let markers = reference.markers.first().map_or(0, Vec::len);
     let d = &base.drive;
     let mut s = format!(
-        "# scenario={} duration={} frame_rate={} method={} rtol=1e-12 atol=1e-14 \
-         rhs_evaluations={} scene.level_of_detail={} drive.frequency={}",
+        "# scenario={} formulation={} duration={} frame_rate={} {run} \
+         rhs_evaluations={} scene.level_of_detail={} solver.method={} drive.frequency={}",
         args.scenario,
+        args.formulation,
         args.duration,
         FRAME_RATE,
-        Method::HighOrder.name(),
         reference.rhs_evaluations,
         base.scene.level_of_detail,
+        base.solver.method.code(),
         d.frequency
     );
     for (group, w) in [
@@ -911,5 +1018,280 @@ fn soak(args: &SoakArgs) -> Result<()> {
             args.scenes
         )));
     }
+    Ok(())
+}
+
+/// One run of the quasi-static work-precision sweep.
+#[derive(Debug, Clone)]
+struct QuasiPoint {
+    rtol: f64,
+    /// Median wall times [s] with the markers read every frame and with the lung volume
+    /// alone, the last run's trajectory, its errors over every frame and over the frames
+    /// from [`SETTLED`] s on; or why not.
+    result: std::result::Result<(f64, f64, Trajectory, TrajectoryError, TrajectoryError), String>,
+}
+
+/// Time [s] after which the quasi-static sweep also reports the errors: the first step's
+/// error decays with the airway time constant (about 0.1 s), so from 0.5 s on what is left is
+/// the integration's along the breath.
+const SETTLED: f64 = 0.5;
+
+/// The frames of `t` from [`SETTLED`] s on.
+fn settled(t: &Trajectory) -> Trajectory {
+    let first = ((SETTLED * FRAME_RATE).round() as usize).min(t.lung.len());
+    Trajectory {
+        lung: t.lung[first..].to_vec(),
+        markers: t.markers[first.min(t.markers.len())..].to_vec(),
+        ..Trajectory::default()
+    }
+}
+
+/// `torso bench work-precision --formulation quasi-static`: the quasi-static mode at rtol
+/// 1e-3 .. 1e-9 (atol rtol / 100, on the lung volume in litres) against its own run at rtol
+/// 1e-10 (atol 1e-12), reading the lung volume and the markers every frame; the reference's
+/// frames are written for `python/bench_scipy.py --formulation quasi-static`, which
+/// integrates the same reduced right-hand side (`bt_quasi_rate`) with scipy.
+fn work_precision_quasi(args: &WorkPrecisionArgs, base: &Config) -> Result<()> {
+    let mut base = base.clone();
+    base.solver.method = Method::QuasiStatic;
+    let mut rc = base.clone();
+    rc.solver.rtol = 1e-10;
+    rc.solver.atol = 1e-12;
+    rc.validate()?;
+    println!(
+        "{} breathing ({} scene), {} s, level of detail {}: reference quasi-static rtol 1e-10 atol 1e-12 ...",
+        args.scenario, args.scene, args.duration, base.scene.level_of_detail
+    );
+    let reference = trajectory(&rc, args.duration, f64::INFINITY)?
+        .ok_or_else(|| Error::State("reference run abandoned".into()))?;
+    let rs = reference.statics.unwrap_or_default();
+    println!(
+        "reference: {:.2} s, {} steps, {} RHS evaluations, {} static solves, {} Newton iterations",
+        reference.wall, reference.steps, reference.rhs_evaluations, rs.solves, rs.iterations
+    );
+    let name = if args.scene == "default" {
+        format!("work_precision_{}_quasi_static", args.scenario)
+    } else {
+        format!(
+            "work_precision_{}_{}_quasi_static",
+            args.scenario, args.scene
+        )
+    };
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::Io {
+        path: args.out.clone(),
+        source: e,
+    })?;
+    let reference_path = args.out.join(format!("{name}_reference.csv"));
+    write_reference(
+        &reference_path,
+        args,
+        &base,
+        &reference,
+        "method=quasi-static rtol=1e-10 atol=1e-12",
+    )?;
+    println!("reference frames: {}", reference_path.display());
+    println!(
+        "{:<12} {:>6} {:>9} {:>9} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10} {:>11} {:>10} {:>11}",
+        "method",
+        "rtol",
+        "wall [s]",
+        "lung-only",
+        "steps",
+        "RHS",
+        "solves",
+        "Newton",
+        "LU",
+        "lung [L]",
+        "marker [mm]",
+        "from 0.5 s",
+        "from 0.5 s"
+    );
+    let mut points = Vec::new();
+    let mut over_cap = false;
+    for rtol in (3..=9).map(|k| 10f64.powi(-k)) {
+        let mut c = base.clone();
+        c.solver.rtol = rtol;
+        c.solver.atol = rtol * 1e-2;
+        c.validate()?;
+        let result = if over_cap {
+            Err("skipped: a looser tolerance already exceeded the time cap".to_string())
+        } else {
+            let mut walls = Vec::new();
+            let mut last = None;
+            let mut failure = None;
+            for _ in 0..args.repeats {
+                match trajectory(&c, args.duration, args.cap) {
+                    Ok(Some(t)) => {
+                        walls.push(t.wall);
+                        last = Some(t);
+                    }
+                    Ok(None) => {
+                        over_cap = true;
+                        failure = Some(format!("skipped: over the {} s time cap", args.cap));
+                        break;
+                    }
+                    Err(e) => {
+                        failure = Some(format!("failed: {e}"));
+                        break;
+                    }
+                }
+            }
+            let mut lung_walls = Vec::new();
+            if failure.is_none() {
+                for _ in 0..args.repeats {
+                    match lung_loop(&c, args.duration) {
+                        Ok((wall, _)) => lung_walls.push(wall),
+                        Err(e) => {
+                            failure = Some(format!("failed: {e}"));
+                            break;
+                        }
+                    }
+                }
+            }
+            match (failure, last) {
+                (Some(reason), _) => Err(reason),
+                (None, Some(t)) => trajectory_error(&t, &reference)
+                    .and_then(|err| {
+                        let late = trajectory_error(&settled(&t), &settled(&reference))?;
+                        Ok((median(&walls), median(&lung_walls), t, err, late))
+                    })
+                    .map_err(|e| e.to_string()),
+                (None, None) => Err("no run".to_string()),
+            }
+        };
+        match &result {
+            Ok((wall, lung_wall, t, err, late)) => {
+                let s = t.statics.unwrap_or_default();
+                println!(
+                    "{:<12} {:>6.0e} {:>9.4} {:>9.4} {:>6} {:>7} {:>7} {:>8} {:>5} {:>10.3e} {:>11.3e} {:>10.3e} {:>11.3e}",
+                    Method::QuasiStatic.name(),
+                    rtol,
+                    wall,
+                    lung_wall,
+                    t.steps,
+                    t.rhs_evaluations,
+                    s.solves,
+                    s.iterations,
+                    s.factorisations,
+                    err.lung,
+                    err.markers * 1e3,
+                    late.lung,
+                    late.markers * 1e3
+                )
+            }
+            Err(reason) => println!("{:<12} {:>6.0e} {reason}", Method::QuasiStatic.name(), rtol),
+        }
+        points.push(QuasiPoint { rtol, result });
+    }
+    let mut csv = String::from(
+        "method,rtol,atol,status,wall_s,wall_lung_only_s,rhs_evaluations,steps,lung_error_l,\
+         marker_error_m,lung_error_settled_l,marker_error_settled_m,static_solves,\
+         newton_iterations,jacobians,factorisations,residuals,continuations\n",
+    );
+    for p in &points {
+        let atol = p.rtol * 1e-2;
+        match &p.result {
+            Ok((wall, lung_wall, t, err, late)) => {
+                let s = t.statics.unwrap_or_default();
+                csv.push_str(&format!(
+                    "{},{:e},{:e},ok,{wall},{lung_wall},{},{},{:e},{:e},{:e},{:e},{},{},{},{},{},{}\n",
+                    Method::QuasiStatic.name(),
+                    p.rtol,
+                    atol,
+                    t.rhs_evaluations,
+                    t.steps,
+                    err.lung,
+                    err.markers,
+                    late.lung,
+                    late.markers,
+                    s.solves,
+                    s.iterations,
+                    s.jacobians,
+                    s.factorisations,
+                    s.residuals,
+                    s.continuations
+                ))
+            }
+            Err(reason) => csv.push_str(&format!(
+                "{},{:e},{:e},\"{}\",,,,,,,,,,,,,,\n",
+                Method::QuasiStatic.name(),
+                p.rtol,
+                atol,
+                reason.replace('"', "'")
+            )),
+        }
+    }
+    csv.push_str(&format!(
+        "# reference: quasi-static rtol 1e-10 atol 1e-12, {} steps, {} RHS evaluations, {} static solves, {} Newton iterations\n",
+        reference.steps, reference.rhs_evaluations, rs.solves, rs.iterations
+    ));
+    let csv_path = args.out.join(format!("{name}.csv"));
+    write_text(&csv_path, &csv)?;
+    let series = |lung: bool| -> (Vec<f64>, Vec<f64>) {
+        points
+            .iter()
+            .filter_map(|p| p.result.as_ref().ok())
+            .map(|(wall, _, _, err, _)| {
+                let e = if lung { err.lung } else { err.markers * 1e3 };
+                (wall.max(1e-9).log10(), e.max(1e-16).log10())
+            })
+            .unzip()
+    };
+    let (xl, yl) = series(true);
+    let (xm, ym) = series(false);
+    fn panel<'a>(title: &str, y_label: &str, x: &'a [f64], y: &'a [f64]) -> Panel<'a> {
+        Panel {
+            title: title.to_string(),
+            x_label: "log10 wall time [s]".into(),
+            y_label: y_label.to_string(),
+            traces: vec![
+                Trace {
+                    label: Method::QuasiStatic.name().to_string(),
+                    x,
+                    y,
+                    color: BLUE,
+                    mark: Mark::Line,
+                },
+                Trace {
+                    label: String::new(),
+                    x,
+                    y,
+                    color: BLUE,
+                    mark: Mark::Points,
+                },
+            ],
+            hlines: Vec::new(),
+            bands: Vec::new(),
+        }
+    }
+    write_figure(
+        &args.out,
+        &name,
+        &[
+            panel(
+                &format!(
+                    "Work-precision, {} breathing, quasi-static: lung volume",
+                    args.scenario
+                ),
+                "log10 max |lung volume error| [L]",
+                &xl,
+                &yl,
+            ),
+            panel(
+                &format!(
+                    "Work-precision, {} breathing, quasi-static: markers",
+                    args.scenario
+                ),
+                "log10 max marker error [mm]",
+                &xm,
+                &ym,
+            ),
+        ],
+    )?;
+    println!(
+        "wrote {} and {}",
+        csv_path.display(),
+        args.out.join(format!("{name}.png")).display()
+    );
     Ok(())
 }

@@ -666,10 +666,19 @@ impl Torso {
 
     /// Subject, posture and applied activations, for the messages of failed solves.
     fn describe_scene(&self) -> String {
+        self.describe_scene_at(self.time)
+    }
+
+    /// [`Torso::describe_scene`] with the activations applied at time `t`.
+    fn describe_scene_at(&self, t: f64) -> String {
         let s = &self.config.subject;
         let act: Vec<String> = MuscleGroup::ALL
             .iter()
-            .map(|g| format!("{} {:.3}", g.name(), self.applied_activation(*g)))
+            .map(|g| {
+                let a =
+                    (self.inputs[g.index()] + self.config.drive.activation(*g, t)).clamp(0.0, 1.0);
+                format!("{} {a:.3}", g.name())
+            })
             .collect();
         format!(
             "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa",

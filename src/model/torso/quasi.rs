@@ -12,6 +12,7 @@
 //! the last solution; the lung and thoracic volumes come from the state alone.
 
 use super::{Applied, Torso};
+use crate::Error;
 use crate::dynamics::statics::{Statics, StaticsError, StaticsMemory};
 use crate::dynamics::{Activations, Data, Model};
 use crate::solver::Ode;
@@ -241,4 +242,119 @@ impl Torso {
         }
         q.fresh = true;
     }
+}
+
+impl Torso {
+    /// In quasi-static mode, the reduced right-hand side for external integrators: the
+    /// airflow into the lungs dV_L/dt [L/s] at time `t` and lung volume `lung_volume` [L],
+    /// with the current inputs plus the drive at `t`, the same function the model's own
+    /// integrator steps ([`QuasiSystem`]: the static equilibrium holding that volume solved
+    /// to the tolerance of the configured `solver.rtol`). The time, the lung volume and the
+    /// inputs do not change; the static solver keeps the equilibrium as a warm start (what
+    /// is solved later agrees with a fresh model's to the solves' tolerance, not bit for
+    /// bit). An error in the other modes ([`Error::State`]), for a non-finite time or a
+    /// volume that is not positive ([`Error::InvalidParameter`]), and when the equilibrium
+    /// cannot be solved ([`Error::Numerical`], naming subject, posture and activations).
+    pub fn quasi_rate(&mut self, t: f64, lung_volume: f64) -> crate::Result<f64> {
+        self.check_reduced_state(t, lung_volume)?;
+        let tolerance = statics_tolerance(self.config.solver.rtol);
+        let mut failure = None;
+        let mut rate = [0.0];
+        {
+            let Torso {
+                compiled,
+                data,
+                inputs,
+                airway_opening,
+                config,
+                quasi,
+                ..
+            } = self;
+            let Some(q) = quasi.as_deref_mut() else {
+                return Err(not_quasi_static());
+            };
+            let mut system = QuasiSystem {
+                model: &compiled.model,
+                data,
+                statics: &mut q.statics,
+                applied: Applied {
+                    inputs: *inputs,
+                    airway_opening: *airway_opening,
+                    drive: &config.drive,
+                    gains: super::side_gains(config),
+                },
+                tolerance,
+                failure: &mut failure,
+            };
+            system.rhs(t, &[lung_volume], &mut rate);
+        }
+        match failure {
+            Some(e) => Err(Error::Numerical {
+                time: t,
+                reason: format!(
+                    "the reduced right-hand side at lung volume {lung_volume} L: {e} ({})",
+                    self.describe_scene_at(t)
+                ),
+            }),
+            None if !rate[0].is_finite() => Err(Error::Numerical {
+                time: t,
+                reason: format!(
+                    "the reduced right-hand side at lung volume {lung_volume} L is {}",
+                    rate[0]
+                ),
+            }),
+            None => Ok(rate[0]),
+        }
+    }
+
+    /// In quasi-static mode, sets the time and the integrated state, the lung volume [L], for
+    /// external integrators of [`Torso::quasi_rate`]: what is read afterwards is that of the
+    /// equilibrium holding `lung_volume` under the activations applied at `t` (solved when
+    /// read, warm-started), and the next [`Torso::advance_to`] continues from it. Errors as
+    /// [`Torso::quasi_rate`]'s; on error nothing changes.
+    pub fn set_lung_volume(&mut self, t: f64, lung_volume: f64) -> crate::Result<()> {
+        self.check_reduced_state(t, lung_volume)?;
+        let held = self.applied(t);
+        let Some(q) = self.quasi.as_deref_mut() else {
+            return Err(not_quasi_static());
+        };
+        q.volume = [lung_volume];
+        q.held = held;
+        q.fresh = false;
+        q.failure = None;
+        self.time = t;
+        self.at_start = false;
+        self.integrator.invalidate();
+        self.observation = None;
+        self.sides = None;
+        self.markers.invalidate();
+        Ok(())
+    }
+
+    /// The checks of [`Torso::quasi_rate`]'s and [`Torso::set_lung_volume`]'s arguments.
+    fn check_reduced_state(&self, t: f64, lung_volume: f64) -> crate::Result<()> {
+        if self.quasi.is_none() {
+            return Err(not_quasi_static());
+        }
+        if !t.is_finite() {
+            return Err(Error::invalid("time", t, "a finite time"));
+        }
+        if !(lung_volume.is_finite() && lung_volume > 0.0) {
+            return Err(Error::invalid(
+                "lung volume",
+                lung_volume,
+                "a finite volume > 0 L",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The error of the reduced state's functions outside quasi-static mode.
+fn not_quasi_static() -> Error {
+    Error::State(
+        "the reduced state (the lung volume alone) exists in quasi-static mode only \
+         (solver.method 4, quasi-static); the other methods integrate the full state"
+            .into(),
+    )
 }

@@ -1,0 +1,193 @@
+//! The relaxation curves of the passive chest wall and of the respiratory system: the static
+//! pressure-volume curves of the model with every muscle relaxed, from residual volume to
+//! total lung capacity, solved by the quasi-static mode's equilibrium at each volume
+//! (`Torso::set_lung_volume`). These are the measurements the compliant-chest-wall work is
+//! judged against (Rahn et al. 1946, Am J Physiol 146:161; Agostoni & Mead 1964, Handbook of
+//! Physiology, Respiration I, ch. 13): the chest wall's compliance over the tidal range above
+//! FRC, the volume at which it relaxes as a fraction of vital capacity, and its stiffening
+//! towards residual volume and total lung capacity.
+//!
+//! The pressures: with the airway shut and the muscles relaxed the chest wall's recoil is
+//! the pleural pressure relative to the body surface, P_cw = P_pl; the respiratory system's
+//! is the alveolar pressure, P_rs = P_pl + P_L(V_L) (the lungs' recoil). Volumes are the
+//! model's own: its rest lung volume is its FRC, its residual volume and total lung
+//! capacity are FRC times the subject's ECSC ratios (`dynamics::pleural::capacity_ratios`),
+//! where the pleural law's barriers stand.
+
+use crate::dynamics::pleural::capacity_ratios;
+use crate::model::{Config, Drive, Quantity, Torso};
+use crate::solver::Method;
+use crate::{Error, Result};
+use serde::Serialize;
+
+/// Pressure of 1 cmH2O [Pa].
+pub const CMH2O: f64 = 98.0665;
+
+/// The tidal range above FRC over which the compliances are taken [L]: a quiet adult breath
+/// (0.5 L; Agostoni & Mead 1964 take the chest wall's compliance over the volumes of quiet
+/// breathing, where its curve is nearly straight).
+pub const TIDAL_RANGE: f64 = 0.5;
+
+/// One point of the curves.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Point {
+    /// Lung volume [L].
+    pub lung: f64,
+    /// Chest wall's recoil, the pleural pressure relative to the body surface [Pa].
+    pub chest_wall: f64,
+    /// Respiratory system's recoil, the alveolar pressure with the airway shut [Pa].
+    pub system: f64,
+}
+
+/// The curves of one subject and posture, and the figures read off them.
+#[derive(Clone, Debug, Serialize)]
+pub struct Relaxation {
+    /// The model's rest lung volume, its FRC [L].
+    pub frc: f64,
+    /// Residual volume [L] (FRC times the subject's ECSC RV/FRC).
+    pub rv: f64,
+    /// Total lung capacity [L] (FRC times the subject's ECSC TLC/FRC).
+    pub tlc: f64,
+    /// The points solved, by increasing volume.
+    pub points: Vec<Point>,
+    /// Volumes where no equilibrium could be solved, with the reason (the curve stops there).
+    pub failed: Vec<(f64, String)>,
+    /// Chest wall's compliance over FRC to FRC + [`TIDAL_RANGE`] [L/cmH2O]: the slope of a
+    /// least-squares line through the points there.
+    pub chest_wall_compliance: f64,
+    /// Respiratory system's compliance over the same range [L/cmH2O].
+    pub system_compliance: f64,
+    /// The chest wall's relaxation volume, where its recoil is zero, as a fraction of vital
+    /// capacity above RV; `None` if the curve does not cross zero.
+    pub chest_wall_relaxation: Option<f64>,
+    /// The respiratory system's relaxation volume (the FRC of a relaxed system), as a fraction of
+    /// vital capacity above RV.
+    pub system_relaxation: Option<f64>,
+    /// Chest wall's recoil at FRC [Pa] (the end-expiratory pleural pressure).
+    pub pleural_at_frc: f64,
+}
+
+/// The relaxation curves of `config`'s subject and posture at `points` volumes spread evenly
+/// from RV to TLC, solved outwards from FRC (each equilibrium warm-starts the next). The
+/// configuration's solver, drive and airway settings are replaced: quasi-static, every
+/// muscle relaxed, the airway shut at the body surface's pressure.
+pub fn relaxation(config: &Config, points: usize) -> Result<Relaxation> {
+    if points < 8 {
+        return Err(Error::invalid(
+            "points",
+            points as f64,
+            "at least 8 volumes from RV to TLC",
+        ));
+    }
+    let mut c = config.clone();
+    c.solver.method = Method::QuasiStatic;
+    c.drive = Drive {
+        enabled: false,
+        ..Drive::default()
+    };
+    let mut torso = Torso::new(c.clone())?;
+    let frc = torso.read(Quantity::LungVolume)?;
+    let (rv_ratio, tlc_ratio) = capacity_ratios(&c.subject);
+    let (rv, tlc) = (frc * rv_ratio, frc * tlc_ratio);
+    let grid: Vec<f64> = (0..points)
+        .map(|i| rv + (tlc - rv) * i as f64 / (points - 1) as f64)
+        .collect();
+    let mut solved = vec![frc_point(&mut torso, frc)?];
+    let mut failed = Vec::new();
+    // outwards from FRC on each side, stopping a side at its first failure
+    for side in [true, false] {
+        let mut t = Torso::new(c.clone())?;
+        let volumes: Vec<f64> = if side {
+            grid.iter().copied().filter(|&v| v > frc).collect()
+        } else {
+            grid.iter().rev().copied().filter(|&v| v < frc).collect()
+        };
+        for v in volumes {
+            match at_volume(&mut t, v) {
+                Ok(p) => solved.push(p),
+                Err(e) => {
+                    failed.push((v, e.to_string()));
+                    break;
+                }
+            }
+        }
+    }
+    // the tidal range, densely
+    let mut t = Torso::new(c)?;
+    for k in 1..=5 {
+        let v = frc + TIDAL_RANGE * k as f64 / 5.0;
+        if let Ok(p) = at_volume(&mut t, v) {
+            solved.push(p);
+        }
+    }
+    solved.sort_by(|a, b| a.lung.total_cmp(&b.lung));
+    solved.dedup_by(|a, b| (a.lung - b.lung).abs() < 1e-9);
+    let tidal: Vec<&Point> = solved
+        .iter()
+        .filter(|p| p.lung >= frc - 1e-9 && p.lung <= frc + TIDAL_RANGE + 1e-9)
+        .collect();
+    let slope = |f: &dyn Fn(&Point) -> f64| {
+        let n = tidal.len() as f64;
+        let (mx, my) = (
+            tidal.iter().map(|p| f(p)).sum::<f64>() / n,
+            tidal.iter().map(|p| p.lung).sum::<f64>() / n,
+        );
+        let sxy: f64 = tidal.iter().map(|p| (f(p) - mx) * (p.lung - my)).sum();
+        let sxx: f64 = tidal.iter().map(|p| (f(p) - mx).powi(2)).sum();
+        // L per Pa, to L per cmH2O
+        sxy / sxx * CMH2O
+    };
+    let crossing = |f: &dyn Fn(&Point) -> f64| {
+        solved.windows(2).find_map(|w| {
+            let (a, b) = (f(&w[0]), f(&w[1]));
+            (a <= 0.0 && b > 0.0).then(|| {
+                let v = w[0].lung + (w[1].lung - w[0].lung) * (-a) / (b - a);
+                (v - rv) / (tlc - rv)
+            })
+        })
+    };
+    Ok(Relaxation {
+        frc,
+        rv,
+        tlc,
+        chest_wall_compliance: slope(&|p| p.chest_wall),
+        system_compliance: slope(&|p| p.system),
+        chest_wall_relaxation: crossing(&|p| p.chest_wall),
+        system_relaxation: crossing(&|p| p.system),
+        pleural_at_frc: solved
+            .iter()
+            .find(|p| (p.lung - frc).abs() < 1e-9)
+            .map_or(f64::NAN, |p| p.chest_wall),
+        points: solved,
+        failed,
+    })
+}
+
+/// The point at FRC, the model's rest.
+fn frc_point(torso: &mut Torso, frc: f64) -> Result<Point> {
+    at_volume(torso, frc)
+}
+
+/// The equilibrium holding lung volume `v` [L] and its pressures.
+fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
+    torso.set_lung_volume(0.0, v)?;
+    let chest_wall = torso.read(Quantity::PleuralPressure)?;
+    let system = torso.read(Quantity::AlveolarPressure)?;
+    let lung = torso.read(Quantity::LungVolume)?;
+    if !(chest_wall.is_finite() && system.is_finite() && lung.is_finite()) {
+        // the reason: the same solve, asked through the reduced right-hand side
+        let why = match torso.quasi_rate(0.0, v) {
+            Err(e) => e.to_string(),
+            Ok(_) => "the equilibrium's pressures are not finite".into(),
+        };
+        return Err(Error::Numerical {
+            time: 0.0,
+            reason: format!("no equilibrium holds the lungs at {v:.3} L: {why}"),
+        });
+    }
+    Ok(Point {
+        lung,
+        chest_wall,
+        system,
+    })
+}
