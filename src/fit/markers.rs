@@ -100,15 +100,6 @@ pub fn grid_label(k: usize) -> String {
     format!("marker[{}]", k + 1)
 }
 
-fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.to_string(),
-        line,
-        column,
-        message: message.into(),
-    }
-}
-
 /// Splits `line` on `sep`, returning each cell with its 1-based character column.
 fn split_cells(line: &str, sep: char) -> Vec<(usize, &str)> {
     let mut out = Vec::new();
@@ -451,7 +442,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
         .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
     let (header_no, header) = loop {
         let Some((no, line)) = lines.next() else {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 0,
                 0,
@@ -473,7 +464,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             "units" => match Units::parse(value) {
                 Some(u) => file_units = Some((u, no)),
                 None => {
-                    return Err(parse_err(
+                    return Err(Error::parse(
                         name,
                         no,
                         col,
@@ -484,7 +475,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             "rate" => match value.trim_end_matches("Hz").trim().parse::<f64>() {
                 Ok(r) if r.is_finite() && r > 0.0 => file_rate = Some(r),
                 _ => {
-                    return Err(parse_err(
+                    return Err(Error::parse(
                         name,
                         no,
                         col,
@@ -510,7 +501,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             continue;
         }
         let Some((marker, axis)) = named_axis(cell) else {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no,
                 *col,
@@ -530,7 +521,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             }
         };
         if let Some(first) = axes[m][axis] {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no,
                 *col,
@@ -546,7 +537,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
         axes[m][axis] = Some(k);
     }
     if labels.is_empty() {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             header_no,
             1,
@@ -555,7 +546,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
     }
     for (m, a) in axes.iter().enumerate() {
         if let Some(axis) = a.iter().position(Option::is_none) {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no,
                 header.chars().count() + 1,
@@ -569,7 +560,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
     }
     let units = match (file_units, options.units) {
         (Some((f, no)), Some(o)) if f != o => {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 no,
                 1,
@@ -583,7 +574,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
         (Some((f, _)), _) => f,
         (None, Some(o)) => o,
         (None, None) => {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no,
                 1,
@@ -593,7 +584,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
     };
     let rate = options.rate.or(file_rate);
     if time_col.is_none() && rate.is_none() {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             header_no,
             1,
@@ -610,7 +601,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             continue;
         }
         if line.starts_with('#') {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 no,
                 1,
@@ -622,7 +613,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             let col = row
                 .get(head.len())
                 .map_or(line.chars().count() + 1, |c| c.0);
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 no,
                 col,
@@ -636,7 +627,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
         let cell = |k: usize| -> Result<Option<f64>> {
             let (col, s) = row[k];
             coordinate(s, |m| {
-                parse_err(
+                Error::parse(
                     name,
                     no,
                     col,
@@ -646,7 +637,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
         };
         let t = match time_col {
             Some(k) => cell(k)?.ok_or_else(|| {
-                parse_err(
+                Error::parse(
                     name,
                     no,
                     row[k].0,
@@ -659,7 +650,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
             && t <= prev
         {
             let col = time_col.map_or(1, |k| row[k].0);
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 no,
                 col,
@@ -679,7 +670,7 @@ pub fn parse_named_csv(text: &str, name: &str, options: &ReadOptions) -> Result<
         frames.push(frame);
     }
     if frames.len() < 2 {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             header_no + frames.len() + 1,
             1,
@@ -746,7 +737,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
     let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
     let line = |i: usize| lines.get(i).copied().unwrap_or("");
     if !line(0).starts_with("PathFileType") {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             1,
             1,
@@ -759,9 +750,11 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         let k = keys
             .iter()
             .position(|(_, c)| c.trim().eq_ignore_ascii_case(key))
-            .ok_or_else(|| parse_err(name, 2, 1, format!("header line 2 has no `{key}` field")))?;
+            .ok_or_else(|| {
+                Error::parse(name, 2, 1, format!("header line 2 has no `{key}` field"))
+            })?;
         let (col, v) = values.get(k).copied().ok_or_else(|| {
-            parse_err(
+            Error::parse(
                 name,
                 3,
                 line(2).chars().count() + 1,
@@ -775,19 +768,19 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         v.parse::<f64>()
             .ok()
             .filter(|r| r.is_finite() && *r > 0.0)
-            .ok_or_else(|| parse_err(name, 3, col, format!("{key}: `{v}` is not a number > 0")))
+            .ok_or_else(|| Error::parse(name, 3, col, format!("{key}: `{v}` is not a number > 0")))
     };
     let count = |key: &str| -> Result<usize> {
         let (col, v) = field(key)?;
         v.parse::<usize>()
-            .map_err(|_| parse_err(name, 3, col, format!("{key}: `{v}` is not a whole number")))
+            .map_err(|_| Error::parse(name, 3, col, format!("{key}: `{v}` is not a whole number")))
     };
     positive("DataRate")?;
     let num_frames = count("NumFrames")?;
     let num_markers = count("NumMarkers")?;
     let (units_col, units_text) = field("Units")?;
     let units = Units::parse(units_text).ok_or_else(|| {
-        parse_err(
+        Error::parse(
             name,
             3,
             units_col,
@@ -812,7 +805,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         || !names[0].1.trim().eq_ignore_ascii_case("Frame#")
         || !names[1].1.trim().eq_ignore_ascii_case("Time")
     {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             4,
             1,
@@ -826,7 +819,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         .map(str::to_string)
         .collect();
     if labels.len() != num_markers {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             4,
             1,
@@ -839,7 +832,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
     for (k, (col, c)) in names[2..].iter().enumerate() {
         let want_label = k % 3 == 0;
         if want_label == c.trim().is_empty() {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 4,
                 *col,
@@ -875,7 +868,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         last_no = no;
         let row = split_cells(raw, '\t');
         if row.len() > width && row[width..].iter().any(|(_, c)| !c.trim().is_empty()) {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 no,
                 row[width].0,
@@ -886,7 +879,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
             match row.get(k) {
                 None => Ok(None),
                 Some(&(col, s)) => coordinate(s, |m| {
-                    parse_err(
+                    Error::parse(
                         name,
                         no,
                         col,
@@ -897,12 +890,12 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         };
         let t = cell(1)?.ok_or_else(|| {
             let col = row.get(1).map_or(raw.chars().count() + 1, |c| c.0);
-            parse_err(name, no, col, "column 2 `Time`: empty time")
+            Error::parse(name, no, col, "column 2 `Time`: empty time")
         })?;
         if let Some(&prev) = times.last()
             && t <= prev
         {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 no,
                 row[1].0,
@@ -918,7 +911,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         frames.push(frame);
     }
     if frames.len() != num_frames {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             last_no,
             1,
@@ -929,7 +922,7 @@ pub fn parse_trc(text: &str, name: &str) -> Result<Markers> {
         ));
     }
     if frames.len() < 2 {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             last_no,
             1,
@@ -1015,7 +1008,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
     let parsed =
         std::panic::catch_unwind(|| c3dio::C3d::from_bytes(bytes).map_err(|e| format!("{e:?}")))
             .map_err(|p| {
-                parse_err(
+                Error::parse(
                     name,
                     0,
                     0,
@@ -1025,7 +1018,8 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
                     ),
                 )
             })?;
-    let c3d = parsed.map_err(|e| parse_err(name, 0, 0, format!("not a readable C3D file: {e}")))?;
+    let c3d =
+        parsed.map_err(|e| Error::parse(name, 0, 0, format!("not a readable C3D file: {e}")))?;
     let points = &c3d.points;
     let count = points.cols();
     let units_text: String = points
@@ -1035,7 +1029,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
         .trim_matches(['\0', ' '])
         .to_string();
     let units = Units::parse(&units_text).ok_or_else(|| {
-        parse_err(
+        Error::parse(
             name,
             0,
             0,
@@ -1044,7 +1038,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
     })?;
     let rate = f64::from(points.frame_rate);
     if !(rate.is_finite() && rate > 0.0) {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -1052,7 +1046,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
         ));
     }
     if count == 0 {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -1061,7 +1055,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
     }
     let mut labels: Vec<String> = points.labels.iter().map(|l| l.trim().to_string()).collect();
     if labels.len() < count {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -1087,7 +1081,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
             };
             let finite = p.point.iter().all(|v| v.is_finite());
             if present && !finite {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     i + 1,
                     k + 1,
@@ -1109,7 +1103,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
         frames.push(frame);
     }
     if frames.len() < 2 {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -1125,7 +1119,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
     };
     let (keys, values) = (strings("KEYS"), strings("VALUES"));
     if keys.len() != values.len() {
-        return Err(parse_err(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -1155,7 +1149,7 @@ pub fn read_c3d(bytes: &[u8], name: &str) -> Result<Markers> {
 /// `c3dio` allocates for it): the frames, points and analog samples per frame of the header
 /// against the bytes after the data start.
 fn check_c3d_size(bytes: &[u8], name: &str) -> Result<()> {
-    let err = |m: String| parse_err(name, 0, 0, format!("not a readable C3D file: {m}"));
+    let err = |m: String| Error::parse(name, 0, 0, format!("not a readable C3D file: {m}"));
     let header = bytes.get(..512).ok_or_else(|| {
         err(format!(
             "{} bytes, shorter than the 512-byte header",

@@ -85,15 +85,6 @@ fn provenance_entry_is_valid(key: &str, value: &str) -> bool {
         && !value.contains(['\n', '\r', '\t'])
 }
 
-fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.to_string(),
-        line,
-        column,
-        message: message.into(),
-    }
-}
-
 /// The expected header cell of field `k` (0 = time).
 fn header_name(k: usize) -> String {
     if k == 0 {
@@ -172,7 +163,7 @@ impl Recording {
         // Leading comments, then the header.
         let (header_no, header) = loop {
             let Some((no, raw)) = lines.next() else {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     0,
                     0,
@@ -196,7 +187,7 @@ impl Recording {
                             grid_line = no;
                         }
                         None => {
-                            return Err(parse_err(
+                            return Err(Error::parse(
                                 name,
                                 no,
                                 col_of(value.trim()),
@@ -212,7 +203,7 @@ impl Recording {
                             Some(u) => u,
                             None => {
                                 let other = value.trim();
-                                return Err(parse_err(
+                                return Err(Error::parse(
                                     name,
                                     no,
                                     col_of(other),
@@ -224,7 +215,7 @@ impl Recording {
                     _ => {
                         let (key, value) = (key.trim(), value.trim());
                         if !provenance_entry_is_valid(key, value) {
-                            return Err(parse_err(
+                            return Err(Error::parse(
                                 name,
                                 no,
                                 1,
@@ -242,7 +233,7 @@ impl Recording {
         for (k, (col, cell)) in head.iter().enumerate() {
             let want = header_name(k);
             if cell.trim() != want {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     header_no,
                     *col,
@@ -256,7 +247,7 @@ impl Recording {
         }
         if head.len() < 4 || !(head.len() - 1).is_multiple_of(3) {
             let col = header.chars().count() + 1;
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no,
                 col,
@@ -271,7 +262,7 @@ impl Recording {
         let grid = match grid {
             Some((r, c)) if r * c == points => (r, c),
             Some((r, c)) => {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     grid_line,
                     1,
@@ -283,7 +274,7 @@ impl Recording {
             }
             None if points == 60 => (10, 6),
             None => {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     1,
                     1,
@@ -306,10 +297,10 @@ impl Recording {
                 continue;
             }
             if let Some(b) = blank_at {
-                return Err(parse_err(name, b, 1, "empty line between frames"));
+                return Err(Error::parse(name, b, 1, "empty line between frames"));
             }
             if line.starts_with('#') {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     no,
                     1,
@@ -323,7 +314,7 @@ impl Recording {
                 } else {
                     line.chars().count() + 1
                 };
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     no,
                     col,
@@ -341,7 +332,7 @@ impl Recording {
                     return Ok(None);
                 }
                 let v: f64 = s.parse().map_err(|_| {
-                    parse_err(
+                    Error::parse(
                         name,
                         no,
                         col,
@@ -349,7 +340,7 @@ impl Recording {
                     )
                 })?;
                 if !v.is_finite() {
-                    return Err(parse_err(
+                    return Err(Error::parse(
                         name,
                         no,
                         col,
@@ -361,11 +352,11 @@ impl Recording {
                 }
                 Ok(Some(v))
             };
-            let t = number(0)?.ok_or_else(|| parse_err(name, no, 1, "time: empty cell"))?;
+            let t = number(0)?.ok_or_else(|| Error::parse(name, no, 1, "time: empty cell"))?;
             if let Some(&prev) = times.last()
                 && t <= prev
             {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     no,
                     1,
@@ -383,7 +374,7 @@ impl Recording {
                     [None, None, None] => frame.push(None),
                     _ => {
                         let missing = xyz.iter().position(|v| v.is_none()).unwrap_or(0);
-                        return Err(parse_err(
+                        return Err(Error::parse(
                             name,
                             no,
                             row[k + missing].0,
@@ -399,7 +390,7 @@ impl Recording {
             frames.push(frame);
         }
         if frames.len() < 2 {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no + frames.len() + 1,
                 1,
