@@ -20,10 +20,10 @@ use breathing_torso::anatomy::skin::{
 };
 use breathing_torso::fit::sway::remove_sway;
 use breathing_torso::fit::{
-    Camera, FitOptions, Format, Markers, PoseOptions, SynthOptions, TorsoMarkers, Units,
-    fit_any_markers, synthesize,
+    Camera, FitOptions, PoseOptions, SynthOptions, TorsoMarkers, fit_any_markers, synthesize,
 };
 use breathing_torso::model::Drive;
+use breathing_torso::recording::{Format, Markers, Units};
 use breathing_torso::{Config, Torso};
 use nalgebra::{Point3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;

@@ -12,8 +12,8 @@
 //! which reads `data/real/` or the directory named by `TORSO_REAL_DATA`, and fails, naming
 //! the file and how to make it, when a recording is absent.
 
-use breathing_torso::fit::Units;
-use breathing_torso::fit::markers::{Format, Markers, ReadOptions};
+use breathing_torso::recording::Units;
+use breathing_torso::recording::{Format, Markers, ReadOptions};
 use std::path::{Path, PathBuf};
 
 /// The breathing band the checks use: 0.1-0.7 Hz (6-42 breaths per minute), the band the
