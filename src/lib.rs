@@ -10,6 +10,7 @@
 //!
 //! | module | owns |
 //! |---|---|
+//! | [`numeric`] | generic minimisers over a box and a seeded random number generator |
 //! | [`mesh`] | triangle meshes: volume, normals, adjacency, I/O, smoothing, repair |
 //! | [`anatomy`] | a [`anatomy::Subject`] turned into geometry and muscle layouts |
 //! | [`solver`] | embedded Runge-Kutta pairs, step control, dense output, generic over [`solver::Ode`] |
@@ -37,6 +38,7 @@ pub mod fit;
 pub mod fmi;
 pub mod mesh;
 pub mod model;
+pub mod numeric;
 pub mod observe;
 pub mod recording;
 pub mod solver;

@@ -31,8 +31,8 @@ use breathing_torso::anatomy::skin::RigidTransform;
 use breathing_torso::fit::mismatch::{
     LIMIT_TE_S, LIMIT_TI_S, LIMIT_TTOT_S, MismatchOptions, MismatchTruth, make_truth,
 };
+use breathing_torso::numeric::rng::Pcg64;
 use breathing_torso::recording::{Format, Markers, Units};
-use breathing_torso::stats::rng::Pcg64;
 use nalgebra::{Matrix3, Point3, Rotation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

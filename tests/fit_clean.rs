@@ -23,8 +23,8 @@ use breathing_torso::fit::{
     Camera, FitOptions, PoseOptions, SynthOptions, Synthetic, TorsoMarkers, bind_recording,
     bind_with_radius, fit_any_markers, synthesize,
 };
+use breathing_torso::numeric::rng::Pcg64;
 use breathing_torso::recording::{Format, Markers, Recording, Units};
-use breathing_torso::stats::rng::Pcg64;
 use breathing_torso::{Config, Torso};
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::PI;

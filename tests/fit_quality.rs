@@ -3,7 +3,7 @@
 //! explains, on marker trajectories with known noise.
 
 use breathing_torso::fit::quality::{PREFILTER_RATIO, explained, noise_floor};
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::PI;
 

@@ -222,7 +222,7 @@ fn sway_of_a_chest_and_back_set_is_removed_and_the_tidal_volume_kept() {
     assert!(changed < LEFT_OF_SIGMA * NOISE, "{changed}");
     // Each marker drifting 10 mm along its own direction, no sway: the back markers' drifts
     // read as a slow rigid motion unless the drift projection is left that part.
-    let mut rng = breathing_torso::stats::rng::Pcg64::new(17, 2);
+    let mut rng = breathing_torso::numeric::rng::Pcg64::new(17, 2);
     let span = times[times.len() - 1] - times[0];
     let directions: Vec<Vector3<f64>> = (0..set.len())
         .map(|_| Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize())

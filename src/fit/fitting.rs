@@ -14,13 +14,13 @@
 //! phases at the recording's first frame; the synthetic recordings use the same convention.
 
 use super::breathing::{RecordingBreaths, breaths_of_signal};
-use super::optimize::{
-    Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
-};
 use super::principal::principal_displacement;
 use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::{RigidTransform, register_rigid};
 use crate::model::{Drive, Wave};
+use crate::numeric::optimize::{
+    Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
+};
 use crate::recording::Recording;
 use crate::stats::frequency::{FrequencyEstimate, estimate_frequency};
 use crate::{Error, Result};
@@ -97,7 +97,7 @@ pub struct FitOptions {
     pub start: Option<[f64; 4]>,
     /// Threads for the Nelder-Mead search: with 2, a second instance of the model (sharing
     /// the compiled model) evaluates ahead the point the search is likely to need next
-    /// ([`super::optimize::nelder_mead_parallel`]); the search and its result are those
+    /// ([`crate::numeric::optimize::nelder_mead_parallel`]); the search and its result are those
     /// of one thread.
     pub threads: usize,
     /// Leave each marker's constant offset out of the cost: the model's and the recording's

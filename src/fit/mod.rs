@@ -14,7 +14,6 @@
 //! | [`drift`] | each marker's slow drift (linear spline, knots three breaths apart) projected out of the cost |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
 //! | [`orient`] | the pose of a marker set on the body: shape candidates, front from the breathing motion, short fits |
-//! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
 //! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
@@ -31,7 +30,6 @@ pub mod figure;
 pub mod fitting;
 pub mod mismatch;
 pub mod named;
-pub mod optimize;
 pub mod orient;
 pub mod principal;
 pub mod quality;
