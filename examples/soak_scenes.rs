@@ -11,7 +11,7 @@
 use breathing_torso::bench::{random_scene, stress_torso};
 use breathing_torso::dynamics::Params;
 use breathing_torso::model::Torso;
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
 
 fn main() -> breathing_torso::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

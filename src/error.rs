@@ -81,6 +81,23 @@ impl Error {
         }
     }
 
+    /// Shorthand for [`Error::Parse`]: what is wrong (`message`) at `line` and `column`
+    /// (1-based, 0 when not applicable) of the file `path` (its name as the user gave it,
+    /// or anything that displays as one, such as `Path::display`).
+    pub fn parse(
+        path: impl std::fmt::Display,
+        line: usize,
+        column: usize,
+        message: impl Into<String>,
+    ) -> Self {
+        Error::Parse {
+            path: path.to_string(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
     /// Shorthand for an I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

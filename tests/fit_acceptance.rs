@@ -31,8 +31,8 @@ use breathing_torso::anatomy::skin::RigidTransform;
 use breathing_torso::fit::mismatch::{
     LIMIT_TE_S, LIMIT_TI_S, LIMIT_TTOT_S, MismatchOptions, MismatchTruth, make_truth,
 };
-use breathing_torso::fit::{Format, Markers, Units};
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
+use breathing_torso::recording::{Format, Markers, Units};
 use nalgebra::{Matrix3, Point3, Rotation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -167,7 +167,7 @@ fn write_case(t: &MismatchTruth, standing: bool, dir: &Path, seed: u64) -> Case 
     );
     let file = if grid {
         let path = dir.join(format!("{}.csv", name.replace(' ', "_")));
-        breathing_torso::fit::Recording {
+        breathing_torso::recording::Recording {
             frames,
             ..rec.clone()
         }

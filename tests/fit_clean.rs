@@ -20,10 +20,11 @@ use breathing_torso::fit::principal::principal_displacement_without;
 use breathing_torso::fit::quality::cardiac_peak;
 use breathing_torso::fit::sway::binding_normal;
 use breathing_torso::fit::{
-    Camera, FitOptions, Format, Markers, PoseOptions, Recording, SynthOptions, Synthetic,
-    TorsoMarkers, Units, bind_recording, bind_with_radius, fit_any_markers, synthesize,
+    Camera, FitOptions, PoseOptions, SynthOptions, Synthetic, TorsoMarkers, bind_recording,
+    bind_with_radius, fit_any_markers, synthesize,
 };
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
+use breathing_torso::recording::{Format, Markers, Recording, Units};
 use breathing_torso::{Config, Torso};
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::PI;

@@ -8,11 +8,11 @@
 use breathing_torso::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions};
 use breathing_torso::fit::quality::quality;
 use breathing_torso::fit::{
-    Camera, FitOptions, Format, Markers, PoseOptions, SynthOptions, TorsoMarkers, Units,
-    fit_any_markers, synthesize,
+    Camera, FitOptions, PoseOptions, SynthOptions, TorsoMarkers, fit_any_markers, synthesize,
 };
 use breathing_torso::model::Drive;
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
+use breathing_torso::recording::{Format, Markers, Units};
 use breathing_torso::{Config, Torso};
 use nalgebra::Vector3;
 use std::sync::Arc;

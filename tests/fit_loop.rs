@@ -10,10 +10,10 @@ use breathing_torso::fit::principal::recording_frequency;
 use breathing_torso::fit::report::{truth_json, write_fit};
 use breathing_torso::fit::source::DriveSchedule;
 use breathing_torso::fit::{
-    Camera, FitOptions, MarkerSource, Method, Recording, SynthOptions, Trajectory, fit_recording,
-    synthesize,
+    Camera, FitOptions, MarkerSource, Method, SynthOptions, Trajectory, fit_recording, synthesize,
 };
 use breathing_torso::model::{Drive, Wave};
+use breathing_torso::recording::Recording;
 use nalgebra::{Point3, Vector3};
 
 /// Markers on a curved front surface; each moves with lagged rib-cage and diaphragm
@@ -388,7 +388,7 @@ fn recordings_without_motion_are_rejected() {
         grid: (10, 6),
         times: (0..100).map(|i| i as f64 / 56.0).collect(),
         frames: vec![rest.iter().map(|p| Some(*p)).collect(); 100],
-        units: breathing_torso::fit::Units::Metres,
+        units: breathing_torso::recording::Units::Metres,
         provenance: Vec::new(),
     };
     let e = fit_recording(&mut model, &rec, &FitOptions::default(), &mut |_, _| {})

@@ -8,10 +8,10 @@
 use breathing_torso::anatomy::Subject;
 use breathing_torso::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions};
 use breathing_torso::fit::{
-    Camera, FitOptions, Format, Markers, PoseOptions, ReadOptions, SynthOptions, TorsoMarkers,
-    Units, fit_any_markers, synthesize,
+    Camera, FitOptions, PoseOptions, SynthOptions, TorsoMarkers, fit_any_markers, synthesize,
 };
 use breathing_torso::model::Drive;
+use breathing_torso::recording::{Format, Markers, ReadOptions, Units};
 use breathing_torso::{Config, Torso};
 use std::sync::Arc;
 

@@ -1,7 +1,9 @@
 //! The optimisers on test functions: Rosenbrock, bounded quadratics with the minimum on a
 //! bound, a multimodal function for the robust methods, budgets and bad input.
 
-use breathing_torso::fit::optimize::{Bounds, NelderMeadOptions, cmaes, multistart, nelder_mead};
+use breathing_torso::numeric::optimize::{
+    Bounds, NelderMeadOptions, cmaes, multistart, nelder_mead,
+};
 
 fn quiet(_: usize, _: f64) {}
 

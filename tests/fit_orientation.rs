@@ -16,11 +16,10 @@ use breathing_torso::anatomy::skin::{
 };
 use breathing_torso::anatomy::{Posture, Subject};
 use breathing_torso::fit::orient::{PoseOptions, orient};
-use breathing_torso::fit::{
-    Camera, Format, Markers, SynthOptions, TorsoMarkers, Units, synthesize,
-};
+use breathing_torso::fit::{Camera, SynthOptions, TorsoMarkers, synthesize};
 use breathing_torso::model::Drive;
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
+use breathing_torso::recording::{Format, Markers, Units};
 use breathing_torso::{Config, Torso};
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
 use std::sync::Arc;

@@ -3,7 +3,7 @@
 //! explains, on marker trajectories with known noise.
 
 use breathing_torso::fit::quality::{PREFILTER_RATIO, explained, noise_floor};
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::PI;
 
@@ -147,9 +147,9 @@ fn a_swaying_trunk_that_does_not_breathe_is_not_explained_and_a_breathing_one_is
     use breathing_torso::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions};
     use breathing_torso::fit::quality::quality;
     use breathing_torso::fit::{
-        Camera, FitOptions, Format, Markers, PoseOptions, SynthOptions, TorsoMarkers, Units,
-        fit_any_markers, synthesize,
+        Camera, FitOptions, PoseOptions, SynthOptions, TorsoMarkers, fit_any_markers, synthesize,
     };
+    use breathing_torso::recording::{Format, Markers, Units};
     use breathing_torso::{Config, Torso};
     use std::sync::Arc;
     let config = |subject: Subject, lod: u32| {

@@ -2,7 +2,7 @@
 //! its line and column.
 
 use breathing_torso::Error;
-use breathing_torso::fit::{Recording, Units};
+use breathing_torso::recording::{Recording, Units};
 use nalgebra::Point3;
 
 fn header(points: usize) -> String {

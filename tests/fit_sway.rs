@@ -20,10 +20,10 @@ use breathing_torso::anatomy::skin::{
 };
 use breathing_torso::fit::sway::remove_sway;
 use breathing_torso::fit::{
-    Camera, FitOptions, Format, Markers, PoseOptions, SynthOptions, TorsoMarkers, Units,
-    fit_any_markers, synthesize,
+    Camera, FitOptions, PoseOptions, SynthOptions, TorsoMarkers, fit_any_markers, synthesize,
 };
 use breathing_torso::model::Drive;
+use breathing_torso::recording::{Format, Markers, Units};
 use breathing_torso::{Config, Torso};
 use nalgebra::{Point3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
@@ -222,7 +222,7 @@ fn sway_of_a_chest_and_back_set_is_removed_and_the_tidal_volume_kept() {
     assert!(changed < LEFT_OF_SIGMA * NOISE, "{changed}");
     // Each marker drifting 10 mm along its own direction, no sway: the back markers' drifts
     // read as a slow rigid motion unless the drift projection is left that part.
-    let mut rng = breathing_torso::stats::rng::Pcg64::new(17, 2);
+    let mut rng = breathing_torso::numeric::rng::Pcg64::new(17, 2);
     let span = times[times.len() - 1] - times[0];
     let directions: Vec<Vector3<f64>> = (0..set.len())
         .map(|_| Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize())

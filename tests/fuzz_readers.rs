@@ -6,10 +6,10 @@
 //! never ask for an allocation out of proportion to the input (a header count is not trusted:
 //! the largest single allocation is checked against the input's size by a counting allocator).
 
-use breathing_torso::fit::Recording;
-use breathing_torso::fit::recording::Units;
 use breathing_torso::mesh::TriMesh;
 use breathing_torso::mesh::io;
+use breathing_torso::recording::Recording;
+use breathing_torso::recording::Units;
 use nalgebra::Point3;
 use proptest::prelude::*;
 use std::alloc::{GlobalAlloc, Layout, System};

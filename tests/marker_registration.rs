@@ -6,7 +6,7 @@ use breathing_torso::anatomy::Subject;
 use breathing_torso::anatomy::skin::{
     MarkerSet, RigidTransform, Skin, SurfaceOptions, register_to_surface,
 };
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
 use nalgebra::{Point3, Unit, UnitQuaternion, Vector3};
 
 /// Points drawn uniformly (by area) on the skin between the clavicle line and 4 cm below

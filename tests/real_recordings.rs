@@ -12,8 +12,8 @@
 //!
 //!     cargo test --release --test real_recordings -- --nocapture
 
-use breathing_torso::fit::Units;
-use breathing_torso::fit::markers::{Format, Markers, ReadOptions};
+use breathing_torso::recording::Units;
+use breathing_torso::recording::{Format, Markers, ReadOptions};
 use nalgebra::{Matrix3, Vector3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};

@@ -1,10 +1,10 @@
 //! Marker recordings in C3D, TRC and CSV: write -> read round trips, missing samples stay
 //! missing, malformed files give errors naming file, row and column, provenance survives.
 
-use breathing_torso::fit::markers::{
+use breathing_torso::recording::{
     Format, Markers, ReadOptions, parse_named_csv, parse_trc, read_c3d,
 };
-use breathing_torso::fit::{Recording, Units};
+use breathing_torso::recording::{Recording, Units};
 use nalgebra::Point3;
 use std::path::PathBuf;
 

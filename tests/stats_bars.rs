@@ -2,8 +2,8 @@
 //! 2001 example 1 and a breathing-like curve), reproducibility for a seed, and the equality
 //! test on identical and on 10 %-different curves.
 
+use breathing_torso::numeric::rng::Pcg64;
 use breathing_torso::stats::bars::{BarsConfig, bars_equality, bars_fit};
-use breathing_torso::stats::rng::Pcg64;
 use std::f64::consts::PI;
 
 fn rmse(a: &[f64], b: &[f64]) -> f64 {

@@ -4,12 +4,12 @@
 //! (no time overlap, less than two breaths of overlap, a flat series, a lag search beyond
 //! the overlap), each naming the file and the figure.
 
+use breathing_torso::numeric::rng::Pcg64;
 use breathing_torso::stats::autoreg::ArGlsConfig;
 use breathing_torso::stats::bars::BarsConfig;
 use breathing_torso::stats::breaths::{BreathDetector, segment_breaths};
 use breathing_torso::stats::io::Series;
 use breathing_torso::stats::prepare::SpiroKind;
-use breathing_torso::stats::rng::Pcg64;
 use breathing_torso::stats::synth::{SpiroSynthOptions, VolumeSource, synth_spirometry};
 use breathing_torso::stats::validation::{ValidationOptions, validate, write_outputs};
 use std::f64::consts::PI;

@@ -5,7 +5,7 @@
 //! failure fails the test. The full soak is `torso bench soak`.
 
 use breathing_torso::bench::{SceneOutcome, random_scene, stress_scene};
-use breathing_torso::stats::rng::Pcg64;
+use breathing_torso::numeric::rng::Pcg64;
 
 #[test]
 fn twenty_random_scenes_run_ten_seconds_without_blow_up() {

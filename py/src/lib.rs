@@ -14,9 +14,10 @@
 
 use breathing_torso::cli::common::{DriveArgs, SolverArgs, SubjectArgs};
 use breathing_torso::cli::fit::{FitFlags, ModelArgs, default_threads};
-use breathing_torso::fit::{FitOptions, Format, Markers, Method, PoseOptions, ReadOptions, Units};
+use breathing_torso::fit::{FitOptions, Method, PoseOptions};
 use breathing_torso::model::run::{Frame, frame};
 use breathing_torso::model::{AdvanceOptions, Drive};
+use breathing_torso::recording::{Format, Markers, ReadOptions, Units};
 use breathing_torso::stats::io::Series;
 use breathing_torso::stats::prepare::SpiroKind;
 use breathing_torso::{Error, anatomy::MuscleGroup};
@@ -522,7 +523,7 @@ fn breathing_frequency<'py>(
             times.len()
         )));
     }
-    let recording = breathing_torso::fit::Recording {
+    let recording = breathing_torso::recording::Recording {
         grid: (1, points),
         frames: frames_of(&values, points),
         times,

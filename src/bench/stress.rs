@@ -12,7 +12,7 @@
 
 use super::{LUNG_BOUNDS, SceneOutcome, set_all_activations};
 use crate::model::{AdvanceOptions, Config, Quantity, Torso};
-use crate::stats::rng::Pcg64;
+use crate::numeric::rng::Pcg64;
 use crate::{Error, Result};
 use serde::Serialize;
 use std::time::Instant;

@@ -23,9 +23,9 @@ use crate::bench::{
     trajectory_semi_implicit,
 };
 use crate::model::{Config, Drive};
+use crate::numeric::rng::Pcg64;
 use crate::solver::Method;
 use crate::stats::plot::{BLUE, DARK, Mark, ORANGE, Panel, RED, Trace, write_figure};
-use crate::stats::rng::Pcg64;
 use crate::{Error, Result};
 use clap::{Args, Subcommand};
 use serde::Serialize;

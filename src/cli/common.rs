@@ -162,13 +162,13 @@ pub fn flag_error(e: Error) -> Error {
 /// Parses a marker grid `ROWSxCOLS` given as `flag` (1..16 each, as the FMU's and the C
 /// ABI's `grid.rows` and `grid.cols`).
 pub fn parse_grid_flag(flag: &str, s: &str) -> Result<(usize, usize)> {
-    crate::fit::recording::parse_grid(s).ok_or_else(|| {
+    crate::recording::parse_grid(s).ok_or_else(|| {
         Error::invalid(
             flag,
             s,
             format!(
                 "ROWSxCOLS with 1..{} each, e.g. 10x6",
-                crate::fit::recording::MAX_GRID_SIDE
+                crate::recording::MAX_GRID_SIDE
             ),
         )
     })

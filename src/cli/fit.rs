@@ -14,10 +14,10 @@ use crate::fit::report::{
 };
 use crate::fit::size::{SizeOptions, estimate_size, registration_residual};
 use crate::fit::{
-    FitOptions, Markers, Method, PoseOptions, ReadOptions, Recording, TorsoMarkers, Units,
-    bind_recording, fit_any_markers, fit_recording,
+    FitOptions, Method, PoseOptions, TorsoMarkers, bind_recording, fit_any_markers, fit_recording,
 };
 use crate::model::Drive;
+use crate::recording::{Markers, ReadOptions, Recording, Units};
 use crate::{Error, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -1095,7 +1095,7 @@ fn sweep_mismatch(args: &SweepArgs) -> Result<()> {
                 times: t.synthetic.recording.times.clone(),
                 frames: t.synthetic.recording.frames.clone(),
                 units: Units::Metres,
-                format: crate::fit::Format::MarkerCsv,
+                format: crate::recording::Format::MarkerCsv,
                 provenance: Vec::new(),
             }
             .write(&path)?;

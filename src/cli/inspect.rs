@@ -3,7 +3,7 @@
 
 use super::fit::ReadArgs;
 use crate::Result;
-use crate::fit::Markers;
+use crate::recording::Markers;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -70,7 +70,7 @@ pub struct ConvertArgs {
 /// Runs `torso convert`.
 pub fn convert(args: &ConvertArgs) -> Result<()> {
     let m = Markers::read(&args.input, &args.read.options()?)?;
-    crate::fit::Format::from_path(&args.output)?;
+    crate::recording::Format::from_path(&args.output)?;
     super::common::prepare_output_file(&args.output)?;
     m.write(&args.output)?;
     println!(

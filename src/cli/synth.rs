@@ -5,9 +5,8 @@ use super::common::{DriveArgs, prepare_output_file};
 use super::fit::ModelArgs;
 use crate::anatomy::skin::{BUILTIN_SETS, MarkerSet, Skin, SkinOptions};
 use crate::fit::report::{drive_fmi, model_provenance, truth_json};
-use crate::fit::{
-    Camera, Format, Markers, Recording, SynthOptions, TorsoMarkers, Units, synthesize,
-};
+use crate::fit::{Camera, SynthOptions, TorsoMarkers, synthesize};
+use crate::recording::{Format, Markers, Recording, Units};
 use crate::{Error, Result, Torso};
 use clap::Args;
 use std::path::Path;

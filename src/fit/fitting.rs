@@ -13,15 +13,15 @@
 //! The drive's phase at model time 1/f equals its phase at 0, so the fitted phases are
 //! phases at the recording's first frame; the synthetic recordings use the same convention.
 
-use super::Recording;
 use super::breathing::{RecordingBreaths, breaths_of_signal};
-use super::optimize::{
-    Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
-};
 use super::principal::principal_displacement;
 use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::{RigidTransform, register_rigid};
 use crate::model::{Drive, Wave};
+use crate::numeric::optimize::{
+    Bounds, Minimum, NelderMeadOptions, Spare, cmaes, multistart, nelder_mead_parallel,
+};
+use crate::recording::Recording;
 use crate::stats::frequency::{FrequencyEstimate, estimate_frequency};
 use crate::{Error, Result};
 use nalgebra::Point3;
@@ -97,7 +97,7 @@ pub struct FitOptions {
     pub start: Option<[f64; 4]>,
     /// Threads for the Nelder-Mead search: with 2, a second instance of the model (sharing
     /// the compiled model) evaluates ahead the point the search is likely to need next
-    /// ([`super::optimize::nelder_mead_parallel`]); the search and its result are those
+    /// ([`crate::numeric::optimize::nelder_mead_parallel`]); the search and its result are those
     /// of one thread.
     pub threads: usize,
     /// Leave each marker's constant offset out of the cost: the model's and the recording's
@@ -780,7 +780,7 @@ pub fn fit_recording(
         return fit_marker_frames(model, recording, options, progress);
     }
     let labels: Vec<String> = (0..recording.points())
-        .map(super::markers::grid_label)
+        .map(crate::recording::grid_label)
         .collect();
     let cleaned = super::clean::clean(&recording.times, &labels, &recording.frames)?;
     let repaired = Recording {
@@ -1212,7 +1212,7 @@ pub fn fit_with_skin(
         grid: recording.grid,
         times: vec![t0, t0 + 1.0 / recording.rate().max(1.0)],
         frames: vec![frame.clone(), frame],
-        units: super::Units::Metres,
+        units: crate::recording::Units::Metres,
         provenance: Vec::new(),
     }
     .write(reference)?;

@@ -22,15 +22,15 @@
 //! floor (mean length of the noise vectors) is stated in.
 
 use super::fitting::{Fit, FitOptions, estimated_noise_floor, fit_recording};
-use super::recording::Units;
 use super::synth::{Camera, SynthOptions, Synthetic, synthesize};
-use super::{MarkerSource, Markers, Recording, TorsoMarkers, Trajectory, fit_any_markers};
+use super::{MarkerSource, TorsoMarkers, Trajectory, fit_any_markers};
 use crate::anatomy::Subject;
 use crate::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions};
 use crate::fit::clinical::BreathReport;
 use crate::model::Drive;
+use crate::numeric::rng::Pcg64;
+use crate::recording::{Markers, Recording, Units};
 use crate::stats::breaths::{BreathDetector, segment_breaths};
-use crate::stats::rng::Pcg64;
 use crate::{Config, Error, Result, Torso};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -369,7 +369,7 @@ pub fn fit_truth_recording(
             times: recording.times.clone(),
             frames: recording.frames.clone(),
             units: Units::Metres,
-            format: super::Format::MarkerCsv,
+            format: crate::recording::Format::MarkerCsv,
             provenance: Vec::new(),
         };
         fit_any_markers(

@@ -1,11 +1,9 @@
 //! Fitting the model to structured-light plethysmography (SLP) recordings (thesis 3.4 and
-//! 4.3): the recording format, synthetic recordings with known parameters, the breathing
+//! 4.3), read by [`crate::recording`]: synthetic recordings with known parameters, the breathing
 //! frequency of a recording, derivative-free optimisers, the fit loop and its report.
 //!
 //! | file | owns |
 //! |---|---|
-//! | [`recording`] | the CSV recording format: reader (errors with file, line, column) and writer |
-//! | [`markers`] | marker recordings in lab formats (C3D, TRC, CSV of named markers) into one structure |
 //! | [`named`] | recordings of any marker set: registration to the skin without correspondences, binding, fit |
 //! | [`principal`] | principal displacement of the grid (PCA) and the breathing frequency |
 //! | [`quality`] | what a fit's figures mean: noise floor (local cubic fits, pre-filter check), motion explained, bounds, verdict |
@@ -16,7 +14,6 @@
 //! | [`drift`] | each marker's slow drift (linear spline, knots three breaths apart) projected out of the cost |
 //! | [`figure`] | the PNG/SVG report: lung volume, compartments, markers, front view of residuals |
 //! | [`orient`] | the pose of a marker set on the body: shape candidates, front from the breathing motion, short fits |
-//! | [`optimize`] | bounded Nelder-Mead (Gao & Han coefficients), multi-start, CMA-ES |
 //! | [`source`] | the [`MarkerSource`] a fit runs: one [`crate::Torso`] reused by snapshot/restore |
 //! | [`fitting`] | registration, frequency, the search over amplitudes and phases (eq. 3.1) |
 //! | [`synth`] | synthetic recordings: camera pose, noise, variability, dropped points |
@@ -31,14 +28,11 @@ pub mod clinical;
 pub mod drift;
 pub mod figure;
 pub mod fitting;
-pub mod markers;
 pub mod mismatch;
 pub mod named;
-pub mod optimize;
 pub mod orient;
 pub mod principal;
 pub mod quality;
-pub mod recording;
 pub mod report;
 pub mod size;
 pub mod source;
@@ -47,9 +41,7 @@ pub mod sweep;
 pub mod synth;
 
 pub use fitting::{Fit, FitOptions, Method, fit_marker_frames, fit_recording};
-pub use markers::{Format, Markers, ReadOptions};
 pub use named::{BoundRecording, MarkerSetFit, bind_recording, bind_with_radius, fit_any_markers};
 pub use orient::{Orientation, PoseOptions};
-pub use recording::{Recording, Units};
 pub use source::{MarkerSource, TorsoMarkers, Trajectory};
 pub use synth::{Camera, SynthOptions, Synthetic, synthesize};

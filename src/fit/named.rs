@@ -6,11 +6,12 @@
 //! others are reported and left out, and the bound markers are fitted with the grid's cost
 //! and optimiser ([`super::fitting::fit_marker_frames`]).
 
+use super::TorsoMarkers;
 use super::fitting::{Fit, FitOptions, fit_marker_frames};
 use super::orient::{Orientation, PoseOptions, orient};
-use super::{Markers, Recording, TorsoMarkers};
 use crate::anatomy::skin::{MarkerSet, Skin, SkinOptions, SurfaceOptions, SurfaceRegistration};
 use crate::model::Torso;
+use crate::recording::{Markers, Recording};
 use crate::{Error, Result};
 use std::sync::Arc;
 

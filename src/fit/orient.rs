@@ -34,13 +34,14 @@
 //!    20-50 degrees in the patch's plane fit the motion alike): the one that fits the skin
 //!    best of them is chosen, and a warning names both residuals and what was done.
 
+use super::TorsoMarkers;
 use super::fitting::{LinearFit, linear_basis, linearised_fit};
 use super::principal::principal_displacement;
-use super::{Markers, Recording, TorsoMarkers};
 use crate::anatomy::skin::{
     MIN_SURFACE_MARKERS, MarkerSet, Skin, SurfaceOptions, SurfaceRegistration, register_candidates,
 };
 use crate::model::{Torso, Wave};
+use crate::recording::{Markers, Recording};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use std::sync::Arc;

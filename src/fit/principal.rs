@@ -10,7 +10,7 @@
 //! [`crate::stats::frequency::estimate_frequency`] (Hann-windowed DFT with two-bin
 //! interpolation, autocorrelation cross-check).
 
-use super::Recording;
+use crate::recording::Recording;
 use crate::stats::frequency::{FrequencyEstimate, detrend_linear, estimate_frequency};
 use crate::{Error, Result};
 use nalgebra::{DMatrix, Vector3};

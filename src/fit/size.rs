@@ -12,12 +12,12 @@
 //! and mass (its girths grow with body mass index), so the residual separates a taller
 //! subject from a heavier one; a uniform scale of the registration would not.
 
-use super::optimize::{Bounds, NelderMeadOptions, nelder_mead};
 use super::{MarkerSource, TorsoMarkers};
 use crate::anatomy::Subject;
 use crate::anatomy::skin::{
     RigidTransform, Skin, SkinOptions, SurfaceOptions, register_rigid, register_to_surface,
 };
+use crate::numeric::optimize::{Bounds, NelderMeadOptions, nelder_mead};
 use crate::{Config, Error, Result};
 use nalgebra::Point3;
 

@@ -39,10 +39,10 @@
 //! removed and the fit's report says so: on the front alone
 //! breathing and forward sway are the same signal.
 
-use super::Recording;
 use super::principal::principal_displacement;
 use super::quality::explained;
 use crate::anatomy::skin::{RigidTransform, Skin, SurfaceBinding, register_rigid};
+use crate::recording::Recording;
 use crate::stats::frequency::estimate_frequency;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, DVector, Point3, UnitQuaternion, Vector3};
@@ -283,7 +283,7 @@ pub fn breathing_frequency(times: &[f64], frames: &[Vec<Option<Point3<f64>>>]) -
         grid: (points, 1),
         times: times.to_vec(),
         frames: registered,
-        units: super::Units::Metres,
+        units: crate::recording::Units::Metres,
         provenance: Vec::new(),
     };
     let pd = principal_displacement(&recording)?;

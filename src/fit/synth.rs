@@ -11,13 +11,13 @@
 //! the breath boundaries (rib-cage inspiration onsets) with phases chosen so the waves are
 //! continuous ([`Breaths::schedule`]).
 
-use super::Recording;
 use super::fitting::wrap_angle;
-use super::recording::Units;
 use super::source::{MarkerSource, Trajectory};
 use crate::anatomy::skin::RigidTransform;
 use crate::model::{Breath, Breaths, Drive};
-use crate::stats::rng::Pcg64;
+use crate::numeric::rng::Pcg64;
+use crate::recording::Recording;
+use crate::recording::Units;
 use crate::{Error, Result};
 use nalgebra::{Point3, Rotation3, Unit, UnitQuaternion, Vector3};
 use std::f64::consts::PI;

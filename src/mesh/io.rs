@@ -95,17 +95,8 @@ fn as_text(bytes: &[u8], name: &str) -> Result<String> {
         let upto = &bytes[..e.utf8_error().valid_up_to()];
         let line = upto.iter().filter(|&&b| b == b'\n').count() + 1;
         let column = upto.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
-        perr(name, line, column, "invalid UTF-8 text")
+        Error::parse(name, line, column, "invalid UTF-8 text")
     })
-}
-
-fn perr(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.to_string(),
-        line,
-        column,
-        message: message.into(),
-    }
 }
 
 /// Whitespace-separated tokens of one line with their 1-based columns.
@@ -130,7 +121,7 @@ fn tokens(line: &str) -> impl Iterator<Item = (usize, &str)> {
 fn parse_f64(tok: &str, name: &str, line: usize, col: usize, what: &str) -> Result<f64> {
     match tok.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(perr(
+        _ => Err(Error::parse(
             name,
             line,
             col,
@@ -160,7 +151,7 @@ pub fn parse_obj(text: &str, name: &str) -> Result<TriMesh> {
                 let mut c = [0.0; 3];
                 for (k, ck) in c.iter_mut().enumerate() {
                     let (col, t) = toks.next().ok_or_else(|| {
-                        perr(
+                        Error::parse(
                             name,
                             line,
                             raw.len() + 1,
@@ -176,7 +167,7 @@ pub fn parse_obj(text: &str, name: &str) -> Result<TriMesh> {
                 for (col, t) in toks {
                     let first = t.split('/').next().unwrap_or("");
                     let i: i64 = first.parse().map_err(|_| {
-                        perr(
+                        Error::parse(
                             name,
                             line,
                             col,
@@ -186,7 +177,7 @@ pub fn parse_obj(text: &str, name: &str) -> Result<TriMesh> {
                     let n = vertices.len() as i64;
                     let resolved = if i > 0 { i - 1 } else { n + i };
                     if i == 0 || resolved < 0 || resolved >= n {
-                        return Err(perr(
+                        return Err(Error::parse(
                             name,
                             line,
                             col,
@@ -196,7 +187,7 @@ pub fn parse_obj(text: &str, name: &str) -> Result<TriMesh> {
                     idx.push(resolved as u32);
                 }
                 if idx.len() < 3 {
-                    return Err(perr(
+                    return Err(Error::parse(
                         name,
                         line,
                         1,
@@ -244,7 +235,7 @@ pub fn parse_stl(bytes: &[u8], name: &str, weld_tolerance: f64) -> Result<TriMes
     } else if looks_ascii {
         parse_stl_ascii(&as_text(bytes, name)?, name)?
     } else if bytes.len() < 84 {
-        return Err(perr(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -255,7 +246,7 @@ pub fn parse_stl(bytes: &[u8], name: &str, weld_tolerance: f64) -> Result<TriMes
         ));
     } else {
         let n = (bytes.len() - 84) / 50;
-        return Err(perr(
+        return Err(Error::parse(
             name,
             0,
             0,
@@ -287,7 +278,7 @@ fn parse_stl_binary(bytes: &[u8], name: &str) -> Result<TriMesh> {
                 let o = 12 + 12 * k + 4 * j;
                 let v = f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
                 if !v.is_finite() {
-                    return Err(perr(
+                    return Err(Error::parse(
                         name,
                         0,
                         0,
@@ -328,12 +319,17 @@ fn parse_stl_ascii(text: &str, name: &str) -> Result<TriMesh> {
             "outer" => in_loop = Some((line, vertices.len())),
             "vertex" => {
                 if in_loop.is_none() {
-                    return Err(perr(name, line, col, "`vertex` outside an `outer loop`"));
+                    return Err(Error::parse(
+                        name,
+                        line,
+                        col,
+                        "`vertex` outside an `outer loop`",
+                    ));
                 }
                 let mut c = [0.0; 3];
                 for (k, ck) in c.iter_mut().enumerate() {
                     let (col, t) = toks.next().ok_or_else(|| {
-                        perr(
+                        Error::parse(
                             name,
                             line,
                             raw.len() + 1,
@@ -346,11 +342,16 @@ fn parse_stl_ascii(text: &str, name: &str) -> Result<TriMesh> {
             }
             "endloop" => {
                 let Some((_, start)) = in_loop.take() else {
-                    return Err(perr(name, line, col, "`endloop` without `outer loop`"));
+                    return Err(Error::parse(
+                        name,
+                        line,
+                        col,
+                        "`endloop` without `outer loop`",
+                    ));
                 };
                 let n = vertices.len() - start;
                 if n != 3 {
-                    return Err(perr(
+                    return Err(Error::parse(
                         name,
                         line,
                         col,
@@ -361,7 +362,7 @@ fn parse_stl_ascii(text: &str, name: &str) -> Result<TriMesh> {
                 triangles.push([b, b + 1, b + 2]);
             }
             other => {
-                return Err(perr(
+                return Err(Error::parse(
                     name,
                     line,
                     col,
@@ -370,11 +371,16 @@ fn parse_stl_ascii(text: &str, name: &str) -> Result<TriMesh> {
             }
         }
         if !seen_solid {
-            return Err(perr(name, line, 1, "ASCII STL must start with `solid`"));
+            return Err(Error::parse(
+                name,
+                line,
+                1,
+                "ASCII STL must start with `solid`",
+            ));
         }
     }
     if let Some((line, _)) = in_loop {
-        return Err(perr(
+        return Err(Error::parse(
             name,
             line,
             1,
@@ -532,7 +538,7 @@ impl<'a> Stream<'a> {
 
     fn next(&mut self, what: &str) -> Result<(usize, usize, &'a str)> {
         let t = self.toks.get(self.pos).copied().ok_or_else(|| {
-            perr(
+            Error::parse(
                 self.name,
                 self.last_line.max(1),
                 0,
@@ -561,7 +567,7 @@ impl<'a> Stream<'a> {
     fn usize(&mut self, what: &str) -> Result<(usize, usize, usize)> {
         let (l, c, t) = self.next(what)?;
         t.parse::<usize>().map(|v| (v, l, c)).map_err(|_| {
-            perr(
+            Error::parse(
                 self.name,
                 l,
                 c,
@@ -573,7 +579,7 @@ impl<'a> Stream<'a> {
     fn index(&mut self, n: usize, what: &str) -> Result<u32> {
         let (v, l, c) = self.usize(what)?;
         if v >= n {
-            return Err(perr(
+            return Err(Error::parse(
                 self.name,
                 l,
                 c,
@@ -588,7 +594,7 @@ impl<'a> Stream<'a> {
         if t.eq_ignore_ascii_case(expected) {
             Ok(())
         } else {
-            Err(perr(
+            Err(Error::parse(
                 self.name,
                 l,
                 c,
@@ -618,7 +624,7 @@ pub fn parse_off(text: &str, name: &str) -> Result<TriMesh> {
         } else {
             format!("expected `OFF` header, found {head:?}")
         };
-        return Err(perr(name, l, c, msg));
+        return Err(Error::parse(name, l, c, msg));
     }
     let (nv, ..) = s.usize("the vertex count")?;
     let (nf, ..) = s.usize("the face count")?;
@@ -634,7 +640,7 @@ pub fn parse_off(text: &str, name: &str) -> Result<TriMesh> {
     for _ in 0..nf {
         let (k, l, c) = s.usize("the face's vertex count")?;
         if k < 3 {
-            return Err(perr(
+            return Err(Error::parse(
                 name,
                 l,
                 c,
@@ -684,14 +690,19 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
     let mut lines = text.lines();
     let first = lines.next().unwrap_or("");
     if !first.starts_with("# vtk DataFile") {
-        return Err(perr(name, 1, 1, "expected `# vtk DataFile Version x.x`"));
+        return Err(Error::parse(
+            name,
+            1,
+            1,
+            "expected `# vtk DataFile Version x.x`",
+        ));
     }
     let mut s = Stream::new(text, name, 2, false);
     s.keyword("ASCII")?;
     s.keyword("DATASET")?;
     let (l, c, kind) = s.next("a dataset type")?;
     if !kind.eq_ignore_ascii_case("POLYDATA") {
-        return Err(perr(
+        return Err(Error::parse(
             name,
             l,
             c,
@@ -737,7 +748,7 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
                         for w in offs.windows(2) {
                             let ((o0, ..), (o1, l1, c1)) = (w[0], w[1]);
                             if o1 < o0 || o1 > conn.len() {
-                                return Err(perr(
+                                return Err(Error::parse(
                                     name,
                                     l1,
                                     c1,
@@ -760,7 +771,7 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
                             );
                         }
                         if used != b {
-                            return Err(perr(
+                            return Err(Error::parse(
                                 name,
                                 l,
                                 c,
@@ -788,7 +799,7 @@ pub fn parse_vtk(text: &str, name: &str) -> Result<TriMesh> {
             }
             "POINT_DATA" | "CELL_DATA" | "METADATA" | "FIELD" => break,
             other => {
-                return Err(perr(
+                return Err(Error::parse(
                     name,
                     l,
                     c,

@@ -580,15 +580,6 @@ pub struct SlpFirstFrame {
     pub points: Vec<Option<Point3<f64>>>,
 }
 
-fn parse_err(path: &Path, line: usize, column: usize, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.display().to_string(),
-        line,
-        column,
-        message: message.into(),
-    }
-}
-
 /// Reads the header and first frame of an SLP recording (CSV, UTF-8): optional `#` comment
 /// lines among which `# grid: RxC` and `# units: m|mm`; a header `time,marker[1].x,
 /// marker[1].y,marker[1].z,...` in row-major grid order; one row per frame (time strictly
@@ -618,8 +609,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
             match key.trim().to_ascii_lowercase().as_str() {
                 "grid" => {
                     let bad = || {
-                        parse_err(
-                            path,
+                        Error::parse(
+                            path.display(),
                             ln,
                             1,
                             format!("grid `{value}`: expected ROWSxCOLS with each in 1..=16"),
@@ -641,8 +632,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
                         "m" => 1.0,
                         "mm" => 1e-3,
                         other => {
-                            return Err(parse_err(
-                                path,
+                            return Err(Error::parse(
+                                path.display(),
                                 ln,
                                 1,
                                 format!("unknown units `{other}`: expected `m` or `mm`"),
@@ -657,16 +648,16 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let Some((_, n)) = header else {
             if cells[0] != "time" {
-                return Err(parse_err(
-                    path,
+                return Err(Error::parse(
+                    path.display(),
                     ln,
                     1,
                     format!("header starts with `{}`, expected `time`", cells[0]),
                 ));
             }
             if cells.len() < 4 || !(cells.len() - 1).is_multiple_of(3) {
-                return Err(parse_err(
-                    path,
+                return Err(Error::parse(
+                    path.display(),
                     ln,
                     cells.len(),
                     format!(
@@ -682,8 +673,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
                     ["x", "y", "z"][(k - 1) % 3]
                 );
                 if *cell != want {
-                    return Err(parse_err(
-                        path,
+                    return Err(Error::parse(
+                        path.display(),
                         ln,
                         k + 1,
                         format!("header column `{cell}`, expected `{want}`"),
@@ -694,8 +685,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
             continue;
         };
         if cells.len() != 1 + 3 * n {
-            return Err(parse_err(
-                path,
+            return Err(Error::parse(
+                path.display(),
                 ln,
                 cells.len().min(1 + 3 * n) + 1,
                 format!("row has {} cells, the header {}", cells.len(), 1 + 3 * n),
@@ -708,15 +699,16 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
             }
             match c.parse::<f64>() {
                 Ok(v) if v.is_finite() => Ok(Some(v)),
-                _ => Err(parse_err(
-                    path,
+                _ => Err(Error::parse(
+                    path.display(),
                     ln,
                     k + 1,
                     format!("`{c}` is not a finite number"),
                 )),
             }
         };
-        let time = number(0)?.ok_or_else(|| parse_err(path, ln, 1, "empty time cell"))?;
+        let time =
+            number(0)?.ok_or_else(|| Error::parse(path.display(), ln, 1, "empty time cell"))?;
         match &first {
             None => {
                 let mut points = Vec::with_capacity(n);
@@ -733,8 +725,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
             }
             Some((t0, points)) => {
                 if time <= *t0 {
-                    return Err(parse_err(
-                        path,
+                    return Err(Error::parse(
+                        path.display(),
                         ln,
                         1,
                         format!("time {time} does not increase (previous {t0})"),
@@ -744,8 +736,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
                 let (rows, cols) = match grid {
                     Some((r, c, gl)) => {
                         if r * c != n {
-                            return Err(parse_err(
-                                path,
+                            return Err(Error::parse(
+                                path.display(),
                                 gl,
                                 1,
                                 format!("grid {r}x{c} has {} points, the header {n}", r * c),
@@ -755,8 +747,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
                     }
                     None if n == 60 => (10, 6),
                     None => {
-                        return Err(parse_err(
-                            path,
+                        return Err(Error::parse(
+                            path.display(),
                             header.map(|h| h.0).unwrap_or(0),
                             1,
                             format!("{n} grid points: add a `# grid: RxC` line (rows x columns)"),
@@ -774,8 +766,8 @@ pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
         }
     }
     let line = text.lines().count();
-    Err(parse_err(
-        path,
+    Err(Error::parse(
+        path.display(),
         line,
         0,
         match (header, first) {

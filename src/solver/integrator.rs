@@ -13,6 +13,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::control::{Chain, Controller, ERR_OLD_MIN};
+use super::norm;
 use super::rosenbrock::Rosenbrock;
 use super::tableau::{DOPRI5, Tableau};
 use super::{ErrorWeights, Method, Ode, Options, SolverError, Stats};
@@ -824,8 +825,7 @@ impl Integrator {
         }
     }
 
-    /// Weighted RMS norm of the local error estimate h Σ e_j k_j with
-    /// sc_i = atol + rtol · max(|y0_i|, |y1_i|) (Hairer, Norsett & Wanner, eq. II.4.11).
+    /// Weighted RMS norm ([`super::norm`]) of the local error estimate h Σ e_j k_j.
     /// DOP853 combines its two estimators as err5² / sqrt(err5² + 0.01 err3²).
     fn error_norm(&mut self, y: &[f64], h: f64, weights: Option<ErrorWeights>) -> f64 {
         let n = self.dim;
@@ -841,34 +841,12 @@ impl Integrator {
         } = &mut self.work;
         stage_sum(e5, tab.e, &self.fsal_k, k, n);
         let (y, ynew) = (&y[..n], &ynew[..n]);
-        let scale = |a: f64, b: f64| (atol + rtol * a.abs().max(b.abs())).max(f64::MIN_POSITIVE);
-        let weighted = |e: &[f64]| -> f64 {
-            match weights {
-                None => e[..n]
-                    .iter()
-                    .zip(y)
-                    .zip(ynew)
-                    .map(|((&e, &a), &b)| (e / scale(a, b)).powi(2))
-                    .sum(),
-                Some(w) => e[..n]
-                    .iter()
-                    .zip(&w.reference[..n])
-                    .zip(&w.weight[..n])
-                    .map(|((&e, &r), &w)| {
-                        let r = r as usize;
-                        let sc = (w * atol + rtol * y[r].abs().max(ynew[r].abs()))
-                            .max(f64::MIN_POSITIVE);
-                        (e / sc).powi(2)
-                    })
-                    .sum(),
-            }
-        };
-        let sum = weighted(e5);
         match tab.e_low {
-            None => h * (sum / n as f64).sqrt(),
+            None => h * norm::rms(&e5[..n], y, ynew, atol, rtol, weights),
             Some(el) => {
+                let sum = norm::square_sum(&e5[..n], y, ynew, atol, rtol, weights);
                 stage_sum(e3, el, &self.fsal_k, k, n);
-                let sum_low = weighted(e3);
+                let sum_low = norm::square_sum(&e3[..n], y, ynew, atol, rtol, weights);
                 if sum == 0.0 && sum_low == 0.0 {
                     return 0.0;
                 }

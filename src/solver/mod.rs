@@ -6,14 +6,15 @@
 //! Failures (non-finite state, step below its floor, too many rejections) are returned as
 //! [`SolverError`]s and leave the caller's state at the last accepted step; nothing panics.
 //!
-//! Layout: `tableau.rs` holds the coefficients of the pairs (Dormand & Prince 1980,
-//! Bogacki & Shampine 1989, DOP853 of Hairer, Norsett & Wanner), `integrator.rs` the
-//! stepping, step control and dense output ([`Integrator`]); `rosenbrock.rs` the stiff
-//! method ([`Method::Rosenbrock`], ROS34PW2), `sparse.rs` its sparse Jacobian, colouring and
-//! linear solver; `symplectic.rs` a fixed-step semi-implicit Euler for comparison
-//! ([`SemiImplicitEuler`]); this file the public types. A problem offers its Jacobian's
-//! structure to the stiff method through [`StiffOde`] (found by [`Ode::as_stiff`]); without
-//! it the stiff method differences densely.
+//! Layout: `tableau.rs` holds the coefficients of the pairs (Dormand & Prince 1980, Bogacki
+//! & Shampine 1989, DOP853 of Hairer, Norsett & Wanner), `integrator.rs` the stepping, step
+//! control and dense output ([`Integrator`]); `control.rs` the PI step-size controller and
+//! `norm.rs` the weighted RMS error norm, both shared by the explicit pairs and the stiff
+//! method; `rosenbrock.rs` the stiff method ([`Method::Rosenbrock`], ROS34PW2), `sparse.rs`
+//! its sparse Jacobian, colouring and linear solver; `symplectic.rs` a fixed-step
+//! semi-implicit Euler for comparison ([`SemiImplicitEuler`]); this file the public types.
+//! A problem offers its Jacobian's structure to the stiff method through [`StiffOde`]
+//! (found by [`Ode::as_stiff`]); without it the stiff method differences densely.
 //!
 //! ```
 //! use breathing_torso::solver::{Integrator, Method, Ode, Options};
@@ -42,6 +43,7 @@
 
 mod control;
 mod integrator;
+mod norm;
 mod rosenbrock;
 pub mod sparse;
 mod symplectic;

@@ -20,6 +20,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::control::{Chain, Controller, ERR_OLD_MIN};
+use super::norm;
 use super::sparse::{Jacobian, Pattern, ShiftedSolver};
 use super::{Ode, Options, SolverError, Stats, StiffOde};
 
@@ -549,19 +550,8 @@ impl Rosenbrock {
             w.ynew[l] = y[l] + y1;
             w.ytmp[l] = e;
         }
-        // the problem's error weights, as the explicit pairs use them
-        let weights = ode.error_weights();
-        let mut sum = 0.0;
-        for l in 0..n {
-            let (r, wt) = match &weights {
-                Some(ew) => (ew.reference[l] as usize, ew.weight[l]),
-                None => (l, 1.0),
-            };
-            let sc = (wt * atol + rtol * y[r].abs().max(w.ynew[r].abs())).max(f64::MIN_POSITIVE);
-            let e = w.ytmp[l];
-            sum += (e / sc) * (e / sc);
-        }
-        let err = (sum / n as f64).sqrt();
+        // the error norm of the explicit pairs, with the problem's error weights
+        let err = norm::rms(&w.ytmp[..n], y, &w.ynew, atol, rtol, ode.error_weights());
         if err.is_finite() && w.ynew.iter().all(|v| v.is_finite()) {
             Attempt::Error(err)
         } else {

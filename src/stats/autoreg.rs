@@ -37,8 +37,8 @@
 //!    on `beta` under the null nor on the scale of `y`, so the null series need neither.
 
 use super::ols::FTest;
-use super::rng::Pcg64;
-use crate::fit::optimize::{Bounds, NelderMeadOptions, nelder_mead};
+use crate::numeric::optimize::{Bounds, NelderMeadOptions, nelder_mead};
+use crate::numeric::rng::Pcg64;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;

@@ -27,7 +27,7 @@
 //!
 //! The chain starts from the equally spaced knot set with the best BIC among `k = 1..=60`
 //! (so a short burn-in suffices), runs `burn_in` iterations (200) then `samples` (2000),
-//! all driven by a seeded [`Pcg64`](super::rng::Pcg64): the same seed gives the same fit.
+//! all driven by a seeded [`Pcg64`](crate::numeric::rng::Pcg64): the same seed gives the same fit.
 //! At each retained iteration the fitted curve is recorded (its average is the posterior
 //! mean curve) and one curve is drawn from `N(beta_hat, sigma^2 (B'B)^-1)`, whose pointwise
 //! 2.5 and 97.5 % quantiles make the 95 % band.
@@ -43,8 +43,8 @@
 //! `|f1_hat - f2_hat|^2 / (sigma_1^2 + sigma_2^2)`; it is reported at the knot draw with
 //! the best BIC with the screening p-value of `T^2 / p ~ F(p, 2(n - p))`.
 
-use super::rng::Pcg64;
 use super::special::{beta_ln_pdf, f_sf};
+use crate::numeric::rng::Pcg64;
 use crate::{Error, Result};
 use serde::Serialize;
 

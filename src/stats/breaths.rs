@@ -288,7 +288,7 @@ pub fn pair_breaths(a: &[Breath], b: &[Breath], max_gap_s: f64) -> Vec<(usize, u
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::rng::Pcg64;
+    use crate::numeric::rng::Pcg64;
     use std::f64::consts::PI;
 
     #[test]

@@ -58,15 +58,6 @@ pub struct Table {
     raw: Vec<String>,
 }
 
-fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.to_string(),
-        line,
-        column,
-        message: message.into(),
-    }
-}
-
 /// Parses CSV text (header row, `#` comments and blank lines skipped, numbers in every
 /// field). `path` is only used in error messages.
 pub fn parse_table(path: &str, text: &str) -> Result<Table> {
@@ -84,7 +75,7 @@ pub fn parse_table(path: &str, text: &str) -> Result<Table> {
             None => {
                 let h: Vec<String> = raw.split(',').map(|s| s.trim().to_string()).collect();
                 if let Some(pos) = h.iter().position(String::is_empty) {
-                    return Err(parse_err(
+                    return Err(Error::parse(
                         path,
                         line_no,
                         field_column(raw, pos),
@@ -96,7 +87,7 @@ pub fn parse_table(path: &str, text: &str) -> Result<Table> {
             Some((h, _)) => {
                 let fields: Vec<&str> = raw.split(',').collect();
                 if fields.len() != h.len() {
-                    return Err(parse_err(
+                    return Err(Error::parse(
                         path,
                         line_no,
                         1,
@@ -112,7 +103,7 @@ pub fn parse_table(path: &str, text: &str) -> Result<Table> {
                     match f.trim().parse::<f64>() {
                         Ok(v) if v.is_finite() => row.push(v),
                         _ => {
-                            return Err(parse_err(
+                            return Err(Error::parse(
                                 path,
                                 line_no,
                                 field_column(raw, j),
@@ -127,8 +118,9 @@ pub fn parse_table(path: &str, text: &str) -> Result<Table> {
             }
         }
     }
-    let (headers, header_line) = headers
-        .ok_or_else(|| parse_err(path, 0, 0, "no header row (file is empty or only comments)"))?;
+    let (headers, header_line) = headers.ok_or_else(|| {
+        Error::parse(path, 0, 0, "no header row (file is empty or only comments)")
+    })?;
     Ok(Table {
         path: path.to_string(),
         headers,
@@ -173,7 +165,7 @@ impl Table {
     pub fn series(&self, name: &str, min_rows: usize) -> Result<Series> {
         let min_rows = min_rows.max(2);
         let ti = self.column_index("time").ok_or_else(|| {
-            parse_err(
+            Error::parse(
                 &self.path,
                 self.header_line,
                 1,
@@ -184,7 +176,7 @@ impl Table {
             )
         })?;
         let vi = self.column_index(name).ok_or_else(|| {
-            parse_err(
+            Error::parse(
                 &self.path,
                 self.header_line,
                 1,
@@ -199,7 +191,7 @@ impl Table {
         let time_col = |k: usize| field_column(&self.raw[k], ti);
         for k in 1..time.len() {
             if time[k] <= time[k - 1] {
-                return Err(parse_err(
+                return Err(Error::parse(
                     &self.path,
                     self.lines[k],
                     time_col(k),
@@ -219,7 +211,7 @@ impl Table {
             source: self.path.clone(),
         };
         if self.rows.len() < min_rows {
-            return Err(parse_err(
+            return Err(Error::parse(
                 &self.path,
                 self.lines.last().copied().unwrap_or(self.header_line),
                 0,
@@ -233,7 +225,7 @@ impl Table {
         for k in 1..series.time.len() {
             let dt = series.time[k] - series.time[k - 1];
             if (dt - step).abs() > 0.5 * step {
-                return Err(parse_err(
+                return Err(Error::parse(
                     &self.path,
                     self.lines[k],
                     time_col(k),

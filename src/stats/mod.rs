@@ -22,7 +22,6 @@
 //! | [`cosinor`] | cosinor fits and equality tests |
 //! | [`bars`] | BARS fits and equality test |
 //! | [`special`] | gamma, incomplete beta, t, F, normal distributions |
-//! | [`rng`] | seeded PCG64 generator and variates |
 //! | [`synth`] | synthetic spirometry |
 //! | [`thoracoabdominal`] | rib-cage / abdomen phase angle (Lissajous) and rib-cage share |
 //! | [`montecarlo`] | size and power of the equality tests by simulation |
@@ -41,7 +40,6 @@ pub mod ols;
 pub mod plot;
 pub mod prepare;
 pub mod resample;
-pub mod rng;
 pub mod special;
 pub mod synth;
 pub mod thoracoabdominal;

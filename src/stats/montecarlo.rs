@@ -19,7 +19,7 @@
 use super::autoreg::{ArGlsConfig, ArRegression};
 use super::bars::{BarsConfig, bars_equality};
 use super::cosinor::{compare_cosinor, cosinor_design};
-use super::rng::Pcg64;
+use crate::numeric::rng::Pcg64;
 use crate::{Error, Result};
 use serde::Serialize;
 use std::f64::consts::PI;

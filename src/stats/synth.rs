@@ -10,7 +10,7 @@
 
 use super::io::Series;
 use super::prepare::SpiroKind;
-use super::rng::Pcg64;
+use crate::numeric::rng::Pcg64;
 use crate::{Error, Result};
 use std::f64::consts::PI;
 

@@ -1,5 +1,6 @@
-//! SLP recordings: the CSV format shared with scripts outside the project, read and written
-//! with errors naming the file, line and column of the first problem.
+//! The SLP grid CSV ([`Recording`]): the format shared with scripts outside the project,
+//! read and written with errors naming the file, line and column of the first problem, and
+//! its conversion to and from the [`Markers`] of the other formats.
 //!
 //! Format (UTF-8): optional leading comment lines starting with `#`, among them
 //! `# grid: RxC` (rows x columns) and `# units: m`, `# units: cm` or `# units: mm`, and
@@ -10,54 +11,15 @@
 //! Without `# grid:` a 60-point recording is a 10 x 6 grid; other sizes need the line.
 //! Positions are held in metres whatever the file's unit.
 
+use super::{Format, Markers, Units, split_cells};
 use crate::{Error, Result};
 use nalgebra::Point3;
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// Largest grid side accepted (the marker grid's own limit).
 pub const MAX_GRID_SIDE: usize = 16;
-
-/// Length unit of a recording file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Units {
-    /// Metres.
-    Metres,
-    /// Millimetres.
-    Millimetres,
-    /// Centimetres.
-    Centimetres,
-}
-
-impl Units {
-    /// Metres per file unit.
-    pub fn to_metres(self) -> f64 {
-        match self {
-            Units::Metres => 1.0,
-            Units::Millimetres => 1e-3,
-            Units::Centimetres => 1e-2,
-        }
-    }
-
-    /// The unit spelt `m`, `cm` or `mm` (case-insensitive, surrounding blanks ignored).
-    pub fn parse(s: &str) -> Option<Units> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "m" => Some(Units::Metres),
-            "cm" => Some(Units::Centimetres),
-            "mm" => Some(Units::Millimetres),
-            _ => None,
-        }
-    }
-
-    /// The spelling used in `# units:` lines.
-    pub fn name(self) -> &'static str {
-        match self {
-            Units::Metres => "m",
-            Units::Millimetres => "mm",
-            Units::Centimetres => "cm",
-        }
-    }
-}
 
 /// A structured-light recording: grid points over time, in metres.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,7 +34,7 @@ pub struct Recording {
     /// Unit of the file it was read from (or is to be written in).
     pub units: Units,
     /// How the recording was made: the `# key: value` comment lines other than `grid` and
-    /// `units`, in file order (see [`crate::fit::markers`] for the keys `torso synth` writes).
+    /// `units`, in file order (see [`crate::recording`] for the keys `torso synth` writes).
     pub provenance: Vec<(String, String)>,
 }
 
@@ -85,15 +47,6 @@ fn provenance_entry_is_valid(key: &str, value: &str) -> bool {
         && !value.contains(['\n', '\r', '\t'])
 }
 
-fn parse_err(path: &str, line: usize, column: usize, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.to_string(),
-        line,
-        column,
-        message: message.into(),
-    }
-}
-
 /// The expected header cell of field `k` (0 = time).
 fn header_name(k: usize) -> String {
     if k == 0 {
@@ -102,22 +55,6 @@ fn header_name(k: usize) -> String {
         let i = (k - 1) / 3 + 1;
         format!("marker[{i}].{}", ["x", "y", "z"][(k - 1) % 3])
     }
-}
-
-/// Splits a line on commas, returning each cell with its 1-based character column.
-fn cells(line: &str) -> Vec<(usize, &str)> {
-    let mut out = Vec::new();
-    let mut start = 0;
-    for (i, c) in line.char_indices() {
-        if c == ',' {
-            out.push((start, &line[start..i]));
-            start = i + 1;
-        }
-    }
-    out.push((start, &line[start..]));
-    out.into_iter()
-        .map(|(b, s)| (line[..b].chars().count() + 1, s))
-        .collect()
 }
 
 /// Parses a marker grid `RxC` (also `R x C`, `R X C`) with 1..[`MAX_GRID_SIDE`] rows and
@@ -172,7 +109,7 @@ impl Recording {
         // Leading comments, then the header.
         let (header_no, header) = loop {
             let Some((no, raw)) = lines.next() else {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     0,
                     0,
@@ -196,7 +133,7 @@ impl Recording {
                             grid_line = no;
                         }
                         None => {
-                            return Err(parse_err(
+                            return Err(Error::parse(
                                 name,
                                 no,
                                 col_of(value.trim()),
@@ -212,7 +149,7 @@ impl Recording {
                             Some(u) => u,
                             None => {
                                 let other = value.trim();
-                                return Err(parse_err(
+                                return Err(Error::parse(
                                     name,
                                     no,
                                     col_of(other),
@@ -224,7 +161,7 @@ impl Recording {
                     _ => {
                         let (key, value) = (key.trim(), value.trim());
                         if !provenance_entry_is_valid(key, value) {
-                            return Err(parse_err(
+                            return Err(Error::parse(
                                 name,
                                 no,
                                 1,
@@ -238,11 +175,11 @@ impl Recording {
         };
 
         // Header.
-        let head = cells(header);
+        let head = split_cells(header, ',');
         for (k, (col, cell)) in head.iter().enumerate() {
             let want = header_name(k);
             if cell.trim() != want {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     header_no,
                     *col,
@@ -256,7 +193,7 @@ impl Recording {
         }
         if head.len() < 4 || !(head.len() - 1).is_multiple_of(3) {
             let col = header.chars().count() + 1;
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no,
                 col,
@@ -271,7 +208,7 @@ impl Recording {
         let grid = match grid {
             Some((r, c)) if r * c == points => (r, c),
             Some((r, c)) => {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     grid_line,
                     1,
@@ -283,7 +220,7 @@ impl Recording {
             }
             None if points == 60 => (10, 6),
             None => {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     1,
                     1,
@@ -306,24 +243,24 @@ impl Recording {
                 continue;
             }
             if let Some(b) = blank_at {
-                return Err(parse_err(name, b, 1, "empty line between frames"));
+                return Err(Error::parse(name, b, 1, "empty line between frames"));
             }
             if line.starts_with('#') {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     no,
                     1,
                     "comment lines are only allowed before the header",
                 ));
             }
-            let row = cells(line);
+            let row = split_cells(line, ',');
             if row.len() != head.len() {
                 let col = if row.len() > head.len() {
                     row[head.len()].0
                 } else {
                     line.chars().count() + 1
                 };
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     no,
                     col,
@@ -341,7 +278,7 @@ impl Recording {
                     return Ok(None);
                 }
                 let v: f64 = s.parse().map_err(|_| {
-                    parse_err(
+                    Error::parse(
                         name,
                         no,
                         col,
@@ -349,7 +286,7 @@ impl Recording {
                     )
                 })?;
                 if !v.is_finite() {
-                    return Err(parse_err(
+                    return Err(Error::parse(
                         name,
                         no,
                         col,
@@ -361,11 +298,11 @@ impl Recording {
                 }
                 Ok(Some(v))
             };
-            let t = number(0)?.ok_or_else(|| parse_err(name, no, 1, "time: empty cell"))?;
+            let t = number(0)?.ok_or_else(|| Error::parse(name, no, 1, "time: empty cell"))?;
             if let Some(&prev) = times.last()
                 && t <= prev
             {
-                return Err(parse_err(
+                return Err(Error::parse(
                     name,
                     no,
                     1,
@@ -383,7 +320,7 @@ impl Recording {
                     [None, None, None] => frame.push(None),
                     _ => {
                         let missing = xyz.iter().position(|v| v.is_none()).unwrap_or(0);
-                        return Err(parse_err(
+                        return Err(Error::parse(
                             name,
                             no,
                             row[k + missing].0,
@@ -399,7 +336,7 @@ impl Recording {
             frames.push(frame);
         }
         if frames.len() < 2 {
-            return Err(parse_err(
+            return Err(Error::parse(
                 name,
                 header_no + frames.len() + 1,
                 1,
@@ -534,5 +471,99 @@ impl Recording {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
         std::fs::write(path, text).map_err(|e| Error::io(path, e))
+    }
+}
+
+/// The label of grid marker `k` (0-based): `marker[k+1]`.
+pub fn grid_label(k: usize) -> String {
+    format!("marker[{}]", k + 1)
+}
+
+impl Markers {
+    /// The markers of a grid recording, labelled `marker[1]`..; its grid joins the provenance.
+    pub fn from_recording(rec: &Recording) -> Markers {
+        let mut provenance = vec![("grid".to_string(), format!("{}x{}", rec.grid.0, rec.grid.1))];
+        provenance.extend(rec.provenance.iter().cloned());
+        Markers {
+            labels: (0..rec.points()).map(grid_label).collect(),
+            times: rec.times.clone(),
+            frames: rec.frames.clone(),
+            units: rec.units,
+            format: Format::GridCsv,
+            provenance,
+        }
+    }
+
+    /// The grid recording of a file whose labels are the grid's `marker[1]`..`marker[R*C]`
+    /// (in any column order); `grid` is the model's marker grid. An error names the labels
+    /// that are not the grid's and what is expected.
+    pub fn to_recording(&self, grid: (usize, usize)) -> Result<Recording> {
+        let n = grid.0 * grid.1;
+        let index: HashMap<&str, usize> = self
+            .labels
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (l.as_str(), k))
+            .collect();
+        let unknown: Vec<&str> = self
+            .labels
+            .iter()
+            .map(String::as_str)
+            .filter(|l| !(0..n).any(|k| grid_label(k) == *l))
+            .collect();
+        let absent: Vec<String> = (0..n)
+            .map(grid_label)
+            .filter(|l| !index.contains_key(l.as_str()))
+            .collect();
+        if !unknown.is_empty() || !absent.is_empty() {
+            let list = |v: &[String]| {
+                if v.len() > 6 {
+                    format!("{}, ... ({} in all)", v[..6].join(", "), v.len())
+                } else {
+                    v.join(", ")
+                }
+            };
+            let unknown: Vec<String> = unknown.iter().map(|s| s.to_string()).collect();
+            let mut msg = format!(
+                "the recording's markers are not the model's {}x{} grid: expected the labels marker[1]..marker[{n}] (row-major from the top row, column 1 on the subject's right)",
+                grid.0, grid.1
+            );
+            if !unknown.is_empty() {
+                let _ = write!(msg, "; not grid labels: {}", list(&unknown));
+            }
+            if !absent.is_empty() {
+                let _ = write!(msg, "; missing: {}", list(&absent));
+            }
+            msg.push_str(" (`torso fit` registers other marker sets to the skin instead, docs/recordings.md)");
+            return Err(Error::State(msg));
+        }
+        let order: Vec<usize> = (0..n).map(|k| index[grid_label(k).as_str()]).collect();
+        let rec = Recording {
+            grid,
+            times: self.times.clone(),
+            frames: self
+                .frames
+                .iter()
+                .map(|f| order.iter().map(|&k| f[k]).collect())
+                .collect(),
+            units: self.units,
+            provenance: self
+                .provenance
+                .iter()
+                .filter(|(k, _)| k != "grid" && k != "units")
+                .cloned()
+                .collect(),
+        };
+        rec.validate()?;
+        Ok(rec)
+    }
+
+    /// The grid the recording names (`grid` provenance), or 10 x 6 for 60 markers.
+    pub fn grid_shape(&self) -> Option<(usize, usize)> {
+        match self.provenance_value("grid") {
+            Some(g) => parse_grid(g),
+            None if self.markers() == 60 => Some((10, 6)),
+            None => None,
+        }
     }
 }

@@ -15,7 +15,7 @@
 //! evaluated point plus a quadratic penalty on the distance the sample lay outside
 //! (Hansen's boundary handling, simplified), so the distribution is pulled back inside.
 
-use crate::stats::rng::Pcg64;
+use super::rng::Pcg64;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
