@@ -384,3 +384,24 @@ fn a_buckling_chest_wall_is_a_clear_error_and_keeps_the_last_good_state() {
         assert_eq!(v, last_good.1);
     }
 }
+
+/// A loose tolerance starts and runs: at rtol 1e-3 and atol 1e-5 L the start equilibrium was
+/// solved as loosely and left the first static solve outside its Newton iterations' reach
+/// (level 1, quiet drive: "did not converge", last correction 3.2e-3 m). The lung volume after
+/// 1 s agrees with an rtol 1e-6 run to 10 x rtol relative: the global error of a
+/// tolerance-controlled integration is of the order of its tolerance (Hairer, Norsett &
+/// Wanner 1993, sec. II.4).
+#[test]
+fn a_loose_tolerance_starts_and_runs() {
+    let run = |rtol: f64, atol: f64| {
+        let mut c = config(1, Method::QuasiStatic, Drive::quiet());
+        c.solver.rtol = rtol;
+        c.solver.atol = atol;
+        let mut t = Torso::new(c).unwrap();
+        t.advance_to(1.0).unwrap();
+        lung(&mut t)
+    };
+    let (loose, tight) = (run(1e-3, 1e-5), run(1e-6, 1e-8));
+    println!("lung at 1 s: rtol 1e-3 {loose:.6} L, rtol 1e-6 {tight:.6} L");
+    assert!((loose - tight).abs() <= 10.0 * 1e-3 * tight);
+}

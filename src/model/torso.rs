@@ -281,6 +281,14 @@ pub struct Torso {
     quasi: Option<Box<Quasi>>,
 }
 
+/// Loosest relative tolerance of the quasi-static mode's start equilibrium (the default
+/// `solver.rtol`; [`Torso::settle`]).
+const QUASI_START_RTOL: f64 = 1e-6;
+
+/// Loosest absolute tolerance of the quasi-static mode's start equilibrium (the default
+/// `solver.atol`).
+const QUASI_START_ATOL: f64 = 1e-8;
+
 fn solver_options(config: &Config) -> Options {
     Options {
         rtol: config.solver.rtol,
@@ -403,10 +411,21 @@ impl Torso {
     /// [`Torso::start_at_equilibrium`]'s work.
     fn settle(&mut self) -> Arc<Equilibrium> {
         let act = self.applied(self.time);
-        let tolerance = self.config.solver.rtol;
+        // The quasi-static mode's start is where its Newton iterations begin: solved no looser
+        // than the default tolerances (rtol 1e-6, atol 1e-8), since at rtol 1e-3 and atol
+        // 1e-5 the start left the first solve outside their reach (level 1, quiet drive: "did
+        // not converge", last correction 3.2e-3 m; `tests/quasi_static.rs`).
+        let (rtol, atol) = match self.quasi {
+            Some(_) => (
+                self.config.solver.rtol.min(QUASI_START_RTOL),
+                self.config.solver.atol.min(QUASI_START_ATOL),
+            ),
+            None => (self.config.solver.rtol, self.config.solver.atol),
+        };
+        let tolerance = rtol;
         let options = Options {
-            rtol: self.config.solver.rtol,
-            atol: self.config.solver.atol,
+            rtol,
+            atol,
             ..Options::default()
         };
         let solved = self.compiled.equilibrium(&act, tolerance, options);
