@@ -16,9 +16,9 @@
 //! [`crate::Config::validate`] stays the final check. A test checks that both agree at every
 //! bound.
 //!
-//! The table's vocabulary is in [`types`], what each variable maps to in the model (the
-//! parameters' configuration fields, the inputs) in [`mapping`], the rows in [`rows`], the
-//! table of a personalised FMU in [`personalise`] and the GUID in [`guid`]; this module
+//! The table's vocabulary is in `types`, what each variable maps to in the model (the
+//! parameters' configuration fields, the inputs) in `mapping`, the rows in `rows`, the
+//! table of a personalised FMU in `personalise` and the GUID in `guid`; this module
 //! holds the value-reference layout and the indexed [`Table`]. Their items are re-exported
 //! here, so every path `crate::fmi::variables::<item>` names them.
 
