@@ -64,7 +64,9 @@ fn fit_case(set_name: &str, factor: f64) -> (f64, usize) {
         ..SynthOptions::default()
     };
     let s = synthesize(&mut source, &synth).unwrap();
-    let path = std::env::temp_dir().join(format!("bt_chest30_{}.c3d", std::process::id()));
+    // one file per case: the tests of this file run in parallel in one process
+    let path =
+        std::env::temp_dir().join(format!("bt_{set_name}_{factor}_{}.c3d", std::process::id()));
     Markers {
         labels: set.labels.clone(),
         times: s.recording.times.clone(),
