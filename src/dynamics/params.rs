@@ -153,7 +153,12 @@ pub const TRANSVERSE_FRACTION: f64 = 0.1;
 /// wall (the rib cage's joints and the lungs' tissue carry their own damping).
 /// Unsourced: no source gives the abdominal wall's own tissue resistance; 1.0 cmH2O s/L is
 /// chosen inside the 0.5-1.5 cmH2O s/L left to the tissues by the cited totals above (West,
-/// Respiratory Physiology: respiratory system 2-3, airways 0.5-2.5 cmH2O s/L).
+/// Respiratory Physiology: respiratory system 2-3, airways 0.5-2.5 cmH2O s/L). The chest wall's
+/// resistance, measured whole in anaesthetised paralysed supine adults, is entirely
+/// viscoelastic (D'Angelo et al. 1991, J Appl Physiol 70:2602); the respiratory system's
+/// viscoelastic resistance there is 3.7 +- 0.7 cmH2O s/L (Jonson et al., "Mechanics of
+/// respiratory system in healthy anesthetized humans with emphasis on viscoelastic
+/// properties"): neither separates the abdominal wall.
 pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
 
 fn default_abdominal_wall_resistance() -> f64 {
@@ -315,7 +320,10 @@ pub struct Params {
     /// chest wall is 0.050 L/cmH2O at -5 cmH2O and 0.086 at +5 against about 0.2 in adults;
     /// halving this constant raises it by 13 % and 3 % (docs/dynamics.md, "What sets the
     /// passive chest wall").
-    /// Unsourced: no source: chosen by hand in commit 16087cb (see above).
+    /// Unsourced: no source: chosen by hand in commit 16087cb (see above). Literature gives the
+    /// costal cartilage's material, not this joint: Young's modulus 32.9 +- 17.9 MPa in
+    /// compression and 11-15 MPa in indentation (Weber, Rothschild & Niehoff 2021, Sci Rep,
+    /// doi:10.1038/s41598-021-93176-x); no stiffness of the sternocostal junction was found.
     pub cartilage_stiffness: f64,
     /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
     /// [N m/rad]. Default 2 N m/rad upright, set by hand; no source: 20 in the first dynamics
@@ -346,14 +354,22 @@ pub struct Params {
     /// Default 40 N/m (a tenth of the abdominal membrane's), set by hand; no source (first
     /// calibration, commit 16087cb). Halving it raises the relaxed chest wall's compliance by
     /// 2-3 %.
-    /// Unsourced: no source: chosen by hand in commit 16087cb.
+    /// Unsourced: no source: chosen by hand in commit 16087cb. Literature: the passive diaphragm
+    /// is much stiffer across its fibres than along them (rat, "Shape and tension distribution
+    /// of the passive rat diaphragm", PMID 11124131: along-fibre tension 6-10 g/cm at 15 cmH2O
+    /// transdiaphragmatic pressure; Boriek & Rodarte 1997, J Appl Physiol 82:1626); no in-plane
+    /// modulus to compare with ours (isotropic) was found.
     pub dome_membrane_stiffness: f64,
     /// In-plane stiffness of a membrane edge of the central tendon [N/m] (stiff: it carries the
     /// radial fibres' pull across the top of the dome). Default 2000 N/m (fifty times the
     /// muscular dome's), set by hand; no source (first calibration, commit 16087cb). Halving it
     /// lowers the relaxed chest wall's compliance by 3 % at +5 cmH2O and raises it by 2 % at
     /// -5 cmH2O.
-    /// Unsourced: no source: chosen by hand in commit 16087cb.
+    /// Unsourced: no source: chosen by hand in commit 16087cb. Literature: the central tendon is
+    /// not stretched by physiological stresses (their earlier measurements, summarised by Boriek &
+    /// Rodarte 1997, J Appl Physiol 82:1626) and is essentially inextensible along and across the fibres near the muscle (dog; Hwang,
+    /// Kelly & Boriek, "Passive mechanics of muscle tendinous junction of canine diaphragm"):
+    /// much stiffer than the muscle, as ours is (x50), but no modulus was found.
     pub tendon_stiffness: f64,
     /// Horizontal support of the diaphragm dome by the rib cage and lungs [N/m^3] (foundation
     /// stiffness per area of dome). Default 2e5 N/m^3, set by hand; no source (first

@@ -50,14 +50,22 @@ pub const SPINE_CENTRES_MM: [(f64, f64); 24] = [
 
 /// Radial room [m] kept between the skin and a bone centreline: rib half-thickness (about
 /// 6 mm) plus the thinnest soft tissue over the ribs and sternum (about 12 mm).
-/// Unsourced: no source: chosen by hand (commit 85fbc4f).
+/// Unsourced: no source: chosen by hand (commit 85fbc4f). Literature, over the sternum only:
+/// CT of 53 adults of normal body mass index (Wayne State University School of Medicine
+/// research abstract, digitalcommons.wayne.edu/som_srs/70) found 17.9 +- 8.9 mm of soft tissue
+/// in men and 13.0 +- 6.0 mm in women over a sternum 17.2 / 13.8 mm deep, so 26.5 / 19.9 mm from
+/// the skin to the bone's mid-plane; ours, a minimum room, is below both means (a lower bound,
+/// not a typical value).
 pub const BONE_CLEARANCE: f64 = 0.018;
 
 /// Radial room [m] kept between the skin and the abdominal cavity's wall: the thinnest
 /// abdominal wall (muscle, fascia, fat and skin, about 10 mm in lean adults).
 /// Unsourced: no source: chosen by hand (commit 85fbc4f). Literature: the rectus abdominis
-/// alone is 14.7 +- 2.9 mm thick (Egwu et al. 2014), so 10 mm is thinner than a lean
-/// adult's ventral wall (a lower bound, not a typical value).
+/// alone is 14.7 +- 2.9 mm thick (Egwu et al. 2014), 10.3 mm in 545 women (Kim et al. 2012,
+/// Arch Plast Surg 39:528), 8.1 mm at L3-L4 in 232 patients (Abbas et al. 2021, see
+/// `ABDOMINAL_WALL_THICKNESS` in `anatomy/abdomen.rs`), to which 17.5 mm (men) to 24.8 mm
+/// (women) of fat add: 10 mm is thinner than a typical ventral wall (a lower bound, not a
+/// typical value).
 pub const WALL_CLEARANCE: f64 = 0.010;
 
 /// Spinous tip offset from a vertebral joint centre (x, y) [m] for a 1.75 m subject: body,
