@@ -47,8 +47,9 @@ pub struct Joint {
 /// Obliquity of the intercostal fibres: the arc-length fraction of the rib separating a
 /// fibre's two attachments (external fibres run caudally and ventrally, internal fibres
 /// caudally and dorsally).
-/// Unsourced: no source: chosen by hand in commit 16087cb; the fibres' measured angle to the
-/// ribs was not looked up.
+/// Unsourced: no source: chosen by hand in commit 16087cb. No measured angle of the human
+/// intercostal fibres to the ribs was found (anatomy texts give directions only: external
+/// fibres caudal and ventral, internal ones at right angles to them).
 pub const OBLIQUITY: f64 = 0.2;
 
 /// Maximal active tension of an intercostal layer per metre of interspace [N/m]. 29 N/cm^2

@@ -70,7 +70,9 @@ pub const WALL_CLEARANCE: f64 = 0.010;
 
 /// Spinous tip offset from a vertebral joint centre (x, y) [m] for a 1.75 m subject: body,
 /// canal, lamina and process about 70 mm dorsal, the process sloping 12 mm caudally.
-/// Unsourced: no source: chosen by hand (commit 85fbc4f).
+/// Unsourced: no source: chosen by hand (commit 85fbc4f). Panjabi et al. 1991 (Spine 16:888,
+/// PMID 1948374) tabulate the thoracic vertebrae's body, canal and spinous-process dimensions,
+/// from which this offset could be summed; their tables were not read.
 const SPINOUS_OFFSET: (f64, f64) = (-0.070, -0.012);
 
 /// Names of the thoracic and lumbar levels of [`crate::anatomy::Spine::joints`].
