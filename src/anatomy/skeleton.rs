@@ -284,9 +284,10 @@ pub fn build_spine(scale: &Scale) -> Spine {
 
 /// Linear density of rib bone [kg/m] for a 75 kg adult (about 0.7 kg for all 24 ribs).
 /// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a). No measured rib
-/// mass was found; rib cross-sectional areas of 240 adults, ribs 2-11 (Holcombe et al. 2023,
-/// Front Bioeng Biotechnol, doi:10.3389/fbioe.2023.1158242), would give one with a bone
-/// density, but their values were not read.
+/// mass was found; rib cross-sectional areas of 240 adults, ribs 2-11 ("Cross-sectional
+/// properties of rib geometry from an adult population", Front Bioeng Biotechnol 2023,
+/// doi:10.3389/fbioe.2023.1158242), would give one with a bone density, but their values were
+/// not read.
 pub const RIB_BONE_DENSITY: f64 = 0.11;
 /// Fraction of body mass carried by the ribs as chest-wall soft tissue (intercostal and
 /// pectoral muscle, fat, skin) moving with them: about 3 kg for a 75 kg adult. Table 1.1 of
