@@ -14,6 +14,7 @@
 //! capacity are FRC times the subject's ECSC ratios (`dynamics::pleural::capacity_ratios`),
 //! where the pleural law's barriers stand.
 
+use crate::dynamics::Params;
 use crate::dynamics::pleural::capacity_ratios;
 use crate::model::{Config, Drive, Quantity, Torso};
 use crate::solver::Method;
@@ -189,5 +190,98 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
         lung,
         chest_wall,
         system,
+    })
+}
+
+/// The relaxed chest wall's compliance [L/cmH2O] over FRC to FRC + [`TIDAL_RANGE`] alone (six
+/// equilibria: FRC and five volumes above it), as [`relaxation`] measures it.
+pub fn tidal_chest_wall_compliance(config: &Config) -> Result<f64> {
+    let mut c = config.clone();
+    c.solver.method = Method::QuasiStatic;
+    c.drive = Drive {
+        enabled: false,
+        ..Drive::default()
+    };
+    let mut torso = Torso::new(c)?;
+    let frc = torso.read(Quantity::LungVolume)?;
+    let mut points = vec![frc_point(&mut torso, frc)?];
+    for k in 1..=5 {
+        points.push(at_volume(&mut torso, frc + TIDAL_RANGE * k as f64 / 5.0)?);
+    }
+    let n = points.len() as f64;
+    let mx = points.iter().map(|p| p.chest_wall).sum::<f64>() / n;
+    let my = points.iter().map(|p| p.lung).sum::<f64>() / n;
+    let sxy: f64 = points
+        .iter()
+        .map(|p| (p.chest_wall - mx) * (p.lung - my))
+        .sum();
+    let sxx: f64 = points.iter().map(|p| (p.chest_wall - mx).powi(2)).sum();
+    Ok(sxy / sxx * CMH2O)
+}
+
+/// One evaluation of [`fit_passive_wall`]: the factor tried and the compliance it gave.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FitStep {
+    /// Factor on the passive wall's stiffnesses ([`Params::scale_passive_wall`]).
+    pub factor: f64,
+    /// Relaxed chest wall's compliance over the tidal range [L/cmH2O].
+    pub compliance: f64,
+}
+
+/// Fits the factor on the passive chest wall's hand-set constants
+/// ([`Params::scale_passive_wall`], applied to `config`'s parameters or its posture's
+/// defaults) so that the relaxed chest wall's compliance over the tidal range
+/// ([`tidal_chest_wall_compliance`]) is `target` [L/cmH2O]: secant iterations on
+/// log C against log factor (C is nearly a power of the factor), from 1 and 0.5, to 0.2 %
+/// of the target. Returns the steps, the last the fit.
+pub fn fit_passive_wall(config: &Config, target: f64) -> Result<Vec<FitStep>> {
+    if !(target.is_finite() && target > 0.0) {
+        return Err(Error::invalid("target compliance", target, "> 0 L/cmH2O"));
+    }
+    let base = config
+        .params
+        .clone()
+        .unwrap_or_else(|| Params::for_posture(config.subject.posture));
+    let eval = |factor: f64| -> Result<FitStep> {
+        let mut c = config.clone();
+        let mut p = base.clone();
+        p.scale_passive_wall(factor);
+        c.params = Some(p);
+        Ok(FitStep {
+            factor,
+            compliance: tidal_chest_wall_compliance(&c)?,
+        })
+    };
+    let mut steps = vec![eval(1.0)?, eval(0.5)?];
+    for _ in 0..12 {
+        let [a, b] = [steps[steps.len() - 2], steps[steps.len() - 1]];
+        if (b.compliance / target - 1.0).abs() < 2e-3 {
+            return Ok(steps);
+        }
+        let (la, lb) = (a.factor.ln(), b.factor.ln());
+        let (ca, cb) = (a.compliance.ln(), b.compliance.ln());
+        let slope = (cb - ca) / (lb - la);
+        if !(slope.is_finite() && slope < 0.0) {
+            return Err(Error::Numerical {
+                time: 0.0,
+                reason: format!(
+                    "the chest wall's compliance does not fall as the passive wall stiffens \
+                     (factor {:.4}: {:.4} L/cmH2O; factor {:.4}: {:.4} L/cmH2O)",
+                    a.factor, a.compliance, b.factor, b.compliance
+                ),
+            });
+        }
+        // at most a factor 4 per step
+        let next = lb + ((target.ln() - cb) / slope).clamp(-4f64.ln(), 4f64.ln());
+        steps.push(eval(next.exp())?);
+    }
+    Err(Error::Numerical {
+        time: 0.0,
+        reason: format!(
+            "the passive wall's fit did not reach {target} L/cmH2O in 14 evaluations (last: \
+             factor {:.4}, {:.4} L/cmH2O)",
+            steps[steps.len() - 1].factor,
+            steps[steps.len() - 1].compliance
+        ),
     })
 }

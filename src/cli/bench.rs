@@ -175,6 +175,16 @@ pub struct RelaxationArgs {
     /// Print every point of the curves.
     #[arg(long)]
     pub curves: bool,
+    /// Muscle law: thesis (a shortening linear spring) or hill (passive and active parts,
+    /// with the passive wall fitted for it, `HILL_PASSIVE_WALL_SCALE`).
+    #[arg(long, default_value = "thesis")]
+    pub muscle_law: String,
+    /// Fit the factor on the passive wall's hand-set stiffnesses so that the relaxed chest
+    /// wall's compliance over the tidal range is the adult's 0.2 L/cmH2O, for the first
+    /// posture given, starting from the muscle law's unscaled wall; then print the curves
+    /// with the fitted factor.
+    #[arg(long)]
+    pub fit: bool,
 }
 
 /// Runs `torso bench relaxation`: the default subject's curves in each posture.
@@ -193,12 +203,46 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
          -5 cmH2O at FRC",
         args.lod
     );
+    use crate::bench::relaxation::fit_passive_wall;
+    use crate::dynamics::CHEST_WALL_COMPLIANCE;
+    let law = crate::dynamics::muscle::MuscleLaw::parse(&args.muscle_law)
+        .map_err(|_| Error::invalid("--muscle-law", &args.muscle_law, "thesis or hill"))?;
+    let mut fitted: Option<f64> = None;
     for name in args.posture.split(',') {
         let posture = Posture::from_name(name.trim())
             .map_err(|_| Error::invalid("--posture", name, "standing, sitting or supine"))?;
         let mut config = Config::default();
         config.scene.level_of_detail = args.lod;
         config.subject.posture = posture;
+        let mut params = crate::dynamics::Params::for_posture_and_law(posture, law);
+        if let Some(f) = fitted {
+            params = crate::dynamics::Params::for_posture(posture);
+            params.muscle_law = law;
+            params.scale_passive_wall(f);
+        }
+        if args.fit && fitted.is_none() {
+            let mut unscaled = crate::dynamics::Params::for_posture(posture);
+            unscaled.muscle_law = law;
+            config.params = Some(unscaled.clone());
+            let steps = fit_passive_wall(&config, CHEST_WALL_COMPLIANCE)?;
+            for s in &steps {
+                println!(
+                    "fit ({posture:?}): factor {:.4}: C_cw {:.4} L/cmH2O",
+                    s.factor, s.compliance
+                );
+            }
+            let f = steps[steps.len() - 1].factor;
+            println!(
+                "fitted factor on the passive wall ({:?} law): {f:.3} (C_cw {:.4} L/cmH2O against \
+                 {CHEST_WALL_COMPLIANCE})",
+                law,
+                steps[steps.len() - 1].compliance
+            );
+            fitted = Some(f);
+            params = unscaled;
+            params.scale_passive_wall(f);
+        }
+        config.params = Some(params);
         let r = relaxation(&config, args.points)?;
         let pct = |f: Option<f64>| f.map_or("none".to_string(), |f| format!("{:.1} %", 100.0 * f));
         println!(

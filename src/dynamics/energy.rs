@@ -24,6 +24,12 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     let toe = model.params.tension_toe;
     for i in 0..el.len() {
         let len = path_length(&data.pos, el.path_of(i));
+        if el.max_force[i] > 0.0 {
+            // a muscle under the passive-and-active law: its passive curve's potential
+            let (slack, f_max) = (el.slack_length[i], el.max_force[i]);
+            e += super::muscle::passive_energy(len, slack, f_max, toe);
+            continue;
+        }
         let stretch = len - el.rest_length[i];
         let k = el.stiffness[i];
         e += softplus_integral(k * stretch, toe) / k;

@@ -12,6 +12,10 @@
 //!   smooth where an element goes slack. A two-point element also damps its ends' relative
 //!   velocity across it, alpha gamma (v_b - v_a)_perp with alpha
 //!   [`super::Params::transverse_fraction`] (the tilted element of `dynamics::inertia`).
+//! - Under the passive-and-active muscle law ([`super::muscle::MuscleLaw::Hill`], an option
+//!   of [`super::Params::muscle_law`]), a muscle's spring force is replaced by
+//!   F_max (f_PE + a f_A) ([`super::muscle::force`]) with the same damper and the same
+//!   softplus tension.
 //! - Zero-length vector springs (cartilage ball joints, wall foundation): F = k d + c d'; the
 //!   wall foundation's c adds the wall's tissue resistance
 //!   ([`super::Params::abdominal_wall_resistance`]) to the stiffness-proportional part.
@@ -128,6 +132,12 @@ struct Pass<'a> {
     damping: &'a [f64],
     slot: &'a [u8],
     gain: &'a [f64],
+    max_force: &'a [f64],
+    optimal_length: &'a [f64],
+    slack_length: &'a [f64],
+    drive: &'a [f64],
+    /// The active stiffness k_A of the passive-and-active law ([`super::muscle`]).
+    active_stiffness: f64,
     level: &'a [f64; 256],
     toe: f64,
     transverse: f64,
@@ -155,6 +165,11 @@ impl<'a> Pass<'a> {
             damping: &el.damping[..n],
             slot: &el.slot[..n],
             gain: &el.gain[..n],
+            max_force: &el.max_force[..n],
+            optimal_length: &el.optimal_length[..n],
+            slack_length: &el.slack_length[..n],
+            drive: &el.drive[..n],
+            active_stiffness: super::muscle::active_stiffness(),
             level,
             toe: model.params.tension_toe,
             transverse: model.params.transverse_fraction,
@@ -168,6 +183,20 @@ impl<'a> Pass<'a> {
     #[inline(always)]
     fn rest(&self, e: usize) -> f64 {
         self.rest_length[e] * (1.0 - self.level[self.slot[e] as usize] * self.gain[e])
+    }
+
+    /// The force of element `e` of length `len` and rate `rate` when it is a muscle under
+    /// the passive-and-active law ([`super::muscle::force`] plus its damper), else `linear`,
+    /// the linear spring-damper's.
+    #[inline(always)]
+    fn hill_or(&self, e: usize, len: f64, rate: f64, linear: f64) -> f64 {
+        let f_max = self.max_force[e];
+        if f_max == 0.0 {
+            return linear;
+        }
+        let a = self.level[self.slot[e] as usize] * self.drive[e];
+        let (o, s) = (self.optimal_length[e], self.slack_length[e]);
+        super::muscle::force(len, o, s, f_max, a, self.active_stiffness) + self.damping[e] * rate
     }
 
     /// The two-point elements `e .. e + LANES`, lane by lane in arrays of coordinates (the
@@ -205,7 +234,7 @@ impl<'a> Pass<'a> {
         let (len, n, rate, mut f) = spring_damper(&d, &dv, &stiffness, &damping, &rest);
         for (l, f) in f.iter_mut().enumerate() {
             if self.slot[e + l] != PASSIVE {
-                *f = tension(*f, self.toe);
+                *f = tension(self.hill_or(e + l, len[l], rate[l], *f), self.toe);
             }
         }
         let fv: [[f64; LANES]; 3] =
@@ -240,7 +269,7 @@ impl<'a> Pass<'a> {
             let rate = (vel[b] - vel[a]).dot(&n);
             let mut f = stiffness * (len - rest) + damping * rate;
             if muscle {
-                f = tension(f, self.toe);
+                f = tension(self.hill_or(e, len, rate, f), self.toe);
             }
             // the transverse damper (`Params::transverse_fraction`): the ends' relative
             // velocity across the element
@@ -261,7 +290,7 @@ impl<'a> Pass<'a> {
         }
         let mut f = stiffness * (len - rest) + damping * rate;
         if muscle {
-            f = tension(f, self.toe);
+            f = tension(self.hill_or(e, len, rate, f), self.toe);
         }
         if f == 0.0 {
             return;

@@ -24,6 +24,7 @@ pub mod inertia;
 pub mod jacobian;
 pub mod kinematics;
 mod model;
+pub mod muscle;
 mod params;
 pub mod pleural;
 pub mod state;
@@ -35,8 +36,9 @@ pub use model::{
     VectorSprings, path_length, via_segment_length, volume,
 };
 pub use params::{
-    DIAPHRAGM_CONTRACTION_UPRIGHT, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN,
-    PLEURAL_BARRIER_PRESSURE, Params, diaphragm_contraction, diaphragm_length_ratio,
+    CHEST_WALL_COMPLIANCE, DIAPHRAGM_CONTRACTION_UPRIGHT, HILL_PASSIVE_WALL_SCALE,
+    LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
+    diaphragm_contraction, diaphragm_length_ratio,
 };
 pub use state::{Layout, error_weights, rest_state};
 

@@ -3,6 +3,7 @@
 //! an [`Anatomy`] and shared between instances (`Arc`), as MuJoCo splits `mjModel` from `mjData`.
 
 use super::inertia::MassMatrix;
+use super::muscle::MuscleLaw;
 use super::params::Params;
 use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
@@ -62,6 +63,17 @@ pub struct Elements {
     /// Anchors of a two-point element (most of them), or [`VIA`] twice for a path with via
     /// points: the force loop reads them without going through `start` and `path`.
     pub ends: Vec<[u32; 2]>,
+    /// Largest isometric force F_max [N] of a muscle under the passive-and-active law
+    /// ([`super::muscle::MuscleLaw::Hill`]); 0 for an element whose force is the linear
+    /// spring of `stiffness` and `rest_length` (the membrane, and muscles under the thesis's
+    /// law).
+    pub max_force: Vec<f64>,
+    /// Optimal length l_opt [m] of a Hill muscle (0 elsewhere).
+    pub optimal_length: Vec<f64>,
+    /// Slack length l_s [m] of a Hill muscle's passive tissue (0 elsewhere).
+    pub slack_length: Vec<f64>,
+    /// Regional gain g of a Hill muscle's activation, a g (0 elsewhere).
+    pub drive: Vec<f64>,
 }
 
 /// The `ends` of an element whose path has via points.
@@ -110,8 +122,52 @@ impl Default for Elements {
             gain: Vec::new(),
             slot: Vec::new(),
             ends: Vec::new(),
+            max_force: Vec::new(),
+            optimal_length: Vec::new(),
+            slack_length: Vec::new(),
+            drive: Vec::new(),
         }
     }
+}
+
+/// Turns the element just pushed for muscle `m` (rest length `l0` at FRC in `posture`) into
+/// a passive-and-active element ([`super::muscle`]): its optimal and slack lengths, its
+/// largest force and regional gain, no activation-shortened rest length, and, for the damping
+/// and the mass scaling that read `stiffness`, its tangent stiffness at rest under full
+/// activation (the passive slope plus k_A F_max / l_opt), damped like every element.
+fn hill_element(
+    elements: &mut Elements,
+    m: &crate::anatomy::MuscleElement,
+    l0: f64,
+    posture: crate::anatomy::Posture,
+    rayleigh: f64,
+) {
+    use super::muscle::{RestLengths, active_stiffness, stiffness};
+    use crate::anatomy::{MuscleGroup, Posture};
+    let lengths = if m.group == MuscleGroup::Diaphragm {
+        let ratio =
+            super::diaphragm_length_ratio(posture) / super::diaphragm_length_ratio(Posture::Supine);
+        RestLengths::diaphragm(l0, ratio)
+    } else {
+        RestLengths::at_rest(l0)
+    };
+    let f = m.max_force;
+    let k = stiffness(
+        l0,
+        lengths.optimal,
+        lengths.slack,
+        f,
+        1.0,
+        active_stiffness(),
+    );
+    let e = elements.len() - 1;
+    elements.max_force[e] = f;
+    elements.optimal_length[e] = lengths.optimal;
+    elements.slack_length[e] = lengths.slack;
+    elements.drive[e] = m.gain;
+    elements.gain[e] = 0.0;
+    elements.stiffness[e] = k;
+    elements.damping[e] = rayleigh * k;
 }
 
 impl Elements {
@@ -137,6 +193,10 @@ impl Elements {
         self.group.push(group);
         self.side.push(side);
         self.gain.push(gain);
+        self.max_force.push(0.0);
+        self.optimal_length.push(0.0);
+        self.slack_length.push(0.0);
+        self.drive.push(0.0);
         self.ends.push(match path {
             [a, b] => [*a, *b],
             _ => [VIA, VIA],
@@ -393,6 +453,9 @@ impl Model {
                 side,
                 beta * m.gain * s,
             );
+            if params.muscle_law == MuscleLaw::Hill {
+                hill_element(&mut elements, m, l0, posture, rayleigh);
+            }
         }
         let muscle_count = elements.len();
         // Membrane: every edge of the abdominal surface with a free end.

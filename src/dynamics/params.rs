@@ -405,9 +405,55 @@ pub struct Params {
     /// effects come from the tables above.
     /// Source: standard gravity 9.80665 m/s^2 (3rd CGPM, 1901); ours 9.81 (agrees).
     pub gravity: f64,
+    /// The muscle law ([`super::muscle::MuscleLaw`]): the seed thesis's shortening spring
+    /// (the default) or passive and active parts. Configurations written before it existed
+    /// read the thesis's.
+    #[serde(default)]
+    pub muscle_law: super::muscle::MuscleLaw,
 }
 
+/// The factor on the passive chest wall's hand-set stiffnesses (and divisor of the abdominal
+/// wall's compliance, [`Params::scale_passive_wall`]) under the passive-and-active muscle law
+/// ([`super::muscle::MuscleLaw::Hill`]): with it the relaxed chest wall of the default subject
+/// standing at level of detail 1 has the adult's compliance, 0.2 L/cmH2O over the tidal range
+/// above FRC (Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13).
+/// Fitted: `torso bench relaxation --fit` (secant on the compliance of the relaxation curve,
+/// `bench::relaxation::fit_passive_wall`), which prints this value.
+pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.349;
+
+/// The adult relaxed chest wall's compliance over the tidal range above FRC [L/cmH2O], the
+/// target of [`HILL_PASSIVE_WALL_SCALE`]'s fit.
+/// Source: Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13: about 0.2
+/// L/cmH2O (Estenne et al. 1985, J Appl Physiol 59:1842: 0.166 seated, 0.158 supine).
+pub const CHEST_WALL_COMPLIANCE: f64 = 0.2;
+
 impl Params {
+    /// Defaults for a posture under muscle law `law`: [`Params::for_posture`], and under the
+    /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`], fitted to
+    /// the relaxed chest wall's compliance once the muscles no longer carry its stiffness.
+    pub fn for_posture_and_law(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
+        let mut p = Params::for_posture(posture);
+        p.muscle_law = law;
+        if law == super::muscle::MuscleLaw::Hill {
+            p.scale_passive_wall(HILL_PASSIVE_WALL_SCALE);
+        }
+        p
+    }
+
+    /// Scales the passive chest wall's hand-set constants by `factor`: the stiffnesses of the
+    /// rib joints, cartilage, abdominal and dome membranes, central tendon and dome support
+    /// times `factor`, the abdominal wall's compliance divided by it (their ratios, set by
+    /// hand, are kept; `docs/dynamics.md`, "What sets the passive chest wall").
+    pub fn scale_passive_wall(&mut self, factor: f64) {
+        self.rib_joint_stiffness *= factor;
+        self.cartilage_stiffness *= factor;
+        self.membrane_stiffness *= factor;
+        self.dome_membrane_stiffness *= factor;
+        self.tendon_stiffness *= factor;
+        self.dome_support *= factor;
+        self.abdominal_wall_compliance /= factor;
+    }
+
     /// Largest contraction of an element of `group` (see [`Params::beta_max`]).
     pub fn beta_for(&self, group: crate::anatomy::MuscleGroup) -> f64 {
         match group {
@@ -453,6 +499,7 @@ impl Params {
             abdominal_wall_compliance: 2.0e-6 * compliance_factor,
             abdominal_wall_resistance: ABDOMINAL_WALL_RESISTANCE,
             gravity: 9.81,
+            muscle_law: super::muscle::MuscleLaw::Thesis,
         }
     }
 

@@ -1,0 +1,262 @@
+//! The muscle law: the force of a muscle element from its length and activation, with a
+//! passive and an active part (a Hill-type law without its velocity dependence), and the
+//! thesis's law it replaces as an option.
+//!
+//! - **Passive**: the relaxed tissue's force-length curve, an exponential toe from the
+//!   tissue's slack length l_s, F_max f_PE(e) with e = l / l_s - 1 and
+//!   f_PE(e) = (exp(k_PE e / e0) - 1) / (exp(k_PE) - 1) (Thelen 2003, J Biomech Eng 125:70,
+//!   eq. 3: [`PASSIVE_SHAPE`], [`PASSIVE_STRAIN`]). Below the slack length it is slightly
+//!   negative, and the element's tension, the softplus of its force
+//!   ([`super::forces::tension`]), makes it slack there.
+//! - **Active**: a F_max (f_L(x) + k_A (x - 1)) with x = l / l_opt the length over the optimal
+//!   length, f_L(x) = exp(-(x - 1)^2 / gamma) (Thelen 2003, eq. 4: [`ACTIVE_WIDTH`]) and k_A
+//!   the activation-proportional stiffness [`active_stiffness`]. f_L's slope is zero at the
+//!   optimal length and negative beyond it, so an activation alone would soften the chest
+//!   wall's equilibrium until it lost definiteness; k_A is the smallest stiffness that keeps
+//!   the active force's slope non-negative at every length. Skeletal muscle does resist a
+//!   stretch while active, through its cross-bridges (the short-range stiffness, Cui et al.
+//!   2008, J Biomech 41:1945), but stiffly and over a short range from the length at which the
+//!   activation rose: a history a quasi-static model, whose positions are not states, does
+//!   not carry. k_A stands in for it over the whole range, softly.
+//! - **Not modelled**: the force-velocity relation (it would make the positions states
+//!   again, against the quasi-static formulation) and activation dynamics (the activations
+//!   are inputs).
+//!
+//! Which lengths: an element's optimal and slack lengths are set from its rest length at FRC
+//! by [`RestLengths`]. The costal diaphragm at supine FRC stands at 1.05 of its optimal length,
+//! and its slack length is 0.79 of the supine FRC length (Road et al. 1986, J Appl Physiol
+//! 60:63, sonomicrometry in dogs: [`DIAPHRAGM_REST_OVER_OPTIMAL`], [`DIAPHRAGM_SLACK_OVER_REST`]),
+//! so the relaxed diaphragm is stretched at FRC by the lungs' recoil and the abdominal
+//! contents. For the other respiratory muscles no such measurement was found; they are taken
+//! at their optimal and slack lengths at FRC, Thelen's convention for limb muscle.
+
+use serde::{Deserialize, Serialize};
+
+/// Which law gives a muscle element's force.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MuscleLaw {
+    /// The seed thesis's law (eq. 2.2-2.3): a linear spring F_max / (beta l0) whose rest length
+    /// shortens with activation, l0 (1 - beta a); relaxed, every muscle is that spring.
+    #[default]
+    Thesis,
+    /// Passive and active parts (this module): the relaxed muscle is its passive
+    /// force-length curve, the active force a F_max f_L(l).
+    Hill,
+}
+
+impl MuscleLaw {
+    /// The law named `name` (`thesis` or `hill`).
+    pub fn parse(name: &str) -> crate::Result<MuscleLaw> {
+        match name {
+            "thesis" => Ok(MuscleLaw::Thesis),
+            "hill" => Ok(MuscleLaw::Hill),
+            _ => Err(crate::Error::invalid("muscle law", name, "thesis or hill")),
+        }
+    }
+}
+
+/// Shape factor k_PE of the passive force-length curve.
+/// Source: Thelen 2003, J Biomech Eng 125:70, eq. 3 and Table 1: k_PE = 4 for young adults'
+/// limb muscle; no respiratory-muscle value was found (ours 4, agrees).
+pub const PASSIVE_SHAPE: f64 = 4.0;
+
+/// Passive strain e0 at which the relaxed tissue carries F_max.
+/// Source: Thelen 2003, J Biomech Eng 125:70, Table 1: e0 = 0.6 for young adults (0.5 for
+/// older adults); no respiratory-muscle value was found (ours 0.6, agrees).
+pub const PASSIVE_STRAIN: f64 = 0.6;
+
+/// Width gamma of the active force-length curve f_L(x) = exp(-(x - 1)^2 / gamma).
+/// Source: Thelen 2003, J Biomech Eng 125:70, eq. 4 and Table 1: gamma = 0.45. The diaphragm
+/// keeps active force down to 40 % of its in-situ length (Kim et al. 1976, J Appl Physiol
+/// 40:807, canine strips), where this curve gives 0.45 F_max (ours 0.45, agrees).
+pub const ACTIVE_WIDTH: f64 = 0.45;
+
+/// The costal diaphragm's rest length at supine FRC over its optimal length.
+/// Source: Road, Newman, Derenne & Grassino 1986, J Appl Physiol 60:63 (sonomicrometry,
+/// anaesthetised dogs, supine): the costal diaphragm is distended to 105 % of its optimal
+/// length at FRC, the crural shortened to 92 % (ours 1.05, the costal part, agrees).
+pub const DIAPHRAGM_REST_OVER_OPTIMAL: f64 = 1.05;
+
+/// The costal diaphragm's slack length (excised, unloaded) over its length at supine FRC.
+/// Source: Road, Newman, Derenne & Grassino 1986, J Appl Physiol 60:63: the equilibrium
+/// length of excised strips was 79 +- 3.6 % of the FRC length for the costal diaphragm, 87 +-
+/// 3.9 % for the crural (ours 0.79, the costal part, agrees).
+pub const DIAPHRAGM_SLACK_OVER_REST: f64 = 0.79;
+
+/// The activation-proportional stiffness k_A = sqrt(2 / gamma) exp(-1/2), the steepest
+/// descent of f_L (at x = 1 + sqrt(gamma / 2)), so that f_L(x) + k_A (x - 1) never falls with
+/// length: 1.279 for gamma = [`ACTIVE_WIDTH`].
+pub fn active_stiffness() -> f64 {
+    (2.0 / ACTIVE_WIDTH).sqrt() * (-0.5f64).exp()
+}
+
+/// Passive force over F_max at strain `e` = l / l_s - 1 from the slack length, and its
+/// derivative in e.
+#[inline]
+pub fn passive(e: f64) -> (f64, f64) {
+    let scale = 1.0 / (PASSIVE_SHAPE.exp() - 1.0);
+    let x = (PASSIVE_SHAPE / PASSIVE_STRAIN * e).exp();
+    (
+        scale * (x - 1.0),
+        scale * PASSIVE_SHAPE / PASSIVE_STRAIN * x,
+    )
+}
+
+/// Active force over a F_max at normalised length `x` = l / l_opt: f_L(x) + k_A (x - 1), and
+/// its derivative in x.
+#[inline]
+pub fn active(x: f64, k_a: f64) -> (f64, f64) {
+    let d = x - 1.0;
+    let f = (-d * d / ACTIVE_WIDTH).exp();
+    (f + k_a * d, -2.0 * d / ACTIVE_WIDTH * f + k_a)
+}
+
+/// The force [N] of a Hill element of largest isometric force `max_force`, optimal length
+/// `optimal`, slack length `slack`, at length `l` and activation `a` (velocity terms aside).
+#[inline]
+pub fn force(l: f64, optimal: f64, slack: f64, max_force: f64, a: f64, k_a: f64) -> f64 {
+    let (p, _) = passive(l / slack - 1.0);
+    let (f, _) = active(l / optimal, k_a);
+    max_force * (p + a * f)
+}
+
+/// The slope dF/dl [N/m] of [`force`].
+pub fn stiffness(l: f64, optimal: f64, slack: f64, max_force: f64, a: f64, k_a: f64) -> f64 {
+    let (_, dp) = passive(l / slack - 1.0);
+    let (_, df) = active(l / optimal, k_a);
+    max_force * (dp / slack + a * df / optimal)
+}
+
+/// The elastic energy [J] of a relaxed Hill element of slack length `slack` and largest force
+/// `max_force` at length `l`: the integral from the slack length of its tension, the softplus
+/// of width `toe` of the passive force ([`super::forces::tension`]), by 8-point Gauss-Legendre
+/// quadrature on panels of at most 2 % of the slack length (exact to rounding for these
+/// smooth integrands).
+pub fn passive_energy(l: f64, slack: f64, max_force: f64, toe: f64) -> f64 {
+    // nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
+    const NODES: [f64; 4] = [
+        0.183_434_642_495_649_8,
+        0.525_532_409_916_329,
+        0.796_666_477_413_626_7,
+        0.960_289_856_497_536_2,
+    ];
+    const WEIGHTS: [f64; 4] = [
+        0.362_683_783_378_362,
+        0.313_706_645_877_887_3,
+        0.222_381_034_453_374_5,
+        0.101_228_536_290_376_3,
+    ];
+    let tension = |x: f64| super::forces::tension(max_force * passive(x / slack - 1.0).0, toe);
+    let panels = ((l - slack).abs() / (0.02 * slack)).ceil().max(1.0) as usize;
+    let h = (l - slack) / panels as f64;
+    let mut sum = 0.0;
+    for p in 0..panels {
+        let mid = slack + (p as f64 + 0.5) * h;
+        for (x, w) in NODES.iter().zip(WEIGHTS) {
+            sum += w * (tension(mid - 0.5 * h * x) + tension(mid + 0.5 * h * x));
+        }
+    }
+    0.5 * h * sum
+}
+
+/// An element's optimal and slack lengths [m] from its rest length at FRC in its posture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestLengths {
+    /// Optimal length l_opt [m].
+    pub optimal: f64,
+    /// Slack length l_s [m].
+    pub slack: f64,
+}
+
+impl RestLengths {
+    /// For a diaphragm fibre of rest length `rest` at FRC in a posture whose fibres are
+    /// `ratio` times as long as supine ones (the supine fibre is longer:
+    /// [`super::diaphragm_length_ratio`] of the posture over the supine one): its supine length
+    /// stands at [`DIAPHRAGM_REST_OVER_OPTIMAL`] of the optimal length, and its slack length is
+    /// [`DIAPHRAGM_SLACK_OVER_REST`] of the supine length.
+    pub fn diaphragm(rest: f64, ratio: f64) -> RestLengths {
+        let supine = rest / ratio;
+        RestLengths {
+            optimal: supine / DIAPHRAGM_REST_OVER_OPTIMAL,
+            slack: supine * DIAPHRAGM_SLACK_OVER_REST,
+        }
+    }
+
+    /// For another muscle: optimal and slack at its rest length.
+    pub fn at_rest(rest: f64) -> RestLengths {
+        RestLengths {
+            optimal: rest,
+            slack: rest,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_active_slope_is_never_negative_and_zero_at_its_steepest_descent() {
+        let k_a = active_stiffness();
+        assert!((k_a - 1.279).abs() < 1e-3, "{k_a}");
+        let mut lowest = f64::INFINITY;
+        for i in 0..=4000 {
+            let x = 0.2 + 1.8 * i as f64 / 4000.0;
+            let (_, slope) = active(x, k_a);
+            lowest = lowest.min(slope);
+        }
+        assert!((-1e-9..1e-5).contains(&lowest), "{lowest}");
+    }
+
+    #[test]
+    fn the_curves_have_their_cited_values() {
+        // Thelen 2003: F_max at the strain e0, zero at slack; f_L(1) = 1.
+        assert!((passive(PASSIVE_STRAIN).0 - 1.0).abs() < 1e-12);
+        assert_eq!(passive(0.0).0, 0.0);
+        assert!((active(1.0, 0.0).0 - 1.0).abs() < 1e-15);
+        // derivatives against central differences
+        for x in [0.5, 0.9, 1.0, 1.2, 1.6] {
+            let h = 1e-6;
+            let k = active_stiffness();
+            let fd = (active(x + h, k).0 - active(x - h, k).0) / (2.0 * h);
+            assert!((fd - active(x, k).1).abs() < 1e-6);
+            let fd = (passive(x - 1.0 + h).0 - passive(x - 1.0 - h).0) / (2.0 * h);
+            assert!((fd - passive(x - 1.0).1).abs() < 1e-6 * (1.0 + fd.abs()));
+        }
+        let (l, o, s, f, a) = (0.11, 0.1, 0.095, 300.0, 0.4);
+        let h = 1e-7;
+        let k = active_stiffness();
+        let fd = (force(l + h, o, s, f, a, k) - force(l - h, o, s, f, a, k)) / (2.0 * h);
+        assert!((fd - stiffness(l, o, s, f, a, k)).abs() < 1e-4 * fd.abs());
+    }
+
+    #[test]
+    fn the_diaphragm_is_stretched_at_frc() {
+        let r = RestLengths::diaphragm(0.2, 1.0);
+        assert!((0.2 / r.optimal - 1.05).abs() < 1e-12);
+        assert!(r.slack < 0.2);
+        // standing, the fibres are shorter than supine (ratio 1 / 1.145): below optimal
+        let r = RestLengths::diaphragm(0.2, 1.0 / 1.145);
+        assert!(0.2 / r.optimal < 1.0);
+    }
+
+    #[test]
+    fn the_passive_energy_is_the_potential_of_the_tension() {
+        let (slack, f_max, toe) = (0.12, 400.0, 0.1);
+        for l in [0.10, 0.12, 0.13, 0.15, 0.19] {
+            let h = 1e-6;
+            let de = (passive_energy(l + h, slack, f_max, toe)
+                - passive_energy(l - h, slack, f_max, toe))
+                / (2.0 * h);
+            let t = crate::dynamics::forces::tension(f_max * passive(l / slack - 1.0).0, toe);
+            assert!((de - t).abs() < 1e-5 * (1.0 + t), "l {l}: dE/dl {de} against {t}");
+        }
+    }
+
+    #[test]
+    fn names_parse() {
+        assert_eq!(MuscleLaw::parse("hill").unwrap(), MuscleLaw::Hill);
+        assert!(MuscleLaw::parse("linear").is_err());
+    }
+}

@@ -1,0 +1,162 @@
+//! The passive-and-active muscle law (`dynamics::muscle`, `Params::muscle_law = hill`) in the
+//! whole model, with the passive wall fitted for it (`HILL_PASSIVE_WALL_SCALE`, fitted by
+//! `torso bench relaxation --muscle-law hill --fit` to the standing chest wall's compliance
+//! over the tidal range, 0.2 L/cmH2O, at level of detail 1). That one figure is calibrated and
+//! is not tested here. What is tested was not calibrated: the supine chest wall, the
+//! respiratory system, the relaxation volume, the curve's stiffening, the energy of a
+//! relaxed motion, and what an activation does. Cited bounds the model misses are ignored
+//! tests stating the measured figure (issue 35).
+
+use breathing_torso::anatomy::{MuscleGroup, Posture};
+use breathing_torso::bench::relaxation::{Relaxation, relaxation};
+use breathing_torso::dynamics::Params;
+use breathing_torso::dynamics::muscle::MuscleLaw;
+use breathing_torso::model::{Config, Drive};
+use breathing_torso::{Quantity, Torso};
+
+fn hill(posture: Posture) -> Config {
+    let mut c = Config::default();
+    c.subject.posture = posture;
+    c.params = Some(Params::for_posture_and_law(posture, MuscleLaw::Hill));
+    c
+}
+
+fn curves(posture: Posture) -> Relaxation {
+    let r = relaxation(&hill(posture), 25).unwrap();
+    println!(
+        "hill, {posture:?}: C_cw {:.4}, C_rs {:.4} L/cmH2O, chest wall relaxed at {:?} of VC, \
+         {} points from {:.3} to {:.3} L (RV {:.3}, FRC {:.3}, TLC {:.3} L), failed {:?}",
+        r.chest_wall_compliance,
+        r.system_compliance,
+        r.chest_wall_relaxation,
+        r.points.len(),
+        r.points[0].lung,
+        r.points.last().unwrap().lung,
+        r.rv,
+        r.frc,
+        r.tlc,
+        r.failed
+    );
+    r
+}
+
+/// Supine, the relaxed chest wall's compliance over the tidal range is the adult's, 0.2 +-
+/// 0.045 L/cmH2O (issue 35, after Agostoni & Mead 1964; Estenne et al. 1985, J Appl Physiol
+/// 59:1842, measured 0.158 supine): not fitted (the fit is standing).
+#[test]
+#[ignore = "issue 35: with the hill law the supine chest wall is 0.1549 L/cmH2O against 0.155-0.245 (just outside)"]
+fn the_supine_chest_wall_has_an_adults_compliance() {
+    let c = curves(Posture::Supine).chest_wall_compliance;
+    assert!((0.155..=0.245).contains(&c), "C_cw supine {c:.4} L/cmH2O");
+}
+
+/// The respiratory system's compliance, 0.08-0.12 L/cmH2O (issue 35), standing and supine.
+#[test]
+fn the_respiratory_system_has_an_adults_compliance() {
+    for posture in [Posture::Standing, Posture::Supine] {
+        let c = curves(posture).system_compliance;
+        assert!(
+            (0.08..=0.12).contains(&c),
+            "{posture:?}: C_rs {c:.4} L/cmH2O"
+        );
+    }
+}
+
+/// The relaxed recoil rises with volume over the whole curve solved (a stable relaxed
+/// system; Rahn et al. 1946, Am J Physiol 146:161).
+#[test]
+fn the_relaxed_recoil_rises_with_volume() {
+    for posture in [Posture::Standing, Posture::Supine] {
+        let r = curves(posture);
+        assert!(
+            r.points.len() >= 10,
+            "{posture:?}: {} points",
+            r.points.len()
+        );
+        for w in r.points.windows(2) {
+            assert!(
+                w[1].chest_wall > w[0].chest_wall,
+                "{posture:?}: recoil falls between {:.3} and {:.3} L",
+                w[0].lung,
+                w[1].lung
+            );
+        }
+    }
+}
+
+/// The chest wall relaxes near 55-60 % of vital capacity (Agostoni & Mead 1964).
+#[test]
+#[ignore = "issue 35: with the hill law the chest wall relaxes at 49.2 % of VC standing and 46.8 % supine, against 55-60 %"]
+fn the_chest_wall_relaxes_near_55_to_60_percent_of_vital_capacity() {
+    for posture in [Posture::Standing, Posture::Supine] {
+        let f = curves(posture).chest_wall_relaxation.unwrap_or(f64::NAN);
+        assert!((0.55..=0.60).contains(&f), "{posture:?}: {f:.3} of VC");
+    }
+}
+
+/// The relaxed curve reaches TLC and RV (Rahn et al. 1946 measured it over the whole vital
+/// capacity).
+#[test]
+#[ignore = "issue 35: with the hill law the relaxed chest wall cannot be deflated more than 0.28 L below FRC (standing and supine), and supine it is followed to 4.54 L of a 6.06 L TLC"]
+fn the_relaxed_curve_spans_the_vital_capacity() {
+    for posture in [Posture::Standing, Posture::Supine] {
+        let r = curves(posture);
+        assert!(r.failed.is_empty(), "{posture:?}: {:?}", r.failed);
+    }
+}
+
+/// With every muscle relaxed, a motion away from rest loses energy and returns to rest: the
+/// elastic energy of the passive curve (`muscle::passive_energy`) is the potential of its
+/// forces, so the mechanical energy never rises between samples.
+#[test]
+fn relaxed_motion_dissipates_energy_under_the_hill_law() {
+    let mut config = hill(Posture::Standing);
+    config.drive = Drive::default();
+    let mut torso = Torso::new(config.clone()).unwrap();
+    let rest = torso.mechanical_energy();
+    // a breath in, held by the diaphragm, then released
+    torso.set_activation(MuscleGroup::Diaphragm, 0.3).unwrap();
+    torso.advance_to(1.0).unwrap();
+    torso.set_activation(MuscleGroup::Diaphragm, 0.0).unwrap();
+    let start = torso.mechanical_energy() - rest;
+    let mut last = start;
+    let mut worst_rise: f64 = 0.0;
+    for i in 1..=200 {
+        torso.advance_to(1.0 + 0.02 * i as f64).unwrap();
+        let e = torso.mechanical_energy() - rest;
+        worst_rise = worst_rise.max(e - last);
+        last = e;
+    }
+    println!("energy above rest {start:.4e} J -> {last:.4e} J, largest rise {worst_rise:.2e} J");
+    assert!(start > 0.0);
+    assert!(worst_rise <= 1e-6 * start, "energy rose by {worst_rise}");
+    assert!(last < 1e-3 * start, "energy left {last} of {start}");
+}
+
+/// Each inspiratory group, activated alone, inflates the lungs, and the diaphragm does it by
+/// descending (thesis 2.1; De Troyer & Boriek 2011, Compr Physiol 1:1273).
+#[test]
+fn inspiratory_activations_inflate_and_the_diaphragm_descends() {
+    for group in [
+        MuscleGroup::Diaphragm,
+        MuscleGroup::ExternalIntercostals,
+        MuscleGroup::Scalenes,
+    ] {
+        let mut config = hill(Posture::Standing);
+        config.drive = Drive::default();
+        let mut torso = Torso::new(config).unwrap();
+        let v0 = torso.read(Quantity::LungVolume).unwrap();
+        torso.set_activation(group, 0.2).unwrap();
+        torso.advance_to(3.0).unwrap();
+        let dv = torso.read(Quantity::LungVolume).unwrap() - v0;
+        let dome = torso.read(Quantity::DiaphragmDisplacement).unwrap();
+        println!(
+            "{group:?} at 0.2: lung volume +{dv:.3} L, diaphragm {:.1} mm",
+            dome * 1e3
+        );
+        assert!(dv > 0.01, "{group:?}: {dv} L");
+        if group == MuscleGroup::Diaphragm {
+            assert!(dome < -1e-3, "the dome moved {dome} m");
+        }
+    }
+}
