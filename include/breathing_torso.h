@@ -225,6 +225,11 @@ typedef struct BtConfig {
    * Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
    */
   double group_gain_left[8];
+  /**
+   * Muscle law (FMI `muscle_law`): 0 the seed thesis's shortening linear spring, 1 passive
+   * and active parts with the passive wall fitted to the adult chest wall's compliance.
+   */
+  int muscle_law;
 } BtConfig;
 
 /**
@@ -569,7 +574,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{7a97dd32-66d9-96ea-d753-0c061181de58}"
+#define BT_FMI_GUID "{04cde9ee-4695-3196-e1de-14825e67080b}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -605,6 +610,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_SLP_REFERENCE 300u
 #define BT_VR_SUBJECT_MESH_DIR 301u
 #define BT_VR_SOLVER_METHOD 205u
+#define BT_VR_MUSCLE_LAW 206u
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u
 #define BT_VR_SOLVER_MAX_STEP 132u

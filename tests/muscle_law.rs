@@ -160,3 +160,59 @@ fn inspiratory_activations_inflate_and_the_diaphragm_descends() {
         }
     }
 }
+
+/// Through the FMU: `muscle_law` = 1 builds the hill law with its fitted wall, and the FMU's
+/// lung volume after a quiet-drive second is the library's, bit for bit; a code outside 0-1
+/// is refused and keeps the thesis's law.
+#[test]
+fn the_fmu_parameter_selects_the_law() {
+    use breathing_torso::fmi::instance::Instance;
+    use breathing_torso::fmi::variables::table;
+    use breathing_torso::fmi::{FMI2, Status};
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let run = |law: Option<i32>| {
+        let mut inst = Instance::new(&FMI2, "t", None, None, false);
+        assert_eq!(
+            inst.set_integer("fmi2SetInteger", &[vr("scene.level_of_detail")], &[0]),
+            Status::Ok
+        );
+        if let Some(code) = law {
+            assert_eq!(
+                inst.set_integer("fmi2SetInteger", &[vr("muscle_law")], &[code]),
+                Status::Ok
+            );
+        }
+        assert_ne!(
+            inst.set_integer("fmi2SetInteger", &[vr("muscle_law")], &[2]),
+            Status::Ok
+        );
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        assert_eq!(
+            inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+            Status::Ok
+        );
+        assert_eq!(inst.do_step("fmi2DoStep", 0.0, 1.0), Status::Ok);
+        let mut v = [0.0];
+        assert_eq!(
+            inst.get_real("fmi2GetReal", &[vr("volume.lung")], &mut v),
+            Status::Ok
+        );
+        v[0]
+    };
+    let library = |law: MuscleLaw| {
+        let mut c = Config::default();
+        c.scene.level_of_detail = 0;
+        c.drive = Drive::quiet();
+        c.muscle_law = law;
+        let mut torso = Torso::new(c).unwrap();
+        torso.advance_to(1.0).unwrap();
+        torso.read(Quantity::LungVolume).unwrap()
+    };
+    let (thesis, hill) = (run(None), run(Some(1)));
+    println!("lung volume after 1 s: thesis {thesis:.6} L, hill {hill:.6} L");
+    assert_eq!(thesis, library(MuscleLaw::Thesis));
+    assert_eq!(hill, library(MuscleLaw::Hill));
+    assert_ne!(thesis, hill);
+}

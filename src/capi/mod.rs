@@ -185,6 +185,9 @@ pub struct BtConfig {
     pub group_gain_right: [f64; 8],
     /// Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
     pub group_gain_left: [f64; 8],
+    /// Muscle law (FMI `muscle_law`): 0 the seed thesis's shortening linear spring, 1 passive
+    /// and active parts with the passive wall fitted to the adult chest wall's compliance.
+    pub muscle_law: c_int,
 }
 
 /// Statistics of one `bt_advance_to` call.

@@ -38,6 +38,10 @@ pub struct SubjectArgs {
     /// one].
     #[arg(long)]
     pub lod: Option<u32>,
+    /// Muscle law: thesis (the seed thesis's shortening linear spring) or hill (passive and
+    /// active parts, the passive wall fitted to the adult chest wall's compliance).
+    #[arg(long, default_value = "thesis")]
+    pub muscle_law: String,
 }
 
 impl SubjectArgs {
@@ -82,6 +86,8 @@ impl SubjectArgs {
             )
         })?;
         c.solver.rtol = solver.rtol;
+        c.muscle_law = crate::dynamics::muscle::MuscleLaw::parse(&self.muscle_law)
+            .map_err(|_| Error::invalid("--muscle-law", &self.muscle_law, "thesis or hill"))?;
         c.validate().map_err(flag_error)?;
         Ok(c)
     }
@@ -133,6 +139,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "scene.level_of_detail" => "--lod",
         "grid.rows" | "grid.cols" => "--grid",
         "solver.method" => "--solver",
+        "muscle_law" => "--muscle-law",
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",

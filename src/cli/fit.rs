@@ -863,6 +863,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             breast_size: 0.0,
             posture: "standing".into(),
             lod: Some(0),
+            muscle_law: "thesis".into(),
         },
         solver: SolverArgs {
             solver: "dopri5".into(),

@@ -46,6 +46,25 @@ pub enum MuscleLaw {
 }
 
 impl MuscleLaw {
+    /// The laws, by code (FMI `muscle_law`: 0 thesis, 1 hill).
+    pub const ALL: [MuscleLaw; 2] = [MuscleLaw::Thesis, MuscleLaw::Hill];
+
+    /// The law's code (FMI `muscle_law`).
+    pub fn code(self) -> i32 {
+        match self {
+            MuscleLaw::Thesis => 0,
+            MuscleLaw::Hill => 1,
+        }
+    }
+
+    /// The law of code `code`; the error names `muscle_law` and the codes.
+    pub fn from_code(code: i64) -> crate::Result<MuscleLaw> {
+        usize::try_from(code)
+            .ok()
+            .and_then(|c| MuscleLaw::ALL.get(c).copied())
+            .ok_or_else(|| crate::Error::invalid("muscle_law", code, "0 thesis or 1 hill"))
+    }
+
     /// The law named `name` (`thesis` or `hill`).
     pub fn parse(name: &str) -> crate::Result<MuscleLaw> {
         match name {
@@ -250,7 +269,10 @@ mod tests {
                 - passive_energy(l - h, slack, f_max, toe))
                 / (2.0 * h);
             let t = crate::dynamics::forces::tension(f_max * passive(l / slack - 1.0).0, toe);
-            assert!((de - t).abs() < 1e-5 * (1.0 + t), "l {l}: dE/dl {de} against {t}");
+            assert!(
+                (de - t).abs() < 1e-5 * (1.0 + t),
+                "l {l}: dE/dl {de} against {t}"
+            );
         }
     }
 

@@ -103,6 +103,12 @@ pub struct Config {
     /// cartilage, a higher bulk modulus) and of sensitivity; `None`: the defaults.
     #[serde(default)]
     pub params: Option<crate::dynamics::Params>,
+    /// The muscle law (FMI `muscle_law`, [`crate::dynamics::muscle::MuscleLaw`]) of the
+    /// posture's defaults ([`crate::dynamics::Params::for_posture_and_law`]) when `params` is
+    /// `None`; `params` carries its own. Configurations written before it existed read the
+    /// thesis's law.
+    #[serde(default)]
+    pub muscle_law: crate::dynamics::muscle::MuscleLaw,
 }
 
 impl Default for Config {
@@ -118,6 +124,7 @@ impl Default for Config {
             group_gains: GroupGains::default(),
             subject_mesh_dir: None,
             params: None,
+            muscle_law: crate::dynamics::muscle::MuscleLaw::Thesis,
         }
     }
 }

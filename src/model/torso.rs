@@ -94,10 +94,9 @@ impl Compiled {
             config.scene.level_of_detail,
             config.subject_mesh_dir.as_deref(),
         )?;
-        let params = config
-            .params
-            .clone()
-            .unwrap_or_else(|| Params::for_posture(config.subject.posture));
+        let params = config.params.clone().unwrap_or_else(|| {
+            Params::for_posture_and_law(config.subject.posture, config.muscle_law)
+        });
         let mut model = Model::compile(&anatomy, params);
         model.set_lung_fraction(config.lung_ratio);
         Ok(Compiled::from_model(anatomy, model))

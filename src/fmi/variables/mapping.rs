@@ -95,6 +95,8 @@ pub enum Parameter {
     MeshDir,
     /// `solver.method` (Integer).
     SolverMethod,
+    /// `muscle_law` (Integer: 0 thesis, 1 hill).
+    MuscleLaw,
     /// `solver.rtol`.
     SolverRtol,
     /// `solver.atol`.
@@ -171,6 +173,7 @@ impl Parameter {
                     .unwrap_or_default(),
             ),
             SolverMethod => Value::Integer(config.solver.method.code()),
+            MuscleLaw => Value::Integer(config.muscle_law.code()),
             SolverRtol => Value::Real(config.solver.rtol),
             SolverAtol => Value::Real(config.solver.atol),
             SolverMaxStep => Value::Real(config.solver.max_step),
@@ -229,6 +232,9 @@ impl Parameter {
                 config.solver.method = Method::from_code(v.into()).ok_or_else(|| {
                     Error::invalid("solver.method", v, format!("0..{}", Method::ALL.len() - 1))
                 })?
+            }
+            (MuscleLaw, Value::Integer(v)) => {
+                config.muscle_law = crate::dynamics::muscle::MuscleLaw::from_code(v.into())?
             }
             (SolverRtol, Value::Real(v)) => config.solver.rtol = v,
             (SolverAtol, Value::Real(v)) => config.solver.atol = v,

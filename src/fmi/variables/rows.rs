@@ -351,6 +351,14 @@ pub(super) fn build(markers: &MarkerOutputs) -> Vec<Variable> {
             "Integration method: 0 Dormand-Prince 5(4), 1 Bogacki-Shampine 3(2), 2 high-order pair, 3 Rosenbrock-W (stiff), 4 quasi-static (chest wall in equilibrium, the lung volume integrated by Dormand-Prince 5(4))",
         )
         .range(0.0, methods),
+        par(
+            "muscle_law",
+            206,
+            Integer,
+            P::MuscleLaw,
+            "Muscle law: 0 the seed thesis's shortening linear spring (default), 1 passive and active parts (Thelen 2003 force-length curves) with the passive wall fitted to the adult chest wall's compliance",
+        )
+        .range(0.0, 1.0),
         par("solver.rtol", 130, Real, P::SolverRtol, "Relative tolerance of the integrator").range(1e-12, 1e-2),
         par("solver.atol", 131, Real, P::SolverAtol, "Absolute tolerance of the integrator on the state").range(1e-14, 1e-2),
         par("solver.max_step", 132, Real, P::SolverMaxStep, "Largest internal integration step").unit("s").range(1e-5, 1.0),
