@@ -44,8 +44,9 @@
 
 use super::accelerations;
 use super::jacobian::TorsoJacobian;
-use super::model::{Model, RIBS};
+use super::model::Model;
 use super::state::{Layout, error_weights};
+use super::structure::RIBS;
 use super::{Activations, Data, forces, kinematics, rhs, rhs_local};
 use crate::solver::sparse::ShiftedSolver;
 use crate::solver::{ErrorWeights, Integrator, Jacobian, Method, Ode, Options};
@@ -131,7 +132,7 @@ fn balance(model: &Model, data: &mut Data, act: &Activations, y: &[f64]) -> Bala
     let mut load = vec![0.0; l.len];
     kinematics::positions_and_velocities(model, data, &l, &still);
     forces::accumulate(model, data, act);
-    accelerations::forces_and_rates(model, data, &l, &still, &mut load);
+    accelerations::forces_and_rates(model, &model.preload, data, &l, &still, &mut load);
     let scale = data.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
     let mut residual: f64 = 0.0;
     let mut squares = 0.0;

@@ -35,8 +35,9 @@
 //! Jacobian.
 
 use super::forces;
-use super::model::{Carrier, Model, RIBS, volume};
+use super::model::Model;
 use super::state::Layout;
+use super::structure::{Carrier, RIBS, volume};
 use super::{Activations, Data, kinematics};
 use crate::solver::{Colouring, Jacobian, JacobianStructure, Pattern};
 use nalgebra::{Point3, Vector3};
@@ -444,10 +445,10 @@ pub fn rhs_frozen(
     dy: &mut [f64],
     pressures: [f64; 2],
 ) {
-    let layout = Layout::new(model);
-    kinematics::positions_and_velocities(model, data, &layout, y);
+    let layout = &model.layout;
+    kinematics::positions_and_velocities(model, data, layout, y);
     forces::accumulate_frozen(model, data, act, pressures);
-    super::accelerations::compute_local(model, data, &layout, y, dy);
+    super::accelerations::compute_local(model, &model.preload, &model.mass, data, layout, y, dy);
 }
 
 /// dV/dy of the volume enclosed by `tris` at state `y` into `out`: analytic for free

@@ -56,8 +56,9 @@
 //! pressure fall as the lungs fill (dP_alv/dV_L = -1 / (u_T^T b) must be positive). Either
 //! is reported as [`StaticsError::Unstable`], never passed over to another branch.
 
-use super::model::{Model, RIBS, volume};
+use super::model::Model;
 use super::state::Layout;
+use super::structure::{RIBS, volume};
 use super::{Activations, Data, accelerations, forces, kinematics};
 use crate::solver::sparse::ShiftedSolver;
 use crate::solver::{Colouring, Jacobian, Pattern};
@@ -1178,7 +1179,7 @@ pub(crate) fn pressures_and_residual(
     let vt = volume(&data.pos, &model.thorax_triangles);
     let pa = frozen_abdomen.unwrap_or_else(|| abdominal_pressure(model, va));
     forces::accumulate_frozen(model, data, act, [pa, pleural]);
-    accelerations::forces_and_rates(model, data, l, y, dy);
+    accelerations::forces_and_rates(model, &model.preload, data, l, y, dy);
     (va, vt)
 }
 
