@@ -6,14 +6,13 @@
 //! potential of the constant preloads.
 
 use super::model::Model;
-use super::state::Layout;
 use super::structure::{RIBS, path_length, volume};
 use super::{Data, kinematics};
 use nalgebra::Vector3;
 
 /// Total mechanical energy [J] of state `y` with no muscle activation.
 pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
-    let l = Layout::new(model);
+    let l = model.layout;
     kinematics::positions_and_velocities(model, data, &l, y);
     let mut e = 0.0;
     // Kinetic: the generalised velocities (rib rates, sternum velocity and angular

@@ -710,7 +710,7 @@ fn pleural_pressure(model: &Structure, data: &mut Data, airway_opening: f64) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Activations, Data, Layout, Model, Params, rest_state, rhs, volume};
+    use super::super::{Activations, Data, Model, Params, rest_state, rhs, volume};
     #[cfg(target_arch = "x86_64")]
     use super::elements_avx2;
     use super::{Pass, elements_in_batches, local_forces};
@@ -720,7 +720,7 @@ mod tests {
     /// A state away from rest: ribs turned, sternum moved, every free vertex displaced
     /// by a different amount, with velocities.
     fn deformed(model: &Model) -> Vec<f64> {
-        let l = Layout::new(model);
+        let l = model.layout;
         let mut y = rest_state(model);
         for r in 0..super::super::RIBS {
             y[l.theta + r] = 0.02 * ((r as f64) * 0.7).sin();

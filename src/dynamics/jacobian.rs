@@ -130,7 +130,7 @@ impl TorsoJacobian {
     /// Pattern (per body pair that interacts), block grouping (one block per body) and
     /// colouring for `model`.
     pub fn new(model: &Model) -> TorsoJacobian {
-        let l = Layout::new(model);
+        let l = model.layout;
         let adj = body_adjacency(model);
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); l.len];
         let mut groups = vec![0u32; l.len];
@@ -196,7 +196,7 @@ impl TorsoJacobian {
     /// sparse part is the local one's and whose low rank grows from 2 to 34 (module doc).
     pub fn full(model: &Model) -> TorsoJacobian {
         let mut j = TorsoJacobian::new(model);
-        let l = Layout::new(model);
+        let l = model.layout;
         let n = l.len;
         let embed = |g: &[f64]| {
             let mut v = vec![0.0; n];
@@ -234,7 +234,7 @@ impl TorsoJacobian {
         f0: &[f64],
         jac: &mut Jacobian,
     ) -> u64 {
-        let l = Layout::new(model);
+        let l = model.layout;
         let n = l.len;
         // the pressures at y (and the volumes they come from)
         kinematics::positions_and_velocities(model, data, &l, y);

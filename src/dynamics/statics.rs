@@ -310,7 +310,7 @@ impl Statics {
     /// equilibrium, velocities ignored) as the first solution and the activations `act` it
     /// balances.
     pub fn new(model: &Model, start: &[f64], act: &Activations) -> Statics {
-        let l = Layout::new(model);
+        let l = model.layout;
         let m = RIBS + 6 + 3 * l.vertices;
         let adj = super::jacobian::body_adjacency(model);
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); m];
@@ -1156,7 +1156,7 @@ fn abdominal_pressure(model: &Model, va: f64) -> f64 {
 /// The thoracic (mesh) volume of state `y` [m^3].
 pub fn volume_of(model: &Model, y: &[f64]) -> f64 {
     let mut data = Data::new(model);
-    kinematics::positions_and_velocities(model, &mut data, &Layout::new(model), y);
+    kinematics::positions_and_velocities(model, &mut data, &model.layout, y);
     volume(&data.pos, &model.thorax_triangles)
 }
 

@@ -128,7 +128,7 @@ struct PoseRig {
 impl PoseRig {
     fn new(model: &Model) -> Self {
         PoseRig {
-            layout: Layout::new(model),
+            layout: model.layout,
             rib_head: model.rib_head.clone(),
             rib_axis: model
                 .rib_axis
