@@ -22,7 +22,7 @@
 use breathing_torso::anatomy::{Anatomy, Anchor, Body, MuscleGroup, VertexRole};
 use breathing_torso::dynamics::kinematics::positions_and_velocities;
 use breathing_torso::dynamics::{
-    Activations, Data, Layout, Model, Params, path_length, rest_state,
+    Activations, Data, Layout, Model, Params, Structure, path_length, rest_state,
 };
 use breathing_torso::observe::{Compartments, observe};
 use breathing_torso::solver::Options;
@@ -40,18 +40,21 @@ struct Figures {
 }
 
 fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
-    let mut model = Model::compile(anatomy, params);
-    let beta = model.params.beta_max_diaphragm;
+    let mut structure = Structure::compile(anatomy, params);
+    let beta = structure.params.beta_max_diaphragm;
     if chords {
         // the fibres as long as their chords (the layout before the smooth dome's arcs)
-        for e in 0..model.muscle_count {
-            if model.elements.group[e] == MuscleGroup::Diaphragm.index() as u8 {
-                let s = model.elements.gain[e] / beta;
-                model.elements.stiffness[e] *= s;
-                model.elements.gain[e] = beta;
+        let el = &mut structure.elements;
+        for e in 0..structure.muscle_count {
+            if el.group[e] == MuscleGroup::Diaphragm.index() as u8 {
+                let s = el.gain[e] / beta;
+                el.stiffness[e] *= s;
+                el.gain[e] = beta;
             }
         }
     }
+    // the mass matrix and the preloads of the changed structure
+    let model = Model::new(structure);
     let mut groups = [0.0; 8];
     groups[MuscleGroup::Diaphragm.index()] = a;
     let act = Activations::new(&groups, 1.0, 1.0);

@@ -12,12 +12,12 @@
 //! |---|---|
 //! | [`numeric`] | generic minimisers over a box and a seeded random number generator |
 //! | [`mesh`] | triangle meshes: volume, normals, adjacency, I/O, smoothing, repair |
+//! | [`recording`] | marker recordings: one file per format (grid CSV, named CSV, TRC, C3D) |
 //! | [`anatomy`] | a [`anatomy::Subject`] turned into geometry and muscle layouts |
 //! | [`solver`] | embedded Runge-Kutta pairs, step control, dense output, generic over [`solver::Ode`] |
 //! | [`dynamics`] | the state vector and the right-hand side of the equations of motion |
 //! | [`observe`] | volumes, pressures and displacements read off a state |
 //! | [`model`] | the facade [`model::Torso`] |
-//! | [`recording`] | marker recordings: one file per format (grid CSV, named CSV, TRC, C3D) |
 //! | [`fit`], [`stats`] | fitting the model to SLP recordings; validation statistics against spirometry |
 //! | [`fmi`], [`capi`] | the FMI 2.0 and 3.0 co-simulation layer and the native C ABI |
 //! | `cli`, `bench` | the `torso` command-line tool and its measurements (feature `tools`) |

@@ -342,7 +342,8 @@ fn bad_recordings_are_rejected_with_line_and_column() {
         "nan.csv",
         &format!("# grid: 2x2\n{h}\n{nan}\n{}\n", row(0.1, 4)),
     );
-    assert_eq!((at(&e).0, at(&e).1), (3, 6));
+    // columns are character columns (the recording reader's), here the NaN cell's first
+    assert_eq!((at(&e).0, at(&e).1), (3, nan.find("NaN").unwrap() + 1));
     let e = bad("units.csv", &format!("# units: inch\n{h}\n"));
     assert!(at(&e).2.contains("inch"));
     let e = bad(
@@ -351,12 +352,12 @@ fn bad_recordings_are_rejected_with_line_and_column() {
     );
     assert_eq!(at(&e).0, 4);
     let e = bad("one.csv", &format!("# grid: 2x2\n{h}\n{}\n", row(0.0, 4)));
-    assert!(at(&e).2.contains("two frames"));
+    assert!(at(&e).2.contains("at least two"), "{e}");
     let e = bad(
         "nogrid.csv",
         &format!("{h}\n{}\n{}\n", row(0.0, 4), row(0.1, 4)),
     );
     assert!(at(&e).2.contains("# grid"));
     let e = bad("header.csv", "time,marker[1].x,marker[2].y,marker[1].z\n");
-    assert_eq!((at(&e).0, at(&e).1), (1, 3));
+    assert_eq!((at(&e).0, at(&e).1), (1, "time,marker[1].x,".len() + 1));
 }

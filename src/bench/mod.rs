@@ -260,7 +260,7 @@ pub struct TorsoSecondOrder<'a> {
 impl<'a> TorsoSecondOrder<'a> {
     /// Wraps `torso`.
     pub fn new(torso: &'a mut Torso) -> Self {
-        let layout = Layout::new(&torso.compiled().model);
+        let layout = torso.compiled().model.layout;
         TorsoSecondOrder { torso, layout }
     }
 }

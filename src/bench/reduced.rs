@@ -298,7 +298,7 @@ pub fn measure(
     config.drive = Drive::quiet();
     let torso = Torso::new(config)?;
     let model = &torso.compiled().model;
-    let l = Layout::new(model);
+    let l = model.layout;
     let n = RIBS + 6 + 3 * l.vertices;
     let reference = test
         .first()

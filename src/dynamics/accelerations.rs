@@ -13,32 +13,111 @@
 //! The left-hand sides are those of the true masses; the accelerations solve the generalised
 //! forces against the scaled mass matrix of `dynamics::inertia` instead (M q'' = f, with
 //! q'' = (theta'', x'', w', vertex x'') contiguous in the state's rates).
+//!
+//! The stage reads the [`Structure`] and the [`Preload`], never the whole model, so that the
+//! preloads can be found with it before the model is assembled ([`Preload::at_rest`]).
 
-use super::Data;
-use super::model::{Model, RIBS};
-use super::state::Layout;
+use super::inertia::MassMatrix;
+use super::state::{Layout, rest_state};
+use super::structure::{RIBS, Structure};
+use super::{Activations, Data, forces, kinematics};
 use nalgebra::{Quaternion, Vector3};
 
-/// Writes y' into `dy`.
-pub fn compute(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
-    forces_and_rates(model, data, l, y, dy);
-    model.mass.solve(&mut dy[l.theta_dot..]);
+/// Constant generalised loads holding the rest pose against gravity and the elements' rest
+/// tension (`Model::preload`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Preload {
+    /// Torque per rib [N m].
+    pub rib: Vec<f64>,
+    /// Force on the sternum [N].
+    pub sternum_force: Vector3<f64>,
+    /// Torque on the sternum about its centre of mass [N m] (the slack muscles' toe tension
+    /// at rest has a moment).
+    pub sternum_torque: Vector3<f64>,
+    /// Force on each free vertex [N].
+    pub vertex: Vec<Vector3<f64>>,
+}
+
+impl Preload {
+    /// No load, for a structure with `free_vertices` free vertices.
+    pub fn zero(free_vertices: usize) -> Preload {
+        Preload {
+            rib: vec![0.0; RIBS],
+            sternum_force: Vector3::zeros(),
+            sternum_torque: Vector3::zeros(),
+            vertex: vec![Vector3::zeros(); free_vertices],
+        }
+    }
+
+    /// The preloads that make the rest pose of `structure` an equilibrium: the generalised
+    /// forces at rest (no activation, no velocity, no preload) are computed and cancelled.
+    pub fn at_rest(structure: &Structure) -> Preload {
+        let none = Preload::zero(structure.free_vertices());
+        let l = Layout::new(structure);
+        let mut data = Data::new(structure);
+        let y = rest_state(structure);
+        let mut dy = vec![0.0; y.len()];
+        kinematics::positions_and_velocities(structure, &mut data, &l, &y);
+        forces::accumulate(structure, &mut data, &Activations::default());
+        forces_and_rates(structure, &none, &mut data, &l, &y, &mut dy);
+        Preload {
+            rib: data.rib_torque.iter().map(|t| -t).collect(),
+            sternum_force: -data.sternum_force,
+            sternum_torque: -data.sternum_torque,
+            vertex: structure
+                .vertex_anchor
+                .iter()
+                .zip(&structure.vertex_mass)
+                .map(|(&a, m)| -data.force[a as usize] - structure.gravity * *m)
+                .collect(),
+        }
+    }
+}
+
+/// Writes y' into `dy`: the generalised forces of [`forces_and_rates`] solved against the
+/// mass matrix `mass`.
+pub fn compute(
+    structure: &Structure,
+    preload: &Preload,
+    mass: &MassMatrix,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    dy: &mut [f64],
+) {
+    forces_and_rates(structure, preload, data, l, y, dy);
+    mass.solve(&mut dy[l.theta_dot..]);
 }
 
 /// As [`compute`], with the mass matrix's block-diagonal part only (the cavities' volume
 /// inertances left out, [`super::inertia::MassMatrix::solve_local`]): the right-hand side
 /// whose Jacobian is sparse plus rank 2 ([`super::jacobian::TorsoJacobian::new`]; the
 /// stiff method's maps it through the whole mass matrix).
-pub fn compute_local(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
-    forces_and_rates(model, data, l, y, dy);
-    model.mass.solve_local(&mut dy[l.theta_dot..]);
+pub fn compute_local(
+    structure: &Structure,
+    preload: &Preload,
+    mass: &MassMatrix,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    dy: &mut [f64],
+) {
+    forces_and_rates(structure, preload, data, l, y, dy);
+    mass.solve_local(&mut dy[l.theta_dot..]);
 }
 
 /// The position rates into `dy`, and the generalised forces where the accelerations go
 /// (rib torques, sternum force and torque, vertex forces, in the order of the rates; the
-/// anchor forces of `data` must be those of `y`): the unbalanced loads that
-/// [`super::equilibrium`] drives to zero.
-pub fn forces_and_rates(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+/// anchor forces of `data` must be those of `y`), with the constant loads `preload`: the
+/// unbalanced loads that [`super::equilibrium`] drives to zero.
+pub fn forces_and_rates(
+    model: &Structure,
+    preload: &Preload,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    dy: &mut [f64],
+) {
     // Position derivatives are the velocities.
     dy[l.theta..l.theta + RIBS].copy_from_slice(&y[l.theta_dot..l.theta_dot + RIBS]);
     dy[l.sternum_x..l.sternum_x + 3].copy_from_slice(&y[l.sternum_v..l.sternum_v + 3]);
@@ -58,13 +137,20 @@ pub fn forces_and_rates(model: &Model, data: &mut Data, l: &Layout, y: &[f64], d
     dy[l.sternum_q + 2] = qd.j;
     dy[l.sternum_q + 3] = qd.k;
 
-    ribs(model, data, l, y, dy);
-    sternum(model, data, l, dy);
-    vertices(model, data, l, y, dy);
+    ribs(model, preload, data, l, y, dy);
+    sternum(model, preload, data, l, dy);
+    vertices(model, preload, data, l, y, dy);
 }
 
 /// Rib torques (generalised forces).
-fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+fn ribs(
+    model: &Structure,
+    preload: &Preload,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    dy: &mut [f64],
+) {
     // one length for both arrays, so that one index check covers them
     let m = data.pos.len();
     let (pos, force) = (&data.pos[..], &data.force[..m]);
@@ -79,17 +165,17 @@ fn ribs(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
         moment += com_arm.cross(&(model.gravity * model.rib_mass[r]));
         let (theta, rate) = (y[l.theta + r], y[l.theta_dot + r]);
         let torque = moment.dot(&u) - model.rib_stiffness[r] * theta - model.rib_damping[r] * rate
-            + model.rib_preload[r];
+            + preload.rib[r];
         data.rib_torque[r] = torque;
         dy[l.theta_dot + r] = torque;
     }
 }
 
 /// Sternum force and torque, less the gyroscopic torque w x I w of its true inertia.
-fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
+fn sternum(model: &Structure, preload: &Preload, data: &mut Data, l: &Layout, dy: &mut [f64]) {
     let x = data.sternum_x;
-    let mut force = model.gravity * model.sternum_mass + model.sternum_preload;
-    let mut torque = model.sternum_torque_preload;
+    let mut force = model.gravity * model.sternum_mass + preload.sternum_force;
+    let mut torque = preload.sternum_torque;
     for &a in &model.sternum_anchors {
         let a = a as usize;
         force += data.force[a];
@@ -106,12 +192,19 @@ fn sternum(model: &Model, data: &mut Data, l: &Layout, dy: &mut [f64]) {
 }
 
 /// Free vertex forces.
-fn vertices(model: &Model, data: &mut Data, l: &Layout, y: &[f64], dy: &mut [f64]) {
+fn vertices(
+    model: &Structure,
+    preload: &Preload,
+    data: &mut Data,
+    l: &Layout,
+    y: &[f64],
+    dy: &mut [f64],
+) {
     let n = l.vertices;
     let (mass, damping, preload) = (
         &model.vertex_mass[..n],
         &model.vertex_damping[..n],
-        &model.vertex_preload[..n],
+        &preload.vertex[..n],
     );
     let vs = y[l.vertex_v..l.vertex_v + 3 * n].chunks_exact(3);
     let accs = dy[l.vertex_v..l.vertex_v + 3 * n].chunks_exact_mut(3);

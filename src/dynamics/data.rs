@@ -4,7 +4,7 @@
 //! the cavities' volumes and pressures of the last evaluation), sized once per model so
 //! that the right-hand side allocates nothing.
 
-use super::{Model, RIBS, forces};
+use super::{RIBS, Structure, forces};
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 
 /// What drives the model in one evaluation: the activations applied to the muscles, per
@@ -112,8 +112,8 @@ pub struct Data {
 }
 
 impl Data {
-    /// Scratch memory for `model`.
-    pub fn new(model: &Model) -> Data {
+    /// Scratch memory for a model of structure `model`.
+    pub fn new(model: &Structure) -> Data {
         let n = model.rest.len();
         let mut data = Data {
             rib_rotation: vec![Matrix3::identity(); RIBS],

@@ -5,14 +5,14 @@
 //! ([`super::pleural::PleuralLaw::energy`], E_L (V - V0)^2 / 2 near rest); gravity; and the
 //! potential of the constant preloads.
 
-use super::model::{Model, RIBS, path_length, volume};
-use super::state::Layout;
+use super::model::Model;
+use super::structure::{RIBS, path_length, volume};
 use super::{Data, kinematics};
 use nalgebra::Vector3;
 
 /// Total mechanical energy [J] of state `y` with no muscle activation.
 pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
-    let l = Layout::new(model);
+    let l = model.layout;
     kinematics::positions_and_velocities(model, data, &l, y);
     let mut e = 0.0;
     // Kinetic: the generalised velocities (rib rates, sternum velocity and angular
@@ -58,18 +58,20 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
         let h = model.rib_head[r];
         let com = h + data.rib_rotation[r] * (model.rib_com[r] - h);
         e -= model.rib_mass[r] * model.gravity.dot(&com.coords);
-        e -= model.rib_preload[r] * y[l.theta + r];
+        e -= model.preload.rib[r] * y[l.theta + r];
     }
-    e -= (model.gravity * model.sternum_mass + model.sternum_preload).dot(&data.sternum_x.coords);
+    e -= (model.gravity * model.sternum_mass + model.preload.sternum_force)
+        .dot(&data.sternum_x.coords);
     // the constant torque's potential over the sternum's rotation from rest (its rotation
     // vector: exact for rotations about a fixed axis, and to second order otherwise)
     e -= model
-        .sternum_torque_preload
+        .preload
+        .sternum_torque
         .dot(&data.sternum_rotation.scaled_axis());
     for (j, m) in model.vertex_mass.iter().enumerate() {
         let px = l.vertex_x + 3 * j;
         let x = Vector3::new(y[px], y[px + 1], y[px + 2]);
-        e -= (model.gravity * *m + model.vertex_preload[j]).dot(&x);
+        e -= (model.gravity * *m + model.preload.vertex[j]).dot(&x);
     }
     let _: &mut Data = data;
     e

@@ -44,8 +44,9 @@
 
 use super::accelerations;
 use super::jacobian::TorsoJacobian;
-use super::model::{Model, RIBS};
-use super::state::{Layout, error_weights};
+use super::model::Model;
+use super::state::error_weights;
+use super::structure::RIBS;
 use super::{Activations, Data, forces, kinematics, rhs, rhs_local};
 use crate::solver::sparse::ShiftedSolver;
 use crate::solver::{ErrorWeights, Integrator, Jacobian, Method, Ode, Options};
@@ -125,13 +126,13 @@ impl Balance {
 
 /// [`imbalance`] with the sum of squares as well.
 fn balance(model: &Model, data: &mut Data, act: &Activations, y: &[f64]) -> Balance {
-    let l = Layout::new(model);
+    let l = model.layout;
     let mut still = y.to_vec();
     still[l.theta_dot..].fill(0.0);
     let mut load = vec![0.0; l.len];
     kinematics::positions_and_velocities(model, data, &l, &still);
     forces::accumulate(model, data, act);
-    accelerations::forces_and_rates(model, data, &l, &still, &mut load);
+    accelerations::forces_and_rates(model, &model.preload, data, &l, &still, &mut load);
     let scale = data.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
     let mut residual: f64 = 0.0;
     let mut squares = 0.0;
@@ -243,7 +244,7 @@ fn newton(
     y: &mut [f64],
     tolerance: f64,
 ) -> Newton {
-    let l = Layout::new(model);
+    let l = model.layout;
     let n = l.len;
     let target = tolerance * NEWTON_MARGIN;
     let mut torso_jacobian = TorsoJacobian::new(model);
@@ -394,7 +395,7 @@ fn stable(
     y: &mut [f64],
     options: Options,
 ) -> (Option<bool>, u64) {
-    let l = Layout::new(model);
+    let l = model.layout;
     let Ok(mut integrator) = Integrator::new(Method::Dopri5, options, y.len()) else {
         return (None, 0);
     };
@@ -447,7 +448,7 @@ pub fn solve(
     tolerance: f64,
     options: Options,
 ) -> Equilibrium {
-    let l = Layout::new(model);
+    let l = model.layout;
     let mut data = Data::new(model);
     let mut y = start.to_vec();
     y[l.theta_dot..].fill(0.0);
@@ -530,7 +531,7 @@ pub fn solve(
 mod tests {
     use super::{imbalance, relax, solve, stable};
     use crate::anatomy::{Anatomy, MuscleGroup, Subject};
-    use crate::dynamics::{Activations, Data, Layout, Model, Params, rest_state};
+    use crate::dynamics::{Activations, Data, Model, Params, rest_state};
     use crate::solver::{Integrator, Method, Options};
 
     fn model() -> Model {
@@ -610,7 +611,7 @@ mod tests {
             "relaxation settled only to {} in {time} s",
             r / s
         );
-        let l = Layout::new(&model);
+        let l = model.layout;
         let apart = |a: &[f64], b: &[f64]| {
             a[..l.theta_dot]
                 .iter()
@@ -687,7 +688,7 @@ mod tests {
         integrator
             .integrate(&mut held, &mut t, &mut y, 4.0)
             .unwrap();
-        let l = Layout::new(&model);
+        let l = model.layout;
         // the drift is under 1 % of the displacement the activation made from rest
         let moved = |a: &[f64], b: &[f64]| {
             a[l.sternum_x..l.theta_dot]

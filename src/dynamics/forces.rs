@@ -4,7 +4,7 @@
 //!   l(t) = l0 r(t) (eq. 2.3) and r = 1 - beta_max a g s for muscles (a the side's activation
 //!   of the group, g the element's regional gain, s the tissue's rest length over the path's:
 //!   the smooth dome's arcs over the chords for a diaphragm fibre, else 1). Muscles only pull (Zajac 1989, thesis 2.1),
-//!   and so do the membrane edges of the diaphragm's dome ([`super::model::PASSIVE_SLACK`]): a
+//!   and so do the membrane edges of the diaphragm's dome ([`super::PASSIVE_SLACK`]): a
 //!   membrane wrinkles rather than carry compression (tension-field theory: Stein &
 //!   Hedgepeth 1961, NASA TN D-813; Mansfield 1969, Proc R Soc A 311:1). The tension of
 //!   either is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps
@@ -21,20 +21,20 @@
 //!   ([`super::Params::abdominal_wall_resistance`]) to the stiffness-proportional part.
 //! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1) - mu dV/dt; each triangle pushes each of
 //!   its corners with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx. The
-//!   viscous term mu (`Model::abdomen_viscosity`) damps the cavity's volume mode.
+//!   viscous term mu (`Structure::abdomen_viscosity`) damps the cavity's volume mode.
 //! - Pleural pressure: P_pl = P_ao - P_L(V_th) - R dV_th/dt on the thoracic surface: the
 //!   pressure at the airway opening (`Activations::airway_opening`, 0 breathing air) less the
 //!   lungs' recoil and the pressure drop of the airflow through the airway resistance R
-//!   (`Model::airway_resistance`); dV/dt is the sum over the triangles of A n . (v_a + v_b +
+//!   (`Structure::airway_resistance`); dV/dt is the sum over the triangles of A n . (v_a + v_b +
 //!   v_c) / 3, exact on a closed surface. All relative to rest, where the chest wall's rest
 //!   forces balance the lungs' recoil at FRC.
 
-use super::model::{Model, PASSIVE, VIA, via_segment_length};
+use super::structure::{PASSIVE, Structure, VIA, via_segment_length};
 use super::{Activations, Data};
 use nalgebra::{Point3, Vector3};
 
 /// Computes `data.force` for every anchor.
-pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
+pub fn accumulate(model: &Structure, data: &mut Data, act: &Activations) {
     local_forces(model, data, act);
     abdominal_pressure(model, data);
     pleural_pressure(model, data, act.airway_opening);
@@ -44,7 +44,12 @@ pub fn accumulate(model: &Model, data: &mut Data, act: &Activations) {
 /// `[abdominal, pleural]` [Pa] instead of computed from the volumes: the local part of the
 /// forces, whose Jacobian is sparse (used by `dynamics::jacobian`). `data`'s volumes and
 /// pressures are left as they were.
-pub fn accumulate_frozen(model: &Model, data: &mut Data, act: &Activations, pressures: [f64; 2]) {
+pub fn accumulate_frozen(
+    model: &Structure,
+    data: &mut Data,
+    act: &Activations,
+    pressures: [f64; 2],
+) {
     local_forces(model, data, act);
     let (na, nt) = (model.abdomen_triangles.len(), model.thorax_triangles.len());
     let (abdomen, thorax) = data.face.split_at_mut(na);
@@ -59,7 +64,7 @@ pub fn accumulate_frozen(model: &Model, data: &mut Data, act: &Activations, pres
 }
 
 /// Element and vector-spring forces (everything but the pressures).
-fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
+fn local_forces(model: &Structure, data: &mut Data, act: &Activations) {
     data.force.fill(Vector3::zeros());
     elements(model, data, act);
     vector_springs(model, data);
@@ -67,7 +72,7 @@ fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
 
 /// Muscle and membrane elements. An element along a path p_0 .. p_m has length
 /// L = sum s_k, s_k = sqrt(|d_k|^2 + c^2) with d_k = p_{k+1} - p_k and c the band's core
-/// ([`super::model::PATH_CORE`]; c = 0 for two-point elements), and rate
+/// ([`super::PATH_CORE`]; c = 0 for two-point elements), and rate
 /// L' = sum (v_{k+1} - v_k) . n_k with n_k = d_k / s_k; its tension f acts on each via point
 /// along n_k - n_{k-1}, on the origin along n_0 and on the insertion along -n_{m-1}
 /// (f = -dE/dx of the element's energy).
@@ -79,7 +84,7 @@ fn local_forces(model: &Model, data: &mut Data, act: &Activations) {
 /// x86-64, NEON on aarch64). Each lane does the operations of [`Pass::single`] in the same
 /// order, with no fused multiply-add, and the forces are added to the anchors element by
 /// element in the elements' order: the result is bit for bit the same on every path.
-fn elements(model: &Model, data: &mut Data, act: &Activations) {
+fn elements(model: &Structure, data: &mut Data, act: &Activations) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above.
@@ -92,7 +97,7 @@ fn elements(model: &Model, data: &mut Data, act: &Activations) {
 /// [`elements_in_batches`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn elements_avx2(model: &Model, data: &mut Data, act: &Activations) {
+fn elements_avx2(model: &Structure, data: &mut Data, act: &Activations) {
     elements_in_batches::<true>(model, data, act);
 }
 
@@ -103,7 +108,7 @@ const LANES: usize = 4;
 /// The element loop behind [`elements`], inlined into each instruction-set variant; `AVX2`
 /// says that the caller runs with AVX2 enabled, so that the batches use its intrinsics.
 #[inline(always)]
-fn elements_in_batches<const AVX2: bool>(model: &Model, data: &mut Data, act: &Activations) {
+fn elements_in_batches<const AVX2: bool>(model: &Structure, data: &mut Data, act: &Activations) {
     let level = act.table();
     let n = model.elements.len();
     let m = data.pos.len();
@@ -149,7 +154,7 @@ impl<'a> Pass<'a> {
     /// The pass over `model`'s elements at anchor positions `pos` and velocities `vel` (of
     /// one length) under the activation table `level` ([`Activations::table`]).
     fn new(
-        model: &'a Model,
+        model: &'a Structure,
         pos: &'a [Point3<f64>],
         vel: &'a [Vector3<f64>],
         level: &'a [f64; 256],
@@ -433,7 +438,7 @@ pub fn tension(f: f64, toe: f64) -> f64 {
 }
 
 /// Cartilage joints and wall foundation.
-fn vector_springs(model: &Model, data: &mut Data) {
+fn vector_springs(model: &Structure, data: &mut Data) {
     let s = &model.springs;
     let n = s.a.len();
     let (ia, ib, horizontal) = (&s.a[..n], &s.b[..n], &s.horizontal[..n]);
@@ -593,7 +598,7 @@ fn volume_faces_and_rate_in_batches(
 /// then thoracic ones) with every triangle's doubled area vector and volume term at `model`'s
 /// rest positions: the entries of the triangles fixed to the ground, which the pressure pass
 /// reads and never rewrites.
-pub(super) fn rest_terms(model: &Model, face: &mut [Vector3<f64>], term: &mut [f64]) {
+pub(super) fn rest_terms(model: &Structure, face: &mut [Vector3<f64>], term: &mut [f64]) {
     let na = model.abdomen_triangles.len();
     let (abdomen_face, thorax_face) = face.split_at_mut(na);
     let (abdomen_term, thorax_term) = term.split_at_mut(na);
@@ -641,7 +646,7 @@ fn apply_pressure(
 }
 
 /// Abdominal pressure from the current cavity volume (eq. 2.5-2.6).
-fn abdominal_pressure(model: &Model, data: &mut Data) {
+fn abdominal_pressure(model: &Structure, data: &mut Data) {
     let tris = &model.abdomen_triangles;
     let n = tris.len();
     let Data {
@@ -670,7 +675,7 @@ fn abdominal_pressure(model: &Model, data: &mut Data) {
 /// resistance. The dome's
 /// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
 /// volume terms negated (exactly what recomputing them would give).
-fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
+fn pleural_pressure(model: &Structure, data: &mut Data, airway_opening: f64) {
     let tris = &model.thorax_triangles;
     let (na, nt) = (model.abdomen_triangles.len(), tris.len());
     let Data {
@@ -734,7 +739,7 @@ fn pleural_pressure(model: &Model, data: &mut Data, airway_opening: f64) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Activations, Data, Layout, Model, Params, rest_state, rhs, volume};
+    use super::super::{Activations, Data, Model, Params, rest_state, rhs, volume};
     #[cfg(target_arch = "x86_64")]
     use super::elements_avx2;
     use super::{Pass, elements_in_batches, local_forces};
@@ -744,7 +749,7 @@ mod tests {
     /// A state away from rest: ribs turned, sternum moved, every free vertex displaced
     /// by a different amount, with velocities.
     fn deformed(model: &Model) -> Vec<f64> {
-        let l = Layout::new(model);
+        let l = model.layout;
         let mut y = rest_state(model);
         for r in 0..super::super::RIBS {
             y[l.theta + r] = 0.02 * ((r as f64) * 0.7).sin();

@@ -17,7 +17,7 @@
 //! Each block alone then vibrates at omega_b at most; blocks moving against their neighbours
 //! (a vertex against the next, a rib against the sternum) stretch the elements between them
 //! from both ends and reach about twice that, omega_i. The damping of every element, spring
-//! and joint is stiffness-proportional (`Model::compile`: c = 2 zeta k / omega_i), so these
+//! and joint is stiffness-proportional (`Structure::compile`: c = 2 zeta k / omega_i), so these
 //! fastest modes are damped with the ratio zeta (1 by default: critically).
 //!
 //! - K_local is the stiffness of the elements, vector springs and rib joints at rest
@@ -56,7 +56,7 @@
 //! S = (W^-1 + U^T Z)^-1, U = [g_A g_T], W = diag(I_A, I_T). The kinetic energy is
 //! q'^T M q' / 2. Gravity keeps acting on the true masses.
 
-use super::model::{Carrier, Model, RIBS, via_segment_length};
+use super::structure::{Carrier, RIBS, Structure, via_segment_length};
 use nalgebra::{DMatrix, Matrix2, Matrix3, Vector2, Vector3};
 
 /// Number of generalised coordinates of the rigid bodies: the ribs' angles, then the
@@ -101,7 +101,7 @@ pub struct MassMatrix {
 }
 
 /// Generalised-coordinate gradients of an anchor's position: (coordinate, dp/dq).
-fn anchor_jacobian(model: &Model, a: u32, out: &mut Vec<(usize, Vector3<f64>)>) {
+fn anchor_jacobian(model: &Structure, a: u32, out: &mut Vec<(usize, Vector3<f64>)>) {
     let p = model.rest[a as usize];
     match model.carrier[a as usize] {
         Carrier::Ground => {}
@@ -137,7 +137,7 @@ struct Gradient {
 
 impl Gradient {
     /// Adds the scalar's gradient `g` with respect to anchor `a`'s position.
-    fn point(&mut self, model: &Model, a: u32, g: &Vector3<f64>) {
+    fn point(&mut self, model: &Structure, a: u32, g: &Vector3<f64>) {
         self.jac.clear();
         anchor_jacobian(model, a, &mut self.jac);
         for (dof, dp) in &self.jac {
@@ -162,7 +162,7 @@ impl Gradient {
 
 /// The blocks of the local stiffness at rest: the rigid bodies' 30 x 30 (row-major) and each
 /// free vertex's 3 x 3.
-fn local_stiffness(model: &Model) -> (Vec<f64>, Vec<Matrix3<f64>>) {
+fn local_stiffness(model: &Structure) -> (Vec<f64>, Vec<Matrix3<f64>>) {
     let mut rigid = vec![0.0; RIGID * RIGID];
     let mut vertex = vec![Matrix3::zeros(); model.free_vertices()];
     let mut add = |gamma: f64, g: &[(usize, f64)]| {
@@ -239,7 +239,7 @@ fn local_stiffness(model: &Model) -> (Vec<f64>, Vec<Matrix3<f64>>) {
 /// The inertia each free vertex gains from the vector springs' damping beyond the
 /// stiffness-proportional part (the abdominal wall's tissue resistance): c / omega_i, so that
 /// the damper alone relaxes a vertex no faster than omega_i [kg, isotropic].
-fn viscous_vertex_mass(model: &Model, omega: f64) -> Vec<f64> {
+fn viscous_vertex_mass(model: &Structure, omega: f64) -> Vec<f64> {
     let rayleigh = 2.0 * model.params.damping_ratio / omega;
     let mut mass = vec![0.0; model.free_vertices()];
     let s = &model.springs;
@@ -259,7 +259,7 @@ fn viscous_vertex_mass(model: &Model, omega: f64) -> Vec<f64> {
 
 /// The generalised gradient dV/dq of the volume enclosed by `tris` at rest (dV/dp of a
 /// corner is the sum of face / 6 over its triangles, exact on a closed surface).
-pub fn volume_gradient(model: &Model, tris: &[[u32; 3]]) -> Vec<f64> {
+pub fn volume_gradient(model: &Structure, tris: &[[u32; 3]]) -> Vec<f64> {
     let pos = &model.rest;
     let mut grad = vec![Vector3::zeros(); pos.len()];
     for t in tris {
@@ -282,10 +282,10 @@ pub fn volume_gradient(model: &Model, tris: &[[u32; 3]]) -> Vec<f64> {
 }
 
 impl MassMatrix {
-    /// The mass matrix of `model` (whose masses are the true ones) for the inertia frequency
+    /// The mass matrix of a model of structure `model` (whose masses are the true ones) for the inertia frequency
     /// `frequency` [Hz] (module doc); `slopes` are the pressure slopes dP/dV at rest `[abdomen, thorax]`
     /// [Pa/m^3] and `resistance` the airway resistance [Pa s/m^3].
-    pub fn new(model: &Model, frequency: f64, slopes: [f64; 2], resistance: f64) -> MassMatrix {
+    pub fn new(model: &Structure, frequency: f64, slopes: [f64; 2], resistance: f64) -> MassMatrix {
         let omega = 2.0 * std::f64::consts::PI * frequency;
         // the blocks' own frequency: half the inertia frequency, since the blocks' coupling
         // (a vertex and its neighbours moving in opposition) can double it

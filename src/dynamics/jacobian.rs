@@ -35,8 +35,9 @@
 //! Jacobian.
 
 use super::forces;
-use super::model::{Carrier, Model, RIBS, volume};
+use super::model::Model;
 use super::state::Layout;
+use super::structure::{Carrier, RIBS, volume};
 use super::{Activations, Data, kinematics};
 use crate::solver::{Colouring, Jacobian, JacobianStructure, Pattern};
 use nalgebra::{Point3, Vector3};
@@ -129,7 +130,7 @@ impl TorsoJacobian {
     /// Pattern (per body pair that interacts), block grouping (one block per body) and
     /// colouring for `model`.
     pub fn new(model: &Model) -> TorsoJacobian {
-        let l = Layout::new(model);
+        let l = model.layout;
         let adj = body_adjacency(model);
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); l.len];
         let mut groups = vec![0u32; l.len];
@@ -195,7 +196,7 @@ impl TorsoJacobian {
     /// sparse part is the local one's and whose low rank grows from 2 to 34 (module doc).
     pub fn full(model: &Model) -> TorsoJacobian {
         let mut j = TorsoJacobian::new(model);
-        let l = Layout::new(model);
+        let l = model.layout;
         let n = l.len;
         let embed = |g: &[f64]| {
             let mut v = vec![0.0; n];
@@ -233,7 +234,7 @@ impl TorsoJacobian {
         f0: &[f64],
         jac: &mut Jacobian,
     ) -> u64 {
-        let l = Layout::new(model);
+        let l = model.layout;
         let n = l.len;
         // the pressures at y (and the volumes they come from)
         kinematics::positions_and_velocities(model, data, &l, y);
@@ -444,10 +445,10 @@ pub fn rhs_frozen(
     dy: &mut [f64],
     pressures: [f64; 2],
 ) {
-    let layout = Layout::new(model);
-    kinematics::positions_and_velocities(model, data, &layout, y);
+    let layout = &model.layout;
+    kinematics::positions_and_velocities(model, data, layout, y);
     forces::accumulate_frozen(model, data, act, pressures);
-    super::accelerations::compute_local(model, data, &layout, y, dy);
+    super::accelerations::compute_local(model, &model.preload, &model.mass, data, layout, y, dy);
 }
 
 /// dV/dy of the volume enclosed by `tris` at state `y` into `out`: analytic for free

@@ -3,7 +3,7 @@
 //! A rib turns by theta about its unit hinge axis u through its head h (Rodrigues):
 //! p = h + R(u, theta)(p0 - h), v = theta' u x (p - h). The sternum is a free rigid body:
 //! p = x + R(q)(p0 - x0), v = x' + w x (p - x). Free vertices are read directly. The rest
-//! arms p0 - h and p0 - x0 are precomputed in the [`Model`].
+//! arms p0 - h and p0 - x0 are precomputed in the [`Structure`].
 //!
 //! The same poses as rigid motions ([`rib_pose`], [`sternum_pose`]) drive the skinning of
 //! the markers (`observe::markers`), so that the state is read into body poses in one place.
@@ -11,8 +11,8 @@
 //! quaternion of the same axis and angle (the two agree to rounding).
 
 use super::Data;
-use super::model::{Model, RIBS};
 use super::state::Layout;
+use super::structure::{RIBS, Structure};
 use nalgebra::{
     Isometry3, Matrix3, Point3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3,
 };
@@ -54,7 +54,7 @@ pub fn rib_pose(head: &Point3<f64>, axis: &Unit<Vector3<f64>>, theta: f64) -> Is
 }
 
 /// Fills `data.pos` and `data.vel` for all moving anchors.
-pub fn positions_and_velocities(model: &Model, data: &mut Data, l: &Layout, y: &[f64]) {
+pub fn positions_and_velocities(model: &Structure, data: &mut Data, l: &Layout, y: &[f64]) {
     for r in 0..RIBS {
         data.rib_rotation[r] = axis_rotation(&model.rib_axis[r], y[l.theta + r]);
     }

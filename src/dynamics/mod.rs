@@ -11,7 +11,10 @@
 //!    axes, sternum force and torque, vertex forces), joint springs, gravity and preload, then
 //!    accelerations.
 //!
-//! The compiled [`Model`] never changes during a run; [`Data`] holds the scratch memory, so
+//! The compiled [`Model`] never changes during a run: `model.rs` compiles its [`Structure`]
+//! (`structure.rs`) first, derives the mass matrix (`inertia.rs`) and the preloads (stage 3's
+//! [`accelerations::Preload`]) from it, and assembles the model once with the state's
+//! [`Layout`] (`state.rs`). [`Data`] holds the scratch memory, so
 //! that the right-hand side allocates nothing; it and the [`Activations`] live in `data.rs`,
 //! the pipeline that runs the stages ([`rhs`], [`rhs_local`]) in this file.
 
@@ -29,34 +32,36 @@ mod params;
 pub mod pleural;
 pub mod state;
 pub mod statics;
+mod structure;
 
 pub use data::{Activations, Data};
-pub use model::{
-    Carrier, Elements, Model, PASSIVE, PASSIVE_SLACK, PATH_CORE, REST_LUNG_FRACTION, RIBS, VIA,
-    VectorSprings, path_length, via_segment_length, volume,
-};
+pub use model::Model;
 pub use params::{
     CHEST_WALL_COMPLIANCE, DIAPHRAGM_CONTRACTION_UPRIGHT, HILL_PASSIVE_WALL_SCALE,
     LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
     diaphragm_contraction, diaphragm_length_ratio,
 };
 pub use state::{Layout, error_weights, rest_state};
+pub use structure::{
+    Carrier, Elements, PASSIVE, PASSIVE_SLACK, PATH_CORE, REST_LUNG_FRACTION, RIBS, Structure, VIA,
+    VectorSprings, path_length, via_segment_length, volume,
+};
 
 /// The right-hand side with the mass matrix's block-diagonal part only (no volume
 /// inertances, `inertia::MassMatrix::solve_local`): the equilibrium's residual, whose
 /// Jacobian [`jacobian::TorsoJacobian::new`] gives (the stiff method's,
 /// [`jacobian::TorsoJacobian::full`], maps it through the whole mass matrix).
 pub fn rhs_local(model: &Model, data: &mut Data, act: &Activations, y: &[f64], dy: &mut [f64]) {
-    let layout = Layout::new(model);
-    kinematics::positions_and_velocities(model, data, &layout, y);
+    let layout = &model.layout;
+    kinematics::positions_and_velocities(model, data, layout, y);
     forces::accumulate(model, data, act);
-    accelerations::compute_local(model, data, &layout, y, dy);
+    accelerations::compute_local(model, &model.preload, &model.mass, data, layout, y, dy);
 }
 
 /// The right-hand side y' = f(y) for the given activations, in stages.
 pub fn rhs(model: &Model, data: &mut Data, act: &Activations, y: &[f64], dy: &mut [f64]) {
-    let layout = Layout::new(model);
-    kinematics::positions_and_velocities(model, data, &layout, y);
+    let layout = &model.layout;
+    kinematics::positions_and_velocities(model, data, layout, y);
     forces::accumulate(model, data, act);
-    accelerations::compute(model, data, &layout, y, dy);
+    accelerations::compute(model, &model.preload, &model.mass, data, layout, y, dy);
 }

@@ -4,7 +4,7 @@
 //! y, z) | free vertex positions (3n) | theta rates (24) | sternum velocity (3) | sternum
 //! angular velocity, world frame (3) | free vertex velocities (3n) ].
 
-use super::model::{Model, RIBS};
+use super::structure::{RIBS, Structure};
 
 /// Offsets into the state vector.
 #[derive(Clone, Copy, Debug)]
@@ -32,9 +32,10 @@ pub struct Layout {
 }
 
 impl Layout {
-    /// The layout of `model`'s state.
-    pub fn new(model: &Model) -> Layout {
-        let n = model.free_vertices();
+    /// The layout of the state of a model of `structure` (stored in
+    /// [`Model::layout`](super::Model::layout)).
+    pub fn new(structure: &Structure) -> Layout {
+        let n = structure.free_vertices();
         let theta = 0;
         let sternum_x = RIBS;
         let sternum_q = sternum_x + 3;
@@ -60,7 +61,7 @@ impl Layout {
 }
 
 /// The rest state: all angles zero, sternum and vertices at rest, identity orientation.
-pub fn rest_state(model: &Model) -> Vec<f64> {
+pub fn rest_state(model: &Structure) -> Vec<f64> {
     let l = Layout::new(model);
     let mut y = vec![0.0; l.len];
     let c = model.sternum_com;
@@ -81,7 +82,7 @@ pub fn rest_state(model: &Model) -> Vec<f64> {
 /// 1 / omega, and the errors of velocities that relax within a step cannot hold the step
 /// (about atol_v = 2 pi 20 Hz x atol). Returns `(reference, weight)`; every component refers
 /// to itself.
-pub fn error_weights(model: &Model) -> (Vec<u32>, Vec<f64>) {
+pub fn error_weights(model: &Structure) -> (Vec<u32>, Vec<f64>) {
     let l = Layout::new(model);
     let reference: Vec<u32> = (0..l.len as u32).collect();
     let mut weight = vec![1.0; l.len];

@@ -56,8 +56,9 @@
 //! pressure fall as the lungs fill (dP_alv/dV_L = -1 / (u_T^T b) must be positive). Either
 //! is reported as [`StaticsError::Unstable`], never passed over to another branch.
 
-use super::model::{Model, RIBS, volume};
+use super::model::Model;
 use super::state::Layout;
+use super::structure::{RIBS, volume};
 use super::{Activations, Data, accelerations, forces, kinematics};
 use crate::solver::sparse::ShiftedSolver;
 use crate::solver::{Colouring, Jacobian, Pattern};
@@ -309,7 +310,7 @@ impl Statics {
     /// equilibrium, velocities ignored) as the first solution and the activations `act` it
     /// balances.
     pub fn new(model: &Model, start: &[f64], act: &Activations) -> Statics {
-        let l = Layout::new(model);
+        let l = model.layout;
         let m = RIBS + 6 + 3 * l.vertices;
         let adj = super::jacobian::body_adjacency(model);
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); m];
@@ -1155,7 +1156,7 @@ fn abdominal_pressure(model: &Model, va: f64) -> f64 {
 /// The thoracic (mesh) volume of state `y` [m^3].
 pub fn volume_of(model: &Model, y: &[f64]) -> f64 {
     let mut data = Data::new(model);
-    kinematics::positions_and_velocities(model, &mut data, &Layout::new(model), y);
+    kinematics::positions_and_velocities(model, &mut data, &model.layout, y);
     volume(&data.pos, &model.thorax_triangles)
 }
 
@@ -1178,7 +1179,7 @@ pub(crate) fn pressures_and_residual(
     let vt = volume(&data.pos, &model.thorax_triangles);
     let pa = frozen_abdomen.unwrap_or_else(|| abdominal_pressure(model, va));
     forces::accumulate_frozen(model, data, act, [pa, pleural]);
-    accelerations::forces_and_rates(model, data, l, y, dy);
+    accelerations::forces_and_rates(model, &model.preload, data, l, y, dy);
     (va, vt)
 }
 

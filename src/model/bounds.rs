@@ -68,7 +68,7 @@ impl Compiled {
             crate::dynamics::kinematics::positions_and_velocities(
                 model,
                 &mut data,
-                &crate::dynamics::Layout::new(model),
+                &model.layout,
                 &y,
             );
             let o = crate::observe::observe(model, &self.compartments, &data.pos, &data.vel, 0.0);

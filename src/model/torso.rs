@@ -4,7 +4,7 @@ use super::{Checkpoint, Config, Drive, Quantity, Snapshot};
 use crate::anatomy::{Anatomy, MuscleGroup};
 use crate::dynamics::equilibrium::Equilibrium;
 use crate::dynamics::jacobian::TorsoJacobian;
-use crate::dynamics::{self, Activations, Data, Layout, Model, Params};
+use crate::dynamics::{self, Activations, Data, Model, Params};
 use crate::observe::markers::{MarkerCache, MarkerOutputs};
 use crate::observe::{self, Compartments, Observation};
 use crate::solver::{
@@ -719,7 +719,7 @@ impl Torso {
         dynamics::kinematics::positions_and_velocities(
             model,
             &mut self.data,
-            &Layout::new(model),
+            &model.layout,
             &self.y,
         );
         let o = observe::observe(
@@ -750,7 +750,7 @@ impl Torso {
         dynamics::kinematics::positions_and_velocities(
             model,
             &mut self.data,
-            &Layout::new(model),
+            &model.layout,
             &self.y,
         );
         let s = observe::observe_sides(&self.compiled.compartments, &self.data.pos);

@@ -29,6 +29,7 @@ use crate::anatomy::skin::{FitOptions, MarkerGrid, MarkerSet, Registration, Skin
 use crate::anatomy::{Anatomy, Body, VertexRole};
 use crate::dynamics::kinematics::{rib_pose, sternum_pose};
 use crate::dynamics::{Layout, Model, RIBS};
+use crate::recording::Recording;
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 use std::path::{Path, PathBuf};
@@ -128,7 +129,7 @@ struct PoseRig {
 impl PoseRig {
     fn new(model: &Model) -> Self {
         PoseRig {
-            layout: Layout::new(model),
+            layout: model.layout,
             rib_head: model.rib_head.clone(),
             rib_axis: model
                 .rib_axis
@@ -580,199 +581,18 @@ pub struct SlpFirstFrame {
     pub points: Vec<Option<Point3<f64>>>,
 }
 
-/// Reads the header and first frame of an SLP recording (CSV, UTF-8): optional `#` comment
-/// lines among which `# grid: RxC` and `# units: m|mm`; a header `time,marker[1].x,
-/// marker[1].y,marker[1].z,...` in row-major grid order; one row per frame (time strictly
-/// increasing, at least two frames; an empty cell = point not tracked). Without `# grid:`
-/// 60 points are a 10 x 6 grid, other counts need the line. Only the first frame (and the
-/// second's time) is read; errors name the line and column.
+/// Reads the grid size and first frame of an SLP recording: the grid CSV of
+/// [`crate::recording::grid_csv`], read and checked whole by [`Recording::read`] (its errors
+/// name the file, line and character column), so that a reference is any recording the fit
+/// reads.
 pub fn read_slp_first_frame(path: &Path) -> Result<SlpFirstFrame> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let mut grid: Option<(usize, usize, usize)> = None;
-    let mut scale = 1.0;
-    let mut header: Option<(usize, usize)> = None; // (line, points)
-    let mut first: Option<(f64, Vec<Option<Point3<f64>>>)> = None;
-    for (i, raw) in text.lines().enumerate() {
-        let ln = i + 1;
-        let line = raw.trim_end_matches('\r');
-        if line.trim().is_empty() {
-            continue;
-        }
-        if let Some(comment) = line.trim_start().strip_prefix('#') {
-            if header.is_some() {
-                continue;
-            }
-            let Some((key, value)) = comment.split_once(':') else {
-                continue;
-            };
-            let value = value.trim();
-            match key.trim().to_ascii_lowercase().as_str() {
-                "grid" => {
-                    let bad = || {
-                        Error::parse(
-                            path.display(),
-                            ln,
-                            1,
-                            format!("grid `{value}`: expected ROWSxCOLS with each in 1..=16"),
-                        )
-                    };
-                    let (r, c) = value
-                        .to_ascii_lowercase()
-                        .split_once('x')
-                        .map(|(r, c)| (r.trim().parse::<usize>(), c.trim().parse::<usize>()))
-                        .ok_or_else(bad)?;
-                    let (r, c) = (r.map_err(|_| bad())?, c.map_err(|_| bad())?);
-                    if !(1..=16).contains(&r) || !(1..=16).contains(&c) {
-                        return Err(bad());
-                    }
-                    grid = Some((r, c, ln));
-                }
-                "units" => {
-                    scale = match value {
-                        "m" => 1.0,
-                        "mm" => 1e-3,
-                        other => {
-                            return Err(Error::parse(
-                                path.display(),
-                                ln,
-                                1,
-                                format!("unknown units `{other}`: expected `m` or `mm`"),
-                            ));
-                        }
-                    };
-                }
-                _ => {}
-            }
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let Some((_, n)) = header else {
-            if cells[0] != "time" {
-                return Err(Error::parse(
-                    path.display(),
-                    ln,
-                    1,
-                    format!("header starts with `{}`, expected `time`", cells[0]),
-                ));
-            }
-            if cells.len() < 4 || !(cells.len() - 1).is_multiple_of(3) {
-                return Err(Error::parse(
-                    path.display(),
-                    ln,
-                    cells.len(),
-                    format!(
-                        "header has {} columns: expected time then x, y, z per grid point",
-                        cells.len()
-                    ),
-                ));
-            }
-            for (k, cell) in cells.iter().enumerate().skip(1) {
-                let want = format!(
-                    "marker[{}].{}",
-                    (k - 1) / 3 + 1,
-                    ["x", "y", "z"][(k - 1) % 3]
-                );
-                if *cell != want {
-                    return Err(Error::parse(
-                        path.display(),
-                        ln,
-                        k + 1,
-                        format!("header column `{cell}`, expected `{want}`"),
-                    ));
-                }
-            }
-            header = Some((ln, (cells.len() - 1) / 3));
-            continue;
-        };
-        if cells.len() != 1 + 3 * n {
-            return Err(Error::parse(
-                path.display(),
-                ln,
-                cells.len().min(1 + 3 * n) + 1,
-                format!("row has {} cells, the header {}", cells.len(), 1 + 3 * n),
-            ));
-        }
-        let number = |k: usize| -> Result<Option<f64>> {
-            let c = cells[k];
-            if c.is_empty() {
-                return Ok(None);
-            }
-            match c.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(Some(v)),
-                _ => Err(Error::parse(
-                    path.display(),
-                    ln,
-                    k + 1,
-                    format!("`{c}` is not a finite number"),
-                )),
-            }
-        };
-        let time =
-            number(0)?.ok_or_else(|| Error::parse(path.display(), ln, 1, "empty time cell"))?;
-        match &first {
-            None => {
-                let mut points = Vec::with_capacity(n);
-                for p in 0..n {
-                    let c = [number(1 + 3 * p)?, number(2 + 3 * p)?, number(3 + 3 * p)?];
-                    points.push(match c {
-                        [Some(x), Some(y), Some(z)] => {
-                            Some(Point3::new(x * scale, y * scale, z * scale))
-                        }
-                        _ => None,
-                    });
-                }
-                first = Some((time, points));
-            }
-            Some((t0, points)) => {
-                if time <= *t0 {
-                    return Err(Error::parse(
-                        path.display(),
-                        ln,
-                        1,
-                        format!("time {time} does not increase (previous {t0})"),
-                    ));
-                }
-                let n = points.len();
-                let (rows, cols) = match grid {
-                    Some((r, c, gl)) => {
-                        if r * c != n {
-                            return Err(Error::parse(
-                                path.display(),
-                                gl,
-                                1,
-                                format!("grid {r}x{c} has {} points, the header {n}", r * c),
-                            ));
-                        }
-                        (r, c)
-                    }
-                    None if n == 60 => (10, 6),
-                    None => {
-                        return Err(Error::parse(
-                            path.display(),
-                            header.map(|h| h.0).unwrap_or(0),
-                            1,
-                            format!("{n} grid points: add a `# grid: RxC` line (rows x columns)"),
-                        ));
-                    }
-                };
-                let (time, points) = first.take().expect("matched Some");
-                return Ok(SlpFirstFrame {
-                    rows,
-                    cols,
-                    time,
-                    points,
-                });
-            }
-        }
-    }
-    let line = text.lines().count();
-    Err(Error::parse(
-        path.display(),
-        line,
-        0,
-        match (header, first) {
-            (None, _) => "no header row (`time,marker[1].x,...`)",
-            _ => "fewer than two frames",
-        },
-    ))
+    let mut rec = Recording::read(path)?;
+    // `Recording::read` refuses a recording of fewer than two frames
+    let points = rec.frames.swap_remove(0);
+    Ok(SlpFirstFrame {
+        rows: rec.grid.0,
+        cols: rec.grid.1,
+        time: rec.times[0],
+        points,
+    })
 }

@@ -12,7 +12,7 @@
 //! resolution) gives the displaced compartments of optoelectronic plethysmography, rib cage
 //! above and abdomen below, which add up to the trunk's volume change.
 //! V_thorax = V_trunk - V_abdomen and V_lung = V_thorax - V_non-lung, the heart's, great
-//! vessels' and mediastinum's volume, constant over a breath ([`Model::non_lung_volume`]: the
+//! vessels' and mediastinum's volume, constant over a breath ([`Model::non_lung_volume`](crate::dynamics::Structure::non_lung_volume): the
 //! thesis's 0.75 lung split at rest, section 4.2), so that lung volume changes are thoracic
 //! ones, as optoelectronic plethysmography measures them against spirometry. The thorax and
 //! abdomen are corrected by the constant volume the faceted dome cuts off the smooth one
