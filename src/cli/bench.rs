@@ -75,6 +75,9 @@ pub struct CoreArgs {
     /// eq. 2.4).
     #[arg(long, default_value_t = 0.5)]
     pub ti_ttot: f64,
+    /// Muscle law: thesis or hill (`params.muscle_law`).
+    #[arg(long, default_value = "thesis")]
+    pub muscle_law: String,
     /// Also write the figures as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -412,6 +415,8 @@ fn core(args: &CoreArgs) -> Result<()> {
     )?;
     config.drive.inspiratory_fraction = args.ti_ttot;
     config.scene.level_of_detail = args.lod;
+    config.muscle_law = crate::dynamics::muscle::MuscleLaw::parse(&args.muscle_law)
+        .map_err(|_| Error::invalid("--muscle-law", &args.muscle_law, "thesis or hill"))?;
     config.solver.method = Method::from_name(&args.method).ok_or_else(|| {
         Error::invalid(
             "--solver",
