@@ -390,6 +390,55 @@ pub fn quiet_breath(posture: Posture, lod: u32, left_diaphragm_gain: f64) -> Res
     })
 }
 
+/// A sniff's inspiratory activation rises and falls over this time [s] each way: a sniff is a
+/// short, sharp voluntary inspiration of about 0.5 s (ATS/ERS statement on respiratory muscle
+/// testing 2002, section 2).
+pub const SNIFF_HALF: f64 = 0.25;
+
+/// The hemidiaphragms' motion in a sniff.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Sniff {
+    /// Lung volume inspired at the sniff's peak [L].
+    pub inspired: f64,
+    /// The left and right hemidiaphragms' displacements (cranial positive) from the start to
+    /// the sniff's largest lung volume [cm].
+    pub hemidiaphragm_motion: [f64; 2],
+}
+
+/// A sniff of the default subject in `posture` with the left hemidiaphragm's gain
+/// `left_diaphragm_gain` (the FMU's `gain.diaphragm.left`): the drive off, the
+/// [`INSPIRATORY`] groups' activation inputs raised from 0 to 1 and back to 0 over
+/// [`SNIFF_HALF`] each way, the airway open, through the FMU sampled every 10 ms.
+pub fn sniff(posture: Posture, lod: u32, left_diaphragm_gain: f64) -> Result<Sniff> {
+    let mut params = relaxed(posture, lod);
+    params.push(("gain.diaphragm.left", left_diaphragm_gain));
+    let mut fmu = Fmu::new(&params)?;
+    let names = [
+        "volume.lung",
+        "diaphragm.displacement.left",
+        "diaphragm.displacement.right",
+    ];
+    let start = fmu.get(&names)?;
+    let mut peak = start.clone();
+    let h = 0.01;
+    while fmu.t < 2.0 * SNIFF_HALF + 0.25 {
+        let t = fmu.t + h;
+        let a = (1.0 - (t - SNIFF_HALF).abs() / SNIFF_HALF).max(0.0);
+        for g in INSPIRATORY {
+            fmu.set(&format!("activation.{}", g.name()), a)?;
+        }
+        fmu.step(h)?;
+        let v = fmu.get(&names)?;
+        if v[0] > peak[0] {
+            peak = v;
+        }
+    }
+    Ok(Sniff {
+        inspired: peak[0] - start[0],
+        hemidiaphragm_motion: [100.0 * (peak[1] - start[1]), 100.0 * (peak[2] - start[2])],
+    })
+}
+
 /// A full inspiratory effort with the airway open.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct FullInspiration {
@@ -792,6 +841,27 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
             );
         }
         Err(e) => failed.push(("paralysed left hemidiaphragm".into(), e.to_string())),
+    }
+    match sniff(Posture::Standing, lod, 0.0) {
+        Ok(q) => {
+            fig(
+                "paralysed left hemidiaphragm's motion in a sniff, standing (cranial +)".into(),
+                q.hemidiaphragm_motion[0],
+                "cm",
+                (0.0, f64::INFINITY),
+                "sniff test paradox (Alexander 1966)",
+                FMU,
+            );
+            fig(
+                "healthy right hemidiaphragm's motion in the same sniff (cranial +)".into(),
+                q.hemidiaphragm_motion[1],
+                "cm",
+                (f64::NEG_INFINITY, 0.0),
+                "sniff test paradox (Alexander 1966)",
+                FMU,
+            );
+        }
+        Err(e) => failed.push(("sniff, paralysed left hemidiaphragm".into(), e.to_string())),
     }
     Ok(Physiology {
         level_of_detail: lod,
