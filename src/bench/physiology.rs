@@ -5,17 +5,17 @@
 //!   relaxed system, and the pleural pressure swing of quiet breathing;
 //! - the compartments' shares of quiet tidal volume, upright and supine (optoelectronic
 //!   plethysmography's split at the costal margin, the library's own displaced volumes);
-//! - diaphragm excursion per litre in quiet breathing, and the excursion of a point of the
-//!   posterior right dome followed along the cranio-caudal line (as M-mode ultrasound
-//!   follows it) in a full inspiratory effort;
+//! - diaphragm excursion per litre in quiet breathing, and the cranio-caudal excursion of a
+//!   point of the posterior right dome (where M-mode ultrasound aims) in a full inspiratory
+//!   effort;
 //! - the volume a full inspiratory effort with the airway open adds to FRC;
 //! - the maximal inspiratory mouth pressure against an occluded airway;
 //! - the paralysed hemidiaphragm's motion and its side's share of tidal volume.
 //!
 //! Most are measured through the FMU's instance ([`Instance`], the object every `fmi2*` call
 //! of the shared library acts on) with its own inputs, parameters and outputs. Two are not,
-//! and say so in their [`Figure::through`]: the posterior dome point is no FMU output (it is
-//! read off the facade's state), and the FMU has no airway occlusion, so the maximal
+//! and say so in their [`Figure::through`]: the dome point of the M-mode excursion is no FMU
+//! output (it is read off the facade's state), and the FMU has no airway occlusion, so the maximal
 //! inspiratory pressure is measured in the quasi-static mode with the lung volume held
 //! ([`Torso::set_lung_volume`]), which is what an occlusion does when gas compression is
 //! neglected: no airflow, the mouth pressure equal to the alveolar pressure.
@@ -448,11 +448,15 @@ pub struct FullInspiration {
     pub inspired: f64,
     /// The volume added, inspired - rest [L] (through the FMU).
     pub added: f64,
-    /// Caudal excursion of the posterior right dome's point along the cranio-caudal axis,
-    /// rest to full inspiration [cm] (through the facade).
+    /// Caudal excursion of a material point of the posterior right dome along the
+    /// cranio-caudal axis, rest to full inspiration [cm] (through the facade): the point the
+    /// M-mode line ([`FullInspiration::m_mode_line`]) crosses at rest.
     pub m_mode_excursion: f64,
-    /// Rest position of that point [m] (x anterior, y cranial, z right).
-    pub m_mode_point: [f64; 3],
+    /// Where that line stands, (x, z) [m] (x anterior, z right).
+    pub m_mode_line: [f64; 2],
+    /// Caudal displacement of the dome as a whole (its swept volume over its area, the FMU's
+    /// `diaphragm.displacement`), rest to full inspiration [cm] (through the facade).
+    pub dome_excursion: f64,
 }
 
 /// Time over which the inspiratory activations rise from 0 to 1 [s]: a deep inspiration to
@@ -464,55 +468,82 @@ fn effort(t: f64) -> f64 {
     (t / EFFORT_RAMP).clamp(0.0, 1.0)
 }
 
-/// The surface vertex of the abdominal cavity that M-mode ultrasound follows: a vertex of the
-/// diaphragm dome on the right side, in the posterior third of the dome's antero-posterior
-/// extent (Boussuges et al. 2009 aim the beam at the posterior third of the right
-/// hemidiaphragm), the one nearest the middle of that region. Returns its anchor index.
-fn posterior_dome_anchor(torso: &Torso) -> Result<usize> {
+/// The M-mode line: a cranio-caudal line through the posterior third of the right
+/// hemidiaphragm (Boussuges et al. 2009 aim the beam perpendicular to the posterior third of
+/// the right hemidiaphragm), at the middle of that region: a sixth of the dome's
+/// antero-posterior extent from its back, half its right half-width from the midline. Returns
+/// its (x, z) [m] (x anterior, z right), from the dome's rest vertices.
+fn m_mode_line(torso: &Torso) -> (f64, f64) {
     let a = &torso.compiled().anatomy;
     let ab = &a.abdomen;
-    let mut dome: Vec<u32> = ab
-        .triangles
-        .iter()
-        .zip(&ab.dome)
-        .filter(|(_, d)| **d)
-        .flat_map(|(t, _)| *t)
-        .collect();
-    dome.sort_unstable();
-    dome.dedup();
-    let pos = |v: u32| a.anchors[ab.anchor[v as usize] as usize].rest;
-    let free: Vec<u32> = dome
-        .into_iter()
-        .filter(|&v| ab.mass[v as usize] > 0.0)
-        .collect();
-    let (xmin, xmax) = free
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |m, &v| {
-            (m.0.min(pos(v).x), m.1.max(pos(v).x))
-        });
-    let zmax = free.iter().fold(0.0f64, |m, &v| m.max(pos(v).z));
-    let region: Vec<u32> = free
-        .into_iter()
-        .filter(|&v| pos(v).z > 0.0 && pos(v).x <= xmin + (xmax - xmin) / 3.0)
-        .collect();
-    // the middle of the region: a sixth of the extent from the back, half the right width
-    let target = (xmin + (xmax - xmin) / 6.0, 0.5 * zmax);
-    region
-        .iter()
-        .min_by(|&&u, &&v| {
-            let d = |w: u32| (pos(w).x - target.0).powi(2) + (pos(w).z - target.1).powi(2);
-            d(u).total_cmp(&d(v))
-        })
-        .map(|&v| ab.anchor[v as usize] as usize)
-        .ok_or_else(|| Error::State("no free vertex on the posterior right dome".into()))
+    let (mut xmin, mut xmax, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+    for (t, _) in ab.triangles.iter().zip(&ab.dome).filter(|(_, d)| **d) {
+        for &v in t {
+            let p = a.anchors[ab.anchor[v as usize] as usize].rest;
+            (xmin, xmax, zmax) = (xmin.min(p.x), xmax.max(p.x), zmax.max(p.z));
+        }
+    }
+    (xmin + (xmax - xmin) / 6.0, 0.5 * zmax)
 }
 
-/// Height (cranial) of anchor `anchor` in the facade's current state [m].
-fn height(torso: &Torso, anchor: usize) -> f64 {
+/// Current anchor positions of the facade's state.
+fn positions(torso: &Torso) -> Vec<nalgebra::Point3<f64>> {
     let model = &torso.compiled().model;
     let mut data = Data::new(model);
     kinematics::positions_and_velocities(model, &mut data, &Layout::new(model), torso.state());
-    data.pos[anchor].y
+    data.pos
+}
+
+/// A material point of the diaphragm dome: three anchors and the weights that place the point
+/// among them.
+#[derive(Clone, Copy, Debug)]
+struct DomePoint {
+    anchors: [usize; 3],
+    weights: [f64; 3],
+}
+
+impl DomePoint {
+    /// The material point of the dome that the cranio-caudal line through (x, z) crosses in
+    /// the facade's current state (the highest crossing, the dome's upper surface; linear
+    /// within each triangle). An error if the line misses the dome.
+    fn on_line(torso: &Torso, (x, z): (f64, f64)) -> Result<DomePoint> {
+        let ab = &torso.compiled().anatomy.abdomen;
+        let pos = positions(torso);
+        let mut best: Option<(f64, DomePoint)> = None;
+        for (t, _) in ab.triangles.iter().zip(&ab.dome).filter(|(_, d)| **d) {
+            let anchors = t.map(|v| ab.anchor[v as usize] as usize);
+            let [p, q, r] = anchors.map(|a| pos[a]);
+            // barycentric coordinates of (x, z) in the triangle's projection on the x-z plane
+            let det = (q.x - p.x) * (r.z - p.z) - (r.x - p.x) * (q.z - p.z);
+            if det.abs() < 1e-15 {
+                continue;
+            }
+            let u = ((x - p.x) * (r.z - p.z) - (r.x - p.x) * (z - p.z)) / det;
+            let w = ((q.x - p.x) * (z - p.z) - (x - p.x) * (q.z - p.z)) / det;
+            if u >= 0.0 && w >= 0.0 && u + w <= 1.0 {
+                let point = DomePoint {
+                    anchors,
+                    weights: [1.0 - u - w, u, w],
+                };
+                let y = point.height(&pos);
+                if best.is_none_or(|(b, _)| y > b) {
+                    best = Some((y, point));
+                }
+            }
+        }
+        best.map(|(_, p)| p).ok_or_else(|| {
+            Error::State(format!(
+                "the cranio-caudal line at x = {x:.3} m, z = {z:.3} m misses the diaphragm dome"
+            ))
+        })
+    }
+
+    /// The point's height (cranial) [m] among anchor positions `pos`.
+    fn height(&self, pos: &[nalgebra::Point3<f64>]) -> f64 {
+        (0..3)
+            .map(|k| self.weights[k] * pos[self.anchors[k]].y)
+            .sum()
+    }
 }
 
 /// A full inspiratory effort of the default subject in `posture` with the airway open: the
@@ -537,9 +568,10 @@ pub fn full_inspiration(posture: Posture, lod: u32) -> Result<FullInspiration> {
     config.scene.level_of_detail = lod;
     config.drive.enabled = false;
     let mut torso = Torso::new(config)?;
-    let anchor = posterior_dome_anchor(&torso)?;
-    let point = torso.compiled().anatomy.anchors[anchor].rest;
-    let y0 = height(&torso, anchor);
+    let line = m_mode_line(&torso);
+    let point = DomePoint::on_line(&torso, line)?;
+    let y0 = point.height(&positions(&torso));
+    let dome0 = torso.read(Quantity::DiaphragmDisplacement)?;
     let mut t = 0.0;
     let mut last = f64::NAN;
     let mut settled = false;
@@ -568,8 +600,9 @@ pub fn full_inspiration(posture: Posture, lod: u32) -> Result<FullInspiration> {
         rest,
         inspired,
         added: inspired - rest,
-        m_mode_excursion: 100.0 * (y0 - height(&torso, anchor)),
-        m_mode_point: point.coords.into(),
+        m_mode_excursion: 100.0 * (y0 - point.height(&positions(&torso))),
+        m_mode_line: [line.0, line.1],
+        dome_excursion: 100.0 * (dome0 - torso.read(Quantity::DiaphragmDisplacement)?),
     })
 }
 
