@@ -205,3 +205,43 @@ fn healthy_hemidiaphragm_descends_in_a_sniff_beside_a_paralysed_one() {
         s.hemidiaphragm_motion[1]
     );
 }
+
+/// `torso bench physiology --json` at level 0 prints every figure with a finite value, its
+/// range and whether the value lies in it; a level of detail out of range is refused by name.
+#[test]
+fn bench_command_prints_json() {
+    use std::process::Command;
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "physiology", "--lod", "0", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let figures = v["figures"].as_array().unwrap();
+    assert_eq!(figures.len(), 13, "{v}");
+    for f in figures {
+        let value = f["value"].as_f64().unwrap();
+        // an open end of a range is written null
+        let lo = f["range"][0].as_f64().unwrap_or(f64::NEG_INFINITY);
+        let hi = f["range"][1].as_f64().unwrap_or(f64::INFINITY);
+        assert!(value.is_finite(), "{f}");
+        assert_eq!(
+            f["met"].as_bool().unwrap(),
+            value >= lo && value <= hi,
+            "{f}"
+        );
+        assert!(!f["source"].as_str().unwrap().is_empty());
+    }
+    // the occluded effort at RV is not solved today: it is listed with its reason
+    assert!(v["failed"].is_array());
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "physiology", "--lod", "3"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("level of detail"));
+}
