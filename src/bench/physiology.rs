@@ -575,13 +575,14 @@ pub fn full_inspiration(posture: Posture, lod: u32) -> Result<FullInspiration> {
     let mut t = 0.0;
     let mut last = f64::NAN;
     let mut settled = false;
-    while t < EFFORT_RAMP + 23.0 {
+    // steps of h, the lung volume compared once a second (every 20th step) after 3 s held
+    for k in 1..=((EFFORT_RAMP + 23.0) / h).round() as u32 {
         for g in INSPIRATORY {
             torso.set_activation(g, effort(t + h))?;
         }
-        t += h;
+        t = f64::from(k) * h;
         torso.advance_to(t)?;
-        if t > EFFORT_RAMP + 3.0 && (t / 1.0).fract() < h / 2.0 {
+        if t > EFFORT_RAMP + 3.0 && k % 20 == 0 {
             let v = torso.read(Quantity::LungVolume)?;
             if (v - last).abs() < 1e-3 {
                 settled = true;
