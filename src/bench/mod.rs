@@ -7,6 +7,7 @@
 //! results and the stress tests (`tests/stress_*.rs`) assert on them.
 
 pub mod fmu;
+pub mod physiology;
 pub mod reduced;
 pub mod relaxation;
 pub mod stress;

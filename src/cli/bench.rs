@@ -14,6 +14,8 @@
 //! - `relaxation`: the relaxed chest wall's and respiratory system's static pressure-volume
 //!   curves from RV to TLC, their compliances over the tidal range and relaxation volumes,
 //!   beside the cited adult figures;
+//! - `physiology`: the physiological figures of issue 35 against their cited ranges
+//!   (`src/cli/bench_physiology.rs`);
 //! - `report`: the headline figures of one run, written as BENCHMARKS.md
 //!   (`src/cli/bench_report.rs`).
 
@@ -47,6 +49,9 @@ pub enum BenchCommand {
     Fmu(FmuArgs),
     /// The relaxed chest wall's and respiratory system's pressure-volume curves.
     Relaxation(RelaxationArgs),
+    /// The physiological figures (compliance, shares, excursions, maximal pressures, a
+    /// paralysed hemidiaphragm) against their cited ranges.
+    Physiology(super::bench_physiology::PhysiologyArgs),
     /// The current headline figures from one run, as a markdown file stamped with the
     /// commit and the machine, each table with the command that reproduces it.
     Report(super::bench_report::ReportArgs),
@@ -334,6 +339,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Stress(a) => super::bench_stress::run(&a),
         BenchCommand::Fmu(a) => fmu(&a),
         BenchCommand::Relaxation(a) => relaxation(&a),
+        BenchCommand::Physiology(a) => super::bench_physiology::run(&a),
         BenchCommand::Report(a) => super::bench_report::run(&a),
     }
 }

@@ -1,6 +1,7 @@
 //! The `torso` command-line tool: one file per subcommand.
 
 pub mod bench;
+pub mod bench_physiology;
 pub mod bench_report;
 pub mod bench_stress;
 pub mod common;

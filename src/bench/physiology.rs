@@ -1,0 +1,905 @@
+//! The physiological figures the chest wall is judged by (issue 35), measured on the default
+//! subject by the experiments a respiratory physiologist would run, each with its cited range:
+//!
+//! - respiratory-system compliance from a 10 cmH2O step of the airway-opening pressure on the
+//!   relaxed system, and the pleural pressure swing of quiet breathing;
+//! - the compartments' shares of quiet tidal volume, upright and supine (optoelectronic
+//!   plethysmography's split at the costal margin, the library's own displaced volumes);
+//! - diaphragm excursion per litre in quiet breathing, and the cranio-caudal excursion of a
+//!   point of the posterior right dome (where M-mode ultrasound aims) in a full inspiratory
+//!   effort;
+//! - the volume a full inspiratory effort with the airway open adds to FRC;
+//! - the maximal inspiratory mouth pressure against an occluded airway;
+//! - the paralysed hemidiaphragm's motion and its side's share of tidal volume.
+//!
+//! Most are measured through the FMU's instance ([`Instance`], the object every `fmi2*` call
+//! of the shared library acts on) with its own inputs, parameters and outputs. Two are not,
+//! and say so in their [`Figure::through`]: the dome point of the M-mode excursion is no FMU
+//! output (it is read off the facade's state), and the FMU has no airway occlusion, so the maximal
+//! inspiratory pressure is measured in the quasi-static mode with the lung volume held
+//! ([`Torso::set_lung_volume`]), which is what an occlusion does when gas compression is
+//! neglected: no airflow, the mouth pressure equal to the alveolar pressure.
+//!
+//! Nothing here prints; `torso bench physiology` (`src/cli/bench_physiology.rs`) formats the
+//! figures, and `tests/physiology_figures.rs` asserts each cited bound.
+
+use super::relaxation::CMH2O;
+use crate::anatomy::{MuscleGroup, Posture, Sex, Subject};
+use crate::dynamics::pleural::capacity_ratios;
+use crate::dynamics::{Data, Layout, kinematics};
+use crate::fmi::instance::Instance;
+use crate::fmi::variables::ScalarType;
+use crate::fmi::{FMI2, Status, table};
+use crate::model::run::{Frame, summarise};
+use crate::model::{Config, Drive, Quantity, Torso};
+use crate::solver::Method;
+use crate::{Error, Result};
+use serde::Serialize;
+
+/// The inspiratory muscle groups a maximal inspiratory effort activates: the diaphragm, the
+/// external intercostals and the scalenes (the model's internal intercostals are its
+/// expiratory group; De Troyer & Estenne 1988, J Appl Physiol 65:2319, on the inspiratory
+/// action of the diaphragm, external intercostals and scalenes).
+pub const INSPIRATORY: [MuscleGroup; 3] = [
+    MuscleGroup::Diaphragm,
+    MuscleGroup::ExternalIntercostals,
+    MuscleGroup::Scalenes,
+];
+
+/// The airway-opening pressure step of the compliance measurement [cmH2O] (issue 35: a 10
+/// cmH2O step on the relaxed system, as a ventilator's inspiratory hold gives).
+pub const PRESSURE_STEP: f64 = 10.0;
+
+/// Respiratory-system compliance of an adult [L/cmH2O]: about 0.1 (0.08-0.12, the range issue
+/// 35 states; Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13: the lungs'
+/// and the chest wall's 0.2 L/cmH2O each in series).
+pub const SYSTEM_COMPLIANCE: (f64, f64) = (0.08, 0.12);
+
+/// Pleural pressure swing of quiet breathing [cmH2O]: 1.5-4 (issue 35's range; West & Luks,
+/// Respiratory Physiology: The Essentials, 10th ed. 2016, ch. 7: from about -5 at FRC to
+/// about -7.5 cmH2O at the end of a quiet inspiration).
+pub const PLEURAL_SWING: (f64, f64) = (1.5, 4.0);
+
+/// Upright rib-cage share of quiet tidal volume: at least half (upright quiet breathing is
+/// rib-cage dominant; Verschakelen & Demedts 1995, Am J Respir Crit Care Med 151:399).
+pub const UPRIGHT_RIB_CAGE_SHARE: (f64, f64) = (0.5, 1.0);
+
+/// Supine abdominal share of quiet tidal volume: 63 +- 11 % (mean +- SD; Aliverti et al.
+/// 2001, J Appl Physiol 90:1821, optoelectronic plethysmography, split at the costal margin).
+pub const SUPINE_ABDOMINAL_SHARE: (f64, f64) = (0.52, 0.74);
+
+/// Diaphragm excursion per litre of quiet tidal volume [cm/L]: 1.66 +- 0.48 (Houston et al.
+/// 1994, Clin Radiol 49:95; the range issue 35 states).
+pub const EXCURSION_PER_LITRE: (f64, f64) = (1.18, 2.14);
+
+/// M-mode excursion of the posterior right hemidiaphragm in a deep breath, men [cm]: the lower
+/// limit of normal 4.7 (Boussuges et al. 2009, Chest 135:391: 7.0 +- 1.1 cm in men).
+pub const DEEP_EXCURSION_MEN: (f64, f64) = (4.7, f64::INFINITY);
+
+/// Volume a full inspiratory effort with the airway open adds to FRC, default subject [L]:
+/// 2.9-4.3 (issue 35's range for the default man's inspiratory capacity; ECSC 1993, Quanjer
+/// et al., Eur Respir J 6 Suppl 16:5, TLC less FRC).
+pub const INSPIRATORY_CAPACITY: (f64, f64) = (2.9, 4.3);
+
+/// The paralysed hemidiaphragm's side takes under 40 % of tidal volume (issue 35).
+pub const PARALYSED_SIDE_SHARE: (f64, f64) = (0.0, 0.4);
+
+/// Maximal inspiratory mouth pressure at residual volume, magnitude [cmH2O], predicted for
+/// sex and age (Black & Hyatt 1969, Am Rev Respir Dis 99:696, the reference equations the
+/// ATS/ERS statement on respiratory muscle testing tabulates, Am J Respir Crit Care Med
+/// 2002, 166:518): men 143 - 0.55 age, women 104 - 0.51 age.
+pub fn pimax_predicted(sex: Sex, age: f64) -> f64 {
+    match sex {
+        Sex::Male => 143.0 - 0.55 * age,
+        Sex::Female => 104.0 - 0.51 * age,
+    }
+}
+
+/// The reference range of the maximal inspiratory mouth pressure at residual volume,
+/// magnitude [cmH2O]: the prediction of [`pimax_predicted`] +- 1.96 standard errors of the
+/// estimate, 22.4 cmH2O in men and 18.5 in women (Harik-Khan, Wise & Fozard 1998, Am J
+/// Respir Crit Care Med 158:1459, the Baltimore Longitudinal Study's healthy adults, whose
+/// regressions give these errors), the interval that holds 95 % of healthy adults.
+pub fn pimax_range(subject: &Subject) -> (f64, f64) {
+    let see = match subject.sex {
+        Sex::Male => 22.4,
+        Sex::Female => 18.5,
+    };
+    let p = pimax_predicted(subject.sex, subject.age);
+    (p - 1.96 * see, p + 1.96 * see)
+}
+
+/// One measured figure.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Figure {
+    /// What was measured.
+    pub name: String,
+    /// The measured value, in `unit`.
+    pub value: f64,
+    /// Unit of `value` and `range`.
+    pub unit: &'static str,
+    /// The cited range (inclusive; an open end is infinite, written `null` in JSON).
+    pub range: (f64, f64),
+    /// Whether the measured value lies within the cited range.
+    pub met: bool,
+    /// Where the range comes from.
+    pub source: &'static str,
+    /// How it was measured: through the FMU's instance, or through the facade and why.
+    pub through: &'static str,
+}
+
+/// Through the FMU's instance.
+const FMU: &str = "FMU";
+
+/// An FMU instance stepped from Rust.
+struct Fmu {
+    inst: Instance,
+    t: f64,
+}
+
+fn vr(name: &str) -> Result<(u32, ScalarType)> {
+    table()
+        .by_name(name)
+        .map(|v| (v.vr, v.ty))
+        .ok_or_else(|| Error::State(format!("no FMI variable {name}")))
+}
+
+fn check(status: Status, what: &str, inst: &Instance) -> Result<()> {
+    if status == Status::Ok {
+        Ok(())
+    } else {
+        Err(Error::State(format!(
+            "FMU instance at t = {} s: {what} returned {status:?}",
+            inst.time()
+        )))
+    }
+}
+
+impl Fmu {
+    /// An instance at its start values but for `parameters` (by FMI name; integers and
+    /// booleans as reals), initialised.
+    fn new(parameters: &[(&str, f64)]) -> Result<Fmu> {
+        let mut inst = Instance::new(&FMI2, "physiology", None, None, false);
+        let s = inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None);
+        check(s, "fmi2SetupExperiment", &inst)?;
+        let s = inst.enter_initialization_mode();
+        check(s, "fmi2EnterInitializationMode", &inst)?;
+        let mut fmu = Fmu { inst, t: 0.0 };
+        for &(name, value) in parameters {
+            fmu.set(name, value)?;
+        }
+        let s = fmu
+            .inst
+            .exit_initialization_mode("fmi2ExitInitializationMode");
+        check(s, "fmi2ExitInitializationMode", &fmu.inst)?;
+        Ok(fmu)
+    }
+
+    /// Sets one variable by FMI name.
+    fn set(&mut self, name: &str, value: f64) -> Result<()> {
+        let (v, ty) = vr(name)?;
+        let s = match ty {
+            ScalarType::Real => self.inst.set_real("fmi2SetReal", &[v], &[value]),
+            ScalarType::Integer => self
+                .inst
+                .set_integer("fmi2SetInteger", &[v], &[value as i32]),
+            ScalarType::Boolean => {
+                self.inst
+                    .set_boolean("fmi2SetBoolean", &[v], &[i32::from(value != 0.0)])
+            }
+            ScalarType::String => {
+                return Err(Error::State(format!("{name} is a string variable")));
+            }
+        };
+        check(s, &format!("setting {name} to {value}"), &self.inst)
+    }
+
+    /// Reads real outputs by FMI name.
+    fn get(&mut self, names: &[&str]) -> Result<Vec<f64>> {
+        let vrs = names
+            .iter()
+            .map(|n| vr(n).map(|v| v.0))
+            .collect::<Result<Vec<u32>>>()?;
+        let mut out = vec![0.0; vrs.len()];
+        let s = self.inst.get_real("fmi2GetReal", &vrs, &mut out);
+        check(s, "fmi2GetReal", &self.inst)?;
+        Ok(out)
+    }
+
+    /// One communication step of `h` seconds.
+    fn step(&mut self, h: f64) -> Result<()> {
+        let s = self.inst.do_step("fmi2DoStep", self.t, h);
+        check(s, "fmi2DoStep", &self.inst)?;
+        self.t += h;
+        Ok(())
+    }
+}
+
+/// The FMU's parameters for `posture` at level of detail `lod`, the drive off.
+fn relaxed(posture: Posture, lod: u32) -> Vec<(&'static str, f64)> {
+    vec![
+        ("posture", f64::from(posture.code())),
+        ("scene.level_of_detail", f64::from(lod)),
+        ("drive.enabled", 0.0),
+    ]
+}
+
+/// Steps `fmu` by `h` until `duration` has passed, then until the lung volume changes by less
+/// than `tolerance` [L] over a second (at most `limit` seconds more), and returns the lung
+/// volume.
+fn settle(fmu: &mut Fmu, duration: f64, tolerance: f64, limit: f64) -> Result<f64> {
+    let h = 0.05;
+    let mut history = Vec::new();
+    let t0 = fmu.t;
+    loop {
+        fmu.step(h)?;
+        let v = fmu.get(&["volume.lung"])?[0];
+        history.push(v);
+        let elapsed = fmu.t - t0;
+        if elapsed >= duration && history.len() > 20 {
+            let second_ago = history[history.len() - 21];
+            if (v - second_ago).abs() < tolerance {
+                return Ok(v);
+            }
+        }
+        if elapsed > duration + limit {
+            return Err(Error::Numerical {
+                time: fmu.t,
+                reason: format!(
+                    "the lung volume did not settle within {:.1} s (last {v:.4} L)",
+                    duration + limit
+                ),
+            });
+        }
+    }
+}
+
+/// The response of the relaxed system to the airway-opening pressure step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PressureStep {
+    /// Lung volume at rest, airway open [L] (the relaxed system's FRC).
+    pub rest: f64,
+    /// Lung volume settled under the step [L].
+    pub held: f64,
+    /// Respiratory-system compliance, (held - rest) / step [L/cmH2O].
+    pub compliance: f64,
+}
+
+/// The respiratory-system compliance of the relaxed default subject in `posture`: the drive
+/// off, the airway-opening pressure stepped from 0 to [`PRESSURE_STEP`] and the lung volume
+/// left to settle, through the FMU.
+pub fn pressure_step(posture: Posture, lod: u32) -> Result<PressureStep> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod))?;
+    let rest = fmu.get(&["volume.lung"])?[0];
+    fmu.set("pressure.airway_opening", PRESSURE_STEP * CMH2O)?;
+    let held = settle(&mut fmu, 3.0, 1e-4, 20.0)?;
+    Ok(PressureStep {
+        rest,
+        held,
+        compliance: (held - rest) / PRESSURE_STEP,
+    })
+}
+
+/// Quiet breathing's figures, over two breaths after a settling one.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct QuietBreath {
+    /// Tidal volume, peak to trough [L].
+    pub tidal_volume: f64,
+    /// Pleural pressure swing, peak to trough [cmH2O].
+    pub pleural_swing: f64,
+    /// Rib-cage share of the displaced volume, as [`crate::model::run::BreathSummary`]
+    /// computes it (rib-cage swing over the sum of the rib-cage and abdominal swings).
+    pub rib_cage_share: f64,
+    /// Diaphragm dome's excursion per litre of tidal volume [cm/L].
+    pub excursion_per_litre: f64,
+    /// The left and right hemidiaphragms' displacements (cranial positive) from the end of
+    /// expiration to the end of inspiration [cm].
+    pub hemidiaphragm_motion: [f64; 2],
+    /// The left lung's share of the tidal volume, the left lung's volume change from the end
+    /// of expiration to the end of inspiration over the whole lungs'.
+    pub left_share: f64,
+    /// Correlation over the analysed breaths of the left hemidiaphragm's cranial displacement
+    /// with the lung volume (positive: it rises as the lungs fill, the paralysed side's
+    /// paradox; negative: it descends with them).
+    pub left_correlation: f64,
+}
+
+/// Pearson correlation of two series.
+fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma).powi(2);
+        sbb += (y - mb).powi(2);
+    }
+    sab / (saa * sbb).sqrt()
+}
+
+/// Quiet breathing (the FMU's start drive, [`Drive::quiet`]) of the default subject in
+/// `posture` with the left hemidiaphragm's gain `left_diaphragm_gain` (1 healthy, 0
+/// paralysed; the FMU's `gain.diaphragm.left`), through the FMU, sampled at 28 Hz.
+pub fn quiet_breath(posture: Posture, lod: u32, left_diaphragm_gain: f64) -> Result<QuietBreath> {
+    let mut fmu = Fmu::new(&[
+        ("posture", f64::from(posture.code())),
+        ("scene.level_of_detail", f64::from(lod)),
+        ("gain.diaphragm.left", left_diaphragm_gain),
+    ])?;
+    let period = 1.0 / Drive::quiet().frequency;
+    let rate = 28.0;
+    let names = [
+        "volume.lung",
+        "volume.abdomen",
+        "volume.rib_cage_displaced",
+        "volume.abdomen_displaced",
+        "pressure.abdomen",
+        "diaphragm.displacement",
+        "pressure.pleural",
+        "diaphragm.displacement.right",
+        "diaphragm.displacement.left",
+        "volume.lung.left",
+    ];
+    let mut frames = Vec::new();
+    let mut extra = Vec::new();
+    let n = (3.0 * period * rate).round() as usize;
+    for k in 0..=n {
+        if k > 0 {
+            fmu.step(1.0 / rate)?;
+        }
+        let v = fmu.get(&names)?;
+        frames.push(Frame {
+            time: fmu.t,
+            lung: v[0],
+            abdomen: v[1],
+            rib_cage_displaced: v[2],
+            abdomen_displaced: v[3],
+            pressure: v[4],
+            diaphragm: v[5],
+            ..Frame::default()
+        });
+        extra.push((fmu.t, v[6], v[7], v[8], v[9]));
+    }
+    let s = summarise(&frames, period);
+    let sel: Vec<usize> = (0..frames.len())
+        .filter(|&i| frames[i].time >= period - 1e-9)
+        .collect();
+    let pleural: Vec<f64> = sel.iter().map(|&i| extra[i].1).collect();
+    let (lo, hi) = pleural
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    // the end of expiration and of inspiration: the smallest and largest lung volumes
+    let by_lung = |a: &&usize, b: &&usize| frames[**a].lung.total_cmp(&frames[**b].lung);
+    let trough = *sel.iter().min_by(by_lung).expect("analysed frames");
+    let peak = *sel.iter().max_by(by_lung).expect("analysed frames");
+    let lungs: Vec<f64> = sel.iter().map(|&i| frames[i].lung).collect();
+    let left: Vec<f64> = sel.iter().map(|&i| extra[i].3).collect();
+    Ok(QuietBreath {
+        tidal_volume: s.tidal_volume,
+        pleural_swing: (hi - lo) / CMH2O,
+        rib_cage_share: s.rib_cage_share,
+        excursion_per_litre: 100.0 * s.dome_excursion / s.tidal_volume,
+        hemidiaphragm_motion: [
+            100.0 * (extra[peak].3 - extra[trough].3),
+            100.0 * (extra[peak].2 - extra[trough].2),
+        ],
+        left_share: (extra[peak].4 - extra[trough].4) / (frames[peak].lung - frames[trough].lung),
+        left_correlation: correlation(&left, &lungs),
+    })
+}
+
+/// A sniff's inspiratory activation rises and falls over this time [s] each way: a sniff is a
+/// short, sharp voluntary inspiration of about 0.5 s (ATS/ERS statement on respiratory muscle
+/// testing 2002, section 2).
+pub const SNIFF_HALF: f64 = 0.25;
+
+/// The hemidiaphragms' motion in a sniff.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Sniff {
+    /// Lung volume inspired at the sniff's peak [L].
+    pub inspired: f64,
+    /// The left and right hemidiaphragms' displacements (cranial positive) from the start to
+    /// the sniff's largest lung volume [cm].
+    pub hemidiaphragm_motion: [f64; 2],
+}
+
+/// A sniff of the default subject in `posture` with the left hemidiaphragm's gain
+/// `left_diaphragm_gain` (the FMU's `gain.diaphragm.left`): the drive off, the
+/// [`INSPIRATORY`] groups' activation inputs raised from 0 to 1 and back to 0 over
+/// [`SNIFF_HALF`] each way, the airway open, through the FMU sampled every 10 ms.
+pub fn sniff(posture: Posture, lod: u32, left_diaphragm_gain: f64) -> Result<Sniff> {
+    let mut params = relaxed(posture, lod);
+    params.push(("gain.diaphragm.left", left_diaphragm_gain));
+    let mut fmu = Fmu::new(&params)?;
+    let names = [
+        "volume.lung",
+        "diaphragm.displacement.left",
+        "diaphragm.displacement.right",
+    ];
+    let start = fmu.get(&names)?;
+    let mut peak = start.clone();
+    let h = 0.01;
+    while fmu.t < 2.0 * SNIFF_HALF + 0.25 {
+        let t = fmu.t + h;
+        let a = (1.0 - (t - SNIFF_HALF).abs() / SNIFF_HALF).max(0.0);
+        for g in INSPIRATORY {
+            fmu.set(&format!("activation.{}", g.name()), a)?;
+        }
+        fmu.step(h)?;
+        let v = fmu.get(&names)?;
+        if v[0] > peak[0] {
+            peak = v;
+        }
+    }
+    Ok(Sniff {
+        inspired: peak[0] - start[0],
+        hemidiaphragm_motion: [100.0 * (peak[1] - start[1]), 100.0 * (peak[2] - start[2])],
+    })
+}
+
+/// A full inspiratory effort with the airway open.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FullInspiration {
+    /// Lung volume at rest [L].
+    pub rest: f64,
+    /// Lung volume settled under full inspiratory activation [L].
+    pub inspired: f64,
+    /// The volume added, inspired - rest [L] (through the FMU).
+    pub added: f64,
+    /// Caudal excursion of a material point of the posterior right dome along the
+    /// cranio-caudal axis, rest to full inspiration [cm] (through the facade): the point the
+    /// M-mode line ([`FullInspiration::m_mode_line`]) crosses at rest.
+    pub m_mode_excursion: f64,
+    /// Where that line stands, (x, z) [m] (x anterior, z right).
+    pub m_mode_line: [f64; 2],
+    /// Caudal displacement of the dome as a whole (its swept volume over its area, the FMU's
+    /// `diaphragm.displacement`), rest to full inspiration [cm] (through the facade).
+    pub dome_excursion: f64,
+}
+
+/// Time over which the inspiratory activations rise from 0 to 1 [s]: a deep inspiration to
+/// TLC takes 1-2 s; a ramp also keeps the inertial dynamics off the physiological bounds.
+pub const EFFORT_RAMP: f64 = 1.0;
+
+/// The activation of the inspiratory groups at `t` seconds into the effort.
+fn effort(t: f64) -> f64 {
+    (t / EFFORT_RAMP).clamp(0.0, 1.0)
+}
+
+/// The M-mode line: a cranio-caudal line through the posterior third of the right
+/// hemidiaphragm (Boussuges et al. 2009 aim the beam perpendicular to the posterior third of
+/// the right hemidiaphragm), at the middle of that region: a sixth of the dome's
+/// antero-posterior extent from its back, half its right half-width from the midline. Returns
+/// its (x, z) [m] (x anterior, z right), from the dome's rest vertices.
+fn m_mode_line(torso: &Torso) -> (f64, f64) {
+    let a = &torso.compiled().anatomy;
+    let ab = &a.abdomen;
+    let (mut xmin, mut xmax, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+    for (t, _) in ab.triangles.iter().zip(&ab.dome).filter(|(_, d)| **d) {
+        for &v in t {
+            let p = a.anchors[ab.anchor[v as usize] as usize].rest;
+            (xmin, xmax, zmax) = (xmin.min(p.x), xmax.max(p.x), zmax.max(p.z));
+        }
+    }
+    (xmin + (xmax - xmin) / 6.0, 0.5 * zmax)
+}
+
+/// Current anchor positions of the facade's state.
+fn positions(torso: &Torso) -> Vec<nalgebra::Point3<f64>> {
+    let model = &torso.compiled().model;
+    let mut data = Data::new(model);
+    kinematics::positions_and_velocities(model, &mut data, &Layout::new(model), torso.state());
+    data.pos
+}
+
+/// A material point of the diaphragm dome: three anchors and the weights that place the point
+/// among them.
+#[derive(Clone, Copy, Debug)]
+struct DomePoint {
+    anchors: [usize; 3],
+    weights: [f64; 3],
+}
+
+impl DomePoint {
+    /// The material point of the dome that the cranio-caudal line through (x, z) crosses in
+    /// the facade's current state (the highest crossing, the dome's upper surface; linear
+    /// within each triangle). An error if the line misses the dome.
+    fn on_line(torso: &Torso, (x, z): (f64, f64)) -> Result<DomePoint> {
+        let ab = &torso.compiled().anatomy.abdomen;
+        let pos = positions(torso);
+        let mut best: Option<(f64, DomePoint)> = None;
+        for (t, _) in ab.triangles.iter().zip(&ab.dome).filter(|(_, d)| **d) {
+            let anchors = t.map(|v| ab.anchor[v as usize] as usize);
+            let [p, q, r] = anchors.map(|a| pos[a]);
+            // barycentric coordinates of (x, z) in the triangle's projection on the x-z plane
+            let det = (q.x - p.x) * (r.z - p.z) - (r.x - p.x) * (q.z - p.z);
+            if det.abs() < 1e-15 {
+                continue;
+            }
+            let u = ((x - p.x) * (r.z - p.z) - (r.x - p.x) * (z - p.z)) / det;
+            let w = ((q.x - p.x) * (z - p.z) - (x - p.x) * (q.z - p.z)) / det;
+            if u >= 0.0 && w >= 0.0 && u + w <= 1.0 {
+                let point = DomePoint {
+                    anchors,
+                    weights: [1.0 - u - w, u, w],
+                };
+                let y = point.height(&pos);
+                if best.is_none_or(|(b, _)| y > b) {
+                    best = Some((y, point));
+                }
+            }
+        }
+        best.map(|(_, p)| p).ok_or_else(|| {
+            Error::State(format!(
+                "the cranio-caudal line at x = {x:.3} m, z = {z:.3} m misses the diaphragm dome"
+            ))
+        })
+    }
+
+    /// The point's height (cranial) [m] among anchor positions `pos`.
+    fn height(&self, pos: &[nalgebra::Point3<f64>]) -> f64 {
+        (0..3)
+            .map(|k| self.weights[k] * pos[self.anchors[k]].y)
+            .sum()
+    }
+}
+
+/// A full inspiratory effort of the default subject in `posture` with the airway open: the
+/// drive off, the [`INSPIRATORY`] groups' activation inputs ramped to 1 over
+/// [`EFFORT_RAMP`] and held until the lung volume settles. The volume added is measured
+/// through the FMU, the posterior dome point's excursion through the facade (the same model
+/// and method, the default explicit integrator), since no FMU output reports that point.
+pub fn full_inspiration(posture: Posture, lod: u32) -> Result<FullInspiration> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod))?;
+    let rest = fmu.get(&["volume.lung"])?[0];
+    let h = 0.05;
+    while fmu.t < EFFORT_RAMP - 1e-9 {
+        for g in INSPIRATORY {
+            fmu.set(&format!("activation.{}", g.name()), effort(fmu.t + h))?;
+        }
+        fmu.step(h)?;
+    }
+    let inspired = settle(&mut fmu, 3.0, 1e-3, 20.0)?;
+
+    let mut config = Config::default();
+    config.subject.posture = posture;
+    config.scene.level_of_detail = lod;
+    config.drive.enabled = false;
+    let mut torso = Torso::new(config)?;
+    let line = m_mode_line(&torso);
+    let point = DomePoint::on_line(&torso, line)?;
+    let y0 = point.height(&positions(&torso));
+    let dome0 = torso.read(Quantity::DiaphragmDisplacement)?;
+    let mut t = 0.0;
+    let mut last = f64::NAN;
+    let mut settled = false;
+    // steps of h, the lung volume compared once a second (every 20th step) after 3 s held
+    for k in 1..=((EFFORT_RAMP + 23.0) / h).round() as u32 {
+        for g in INSPIRATORY {
+            torso.set_activation(g, effort(t + h))?;
+        }
+        t = f64::from(k) * h;
+        torso.advance_to(t)?;
+        if t > EFFORT_RAMP + 3.0 && k % 20 == 0 {
+            let v = torso.read(Quantity::LungVolume)?;
+            if (v - last).abs() < 1e-3 {
+                settled = true;
+                break;
+            }
+            last = v;
+        }
+    }
+    if !settled {
+        return Err(Error::Numerical {
+            time: t,
+            reason: "the facade's full inspiration did not settle".into(),
+        });
+    }
+    Ok(FullInspiration {
+        rest,
+        inspired,
+        added: inspired - rest,
+        m_mode_excursion: 100.0 * (y0 - point.height(&positions(&torso))),
+        m_mode_line: [line.0, line.1],
+        dome_excursion: 100.0 * (dome0 - torso.read(Quantity::DiaphragmDisplacement)?),
+    })
+}
+
+/// The maximal inspiratory effort against an occluded airway.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Occluded {
+    /// The lung volume held [L].
+    pub volume: f64,
+    /// The highest inspiratory activation whose equilibrium was solved (1 for a maximal
+    /// effort).
+    pub activation: f64,
+    /// Mouth pressure at that activation, the alveolar pressure with no airflow [cmH2O]
+    /// (negative: suction).
+    pub mouth_pressure: f64,
+    /// Why the next activation step could not be solved (`None` when the effort was maximal).
+    pub stopped: Option<String>,
+}
+
+/// Activation increment of the occluded effort: each equilibrium warm-starts the next.
+pub const EFFORT_INCREMENT: f64 = 0.05;
+
+/// The inspiratory mouth pressure of `config`'s subject and posture against an occluded
+/// airway at the lung volume `volume(frc, rv)` [L] chooses: the quasi-static mode holding
+/// that volume (no airflow, gas compression neglected), the drive off, reached from the
+/// relaxed FRC in four steps of volume, then the [`INSPIRATORY`] groups' activation inputs
+/// raised to 1 in steps of [`EFFORT_INCREMENT`] (each equilibrium warm-starting the next),
+/// the mouth pressure read as the alveolar pressure. Where an activation step cannot be
+/// solved, the effort stops there and says why ([`Occluded::stopped`]). Through the facade:
+/// the FMU has no occlusion input. An error if the relaxed volume itself cannot be held.
+pub fn occluded_effort(config: &Config, volume: impl Fn(f64, f64) -> f64) -> Result<Occluded> {
+    let mut c = config.clone();
+    c.solver.method = Method::QuasiStatic;
+    c.drive = Drive {
+        enabled: false,
+        ..Drive::default()
+    };
+    let (rv_ratio, _) = capacity_ratios(&c.subject);
+    let mut torso = Torso::new(c)?;
+    let frc = torso.read(Quantity::LungVolume)?;
+    let target = volume(frc, frc * rv_ratio);
+    let mut pressure = f64::NAN;
+    for k in 1..=4 {
+        let v = frc + (target - frc) * f64::from(k) / 4.0;
+        torso.set_lung_volume(0.0, v)?;
+        pressure = torso.read(Quantity::AlveolarPressure)?;
+        if !pressure.is_finite() {
+            return Err(Error::Numerical {
+                time: 0.0,
+                reason: format!("no relaxed equilibrium holds {v:.3} L"),
+            });
+        }
+    }
+    let steps = (1.0 / EFFORT_INCREMENT).round() as u32;
+    let mut reached = 0.0;
+    let mut stopped = None;
+    for k in 1..=steps {
+        let a = f64::from(k) / f64::from(steps);
+        for g in INSPIRATORY {
+            torso.set_activation(g, a)?;
+        }
+        torso.set_lung_volume(0.0, target)?;
+        let p = torso.read(Quantity::AlveolarPressure)?;
+        if !p.is_finite() {
+            let why = torso.quasi_rate(0.0, target).err().map_or_else(
+                || "the pressure is not finite".to_string(),
+                |e| e.to_string(),
+            );
+            stopped = Some(format!("no equilibrium at activation {a:.2}: {why}"));
+            break;
+        }
+        (reached, pressure) = (a, p);
+    }
+    Ok(Occluded {
+        volume: target,
+        activation: reached,
+        mouth_pressure: pressure / CMH2O,
+        stopped,
+    })
+}
+
+/// Every figure of the default subject at level of detail `lod`, with the measurements they
+/// came from.
+#[derive(Clone, Debug, Serialize)]
+pub struct Physiology {
+    /// Level of detail.
+    pub level_of_detail: u32,
+    /// The figures against their cited ranges.
+    pub figures: Vec<Figure>,
+    /// Figures that could not be measured, with the reason.
+    pub failed: Vec<(String, String)>,
+}
+
+/// Measures every figure of the default subject at level of detail `lod` (a failed
+/// measurement is listed in [`Physiology::failed`], not an error).
+pub fn physiology(lod: u32) -> Result<Physiology> {
+    if lod > 2 {
+        return Err(Error::invalid("level of detail", lod, "0, 1 or 2"));
+    }
+    let mut figures = Vec::new();
+    let mut failed = Vec::new();
+    let mut fig = |name: String, value: f64, unit, range: (f64, f64), source, through| {
+        figures.push(Figure {
+            name,
+            value,
+            unit,
+            range,
+            met: value >= range.0 && value <= range.1,
+            source,
+            through,
+        })
+    };
+    let name = |p: Posture| format!("{p:?}").to_lowercase();
+    for posture in [Posture::Standing, Posture::Supine] {
+        match pressure_step(posture, lod) {
+            Ok(s) => fig(
+                format!(
+                    "respiratory-system compliance, {} ({PRESSURE_STEP} cmH2O airway-opening step)",
+                    name(posture)
+                ),
+                s.compliance,
+                "L/cmH2O",
+                SYSTEM_COMPLIANCE,
+                "Agostoni & Mead 1964",
+                FMU,
+            ),
+            Err(e) => failed.push((format!("compliance, {}", name(posture)), e.to_string())),
+        }
+    }
+    match quiet_breath(Posture::Standing, lod, 1.0) {
+        Ok(q) => {
+            fig(
+                "pleural pressure swing, quiet breathing standing".into(),
+                q.pleural_swing,
+                "cmH2O",
+                PLEURAL_SWING,
+                "West & Luks 2016",
+                FMU,
+            );
+            fig(
+                "rib-cage share of quiet tidal volume, standing".into(),
+                100.0 * q.rib_cage_share,
+                "%",
+                (
+                    100.0 * UPRIGHT_RIB_CAGE_SHARE.0,
+                    100.0 * UPRIGHT_RIB_CAGE_SHARE.1,
+                ),
+                "Verschakelen & Demedts 1995",
+                FMU,
+            );
+            fig(
+                "diaphragm excursion per litre, quiet breathing standing".into(),
+                q.excursion_per_litre,
+                "cm/L",
+                EXCURSION_PER_LITRE,
+                "Houston et al. 1994",
+                FMU,
+            );
+        }
+        Err(e) => failed.push(("quiet breathing, standing".into(), e.to_string())),
+    }
+    match quiet_breath(Posture::Supine, lod, 1.0) {
+        Ok(q) => fig(
+            "abdominal share of quiet tidal volume, supine".into(),
+            100.0 * (1.0 - q.rib_cage_share),
+            "%",
+            (
+                100.0 * SUPINE_ABDOMINAL_SHARE.0,
+                100.0 * SUPINE_ABDOMINAL_SHARE.1,
+            ),
+            "Aliverti et al. 2001",
+            FMU,
+        ),
+        Err(e) => failed.push(("quiet breathing, supine".into(), e.to_string())),
+    }
+    match full_inspiration(Posture::Standing, lod) {
+        Ok(f) => {
+            fig(
+                "volume added by full inspiratory activation, airway open, standing".into(),
+                f.added,
+                "L",
+                INSPIRATORY_CAPACITY,
+                "ECSC 1993 (inspiratory capacity)",
+                FMU,
+            );
+            fig(
+                "M-mode excursion of the posterior right dome, full inspiration standing".into(),
+                f.m_mode_excursion,
+                "cm",
+                DEEP_EXCURSION_MEN,
+                "Boussuges et al. 2009",
+                "facade (no FMU output reports a dome point)",
+            );
+        }
+        Err(e) => failed.push(("full inspiration, standing".into(), e.to_string())),
+    }
+    let mut config = Config::default();
+    config.scene.level_of_detail = lod;
+    let range = pimax_range(&config.subject);
+    let at_rv = occluded_effort(&config, |_, rv| rv);
+    let maximal = matches!(&at_rv, Ok(o) if o.stopped.is_none());
+    match at_rv {
+        Ok(o) if o.stopped.is_some() => failed.push((
+            format!("maximal inspiratory pressure at RV ({:.2} L)", o.volume),
+            format!(
+                "{:.1} cmH2O at inspiratory activation {:.2}, the highest solved; {}",
+                o.mouth_pressure,
+                o.activation,
+                o.stopped.unwrap_or_default()
+            ),
+        )),
+        Ok(o) => fig(
+            format!(
+                "maximal inspiratory mouth pressure at RV ({:.2} L), occluded, standing (magnitude)",
+                o.volume
+            ),
+            -o.mouth_pressure,
+            "cmH2O",
+            range,
+            "Black & Hyatt 1969; Harik-Khan et al. 1998; ATS/ERS 2002",
+            "facade, quasi-static with the lung volume held (the FMU has no occlusion input)",
+        ),
+        Err(e) => failed.push(("maximal inspiratory pressure at RV".into(), e.to_string())),
+    }
+    if !maximal {
+        // the same effort at FRC, for the record (the reference is at RV)
+        match occluded_effort(&config, |frc, _| frc) {
+            Ok(o) => failed.push((
+                format!("the same effort at FRC ({:.2} L), for the record", o.volume),
+                format!(
+                    "{:.1} cmH2O at inspiratory activation {:.2}, the highest solved{}",
+                    o.mouth_pressure,
+                    o.activation,
+                    o.stopped.map_or(String::new(), |w| format!("; {w}"))
+                ),
+            )),
+            Err(e) => failed.push(("the same effort at FRC".into(), e.to_string())),
+        }
+    }
+    match quiet_breath(Posture::Standing, lod, 0.0) {
+        Ok(q) => {
+            fig(
+                "paralysed left hemidiaphragm's motion in inspiration, quiet standing (cranial +)"
+                    .into(),
+                q.hemidiaphragm_motion[0],
+                "cm",
+                (0.0, f64::INFINITY),
+                "sniff test paradox (Alexander 1966)",
+                FMU,
+            );
+            fig(
+                "healthy right hemidiaphragm's motion in inspiration, same breath (cranial +)"
+                    .into(),
+                q.hemidiaphragm_motion[1],
+                "cm",
+                (f64::NEG_INFINITY, 0.0),
+                "sniff test paradox (Alexander 1966)",
+                FMU,
+            );
+            fig(
+                "paralysed side's share of tidal volume, quiet standing".into(),
+                100.0 * q.left_share,
+                "%",
+                (
+                    100.0 * PARALYSED_SIDE_SHARE.0,
+                    100.0 * PARALYSED_SIDE_SHARE.1,
+                ),
+                "issue 35",
+                FMU,
+            );
+        }
+        Err(e) => failed.push(("paralysed left hemidiaphragm".into(), e.to_string())),
+    }
+    match sniff(Posture::Standing, lod, 0.0) {
+        Ok(q) => {
+            fig(
+                "paralysed left hemidiaphragm's motion in a sniff, standing (cranial +)".into(),
+                q.hemidiaphragm_motion[0],
+                "cm",
+                (0.0, f64::INFINITY),
+                "sniff test paradox (Alexander 1966)",
+                FMU,
+            );
+            fig(
+                "healthy right hemidiaphragm's motion in the same sniff (cranial +)".into(),
+                q.hemidiaphragm_motion[1],
+                "cm",
+                (f64::NEG_INFINITY, 0.0),
+                "sniff test paradox (Alexander 1966)",
+                FMU,
+            );
+        }
+        Err(e) => failed.push(("sniff, paralysed left hemidiaphragm".into(), e.to_string())),
+    }
+    Ok(Physiology {
+        level_of_detail: lod,
+        figures,
+        failed,
+    })
+}

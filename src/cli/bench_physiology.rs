@@ -1,0 +1,59 @@
+//! `torso bench physiology`: the physiological figures the chest wall is judged by
+//! (`bench::physiology`), each printed with its measured value, its cited range, its source,
+//! whether it is met and how it was measured; `--json` prints them as JSON instead.
+
+use crate::Result;
+use crate::bench::physiology::physiology;
+use clap::Args;
+
+/// Options of `torso bench physiology`.
+#[derive(Args, Debug)]
+pub struct PhysiologyArgs {
+    /// Level of detail.
+    #[arg(long, default_value_t = 1)]
+    pub lod: u32,
+    /// Print the figures as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// A range's end for printing (an infinite end as "-").
+fn end(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        "-".into()
+    }
+}
+
+/// Runs `torso bench physiology`.
+pub fn run(args: &PhysiologyArgs) -> Result<()> {
+    let p = physiology(args.lod)?;
+    if args.json {
+        let text = serde_json::to_string_pretty(&p)
+            .map_err(|e| crate::Error::State(format!("JSON: {e}")))?;
+        println!("{text}");
+        return Ok(());
+    }
+    println!(
+        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}",
+        p.level_of_detail
+    );
+    for f in &p.figures {
+        println!(
+            "{} {}: {:.3} {} (cited {}..{}, {}; through the {})",
+            if f.met { "met   " } else { "MISSED" },
+            f.name,
+            f.value,
+            f.unit,
+            end(f.range.0),
+            end(f.range.1),
+            f.source,
+            f.through
+        );
+    }
+    for (what, why) in &p.failed {
+        println!("FAILED {what}: {why}");
+    }
+    Ok(())
+}

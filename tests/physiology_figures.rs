@@ -1,0 +1,247 @@
+//! The physiological figures of issue 35 (`bench::physiology`, `torso bench physiology`),
+//! each cited bound a test, on the default subject at the default level of detail. None of
+//! these figures was calibrated: the quiet drive's amplitudes were set to a tidal volume
+//! (docs/drive.md), which is therefore not tested here; compliances, shares, excursions per
+//! litre, maximal volumes and pressures and a paralysed side's motion are outcomes.
+//!
+//! The bounds are the cited ones, never widened; those the model misses today are ignored
+//! with the figure measured (`cargo test --release --test physiology_figures -- --ignored
+//! --nocapture` measures them again).
+
+use breathing_torso::anatomy::Posture;
+use breathing_torso::bench::physiology::*;
+use breathing_torso::model::Config;
+
+/// Level of detail of every measurement (the default).
+const LOD: u32 = 1;
+
+fn within(value: f64, (lo, hi): (f64, f64)) -> bool {
+    value >= lo && value <= hi
+}
+
+fn compliance(posture: Posture) {
+    let s = pressure_step(posture, LOD).unwrap();
+    println!(
+        "{posture:?}: rest {:.3} L, under {PRESSURE_STEP} cmH2O {:.3} L, C_rs {:.4} L/cmH2O",
+        s.rest, s.held, s.compliance
+    );
+    assert!(
+        within(s.compliance, SYSTEM_COMPLIANCE),
+        "{posture:?}: C_rs {} L/cmH2O against {SYSTEM_COMPLIANCE:?}",
+        s.compliance
+    );
+}
+
+#[test]
+#[ignore = "issue 35: respiratory-system compliance standing measured 0.062 L/cmH2O against 0.08-0.12"]
+fn system_compliance_standing() {
+    compliance(Posture::Standing);
+}
+
+#[test]
+#[ignore = "issue 35: respiratory-system compliance supine measured 0.069 L/cmH2O against 0.08-0.12"]
+fn system_compliance_supine() {
+    compliance(Posture::Supine);
+}
+
+fn quiet(posture: Posture, left_gain: f64) -> QuietBreath {
+    let q = quiet_breath(posture, LOD, left_gain).unwrap();
+    println!("{posture:?}, left diaphragm gain {left_gain}: {q:?}");
+    q
+}
+
+#[test]
+fn quiet_pleural_swing() {
+    let q = quiet(Posture::Standing, 1.0);
+    assert!(
+        within(q.pleural_swing, PLEURAL_SWING),
+        "pleural swing {} cmH2O against {PLEURAL_SWING:?}",
+        q.pleural_swing
+    );
+}
+
+#[test]
+#[ignore = "issue 35: upright rib-cage share of quiet tidal volume measured 46.9 % against >= 50 %"]
+fn upright_rib_cage_share() {
+    let q = quiet(Posture::Standing, 1.0);
+    assert!(
+        within(q.rib_cage_share, UPRIGHT_RIB_CAGE_SHARE),
+        "rib-cage share {}",
+        q.rib_cage_share
+    );
+}
+
+#[test]
+fn supine_abdominal_share() {
+    let q = quiet(Posture::Supine, 1.0);
+    let abdominal = 1.0 - q.rib_cage_share;
+    assert!(
+        within(abdominal, SUPINE_ABDOMINAL_SHARE),
+        "supine abdominal share {abdominal} against {SUPINE_ABDOMINAL_SHARE:?}"
+    );
+}
+
+#[test]
+fn quiet_excursion_per_litre() {
+    let q = quiet(Posture::Standing, 1.0);
+    assert!(
+        within(q.excursion_per_litre, EXCURSION_PER_LITRE),
+        "{} cm/L against {EXCURSION_PER_LITRE:?}",
+        q.excursion_per_litre
+    );
+}
+
+fn full() -> FullInspiration {
+    let f = full_inspiration(Posture::Standing, LOD).unwrap();
+    println!("{f:?}");
+    f
+}
+
+#[test]
+#[ignore = "issue 35: full inspiratory activation with the airway open measured 2.23 L above FRC against 2.9-4.3 L"]
+fn full_inspiration_volume() {
+    let f = full();
+    assert!(
+        within(f.added, INSPIRATORY_CAPACITY),
+        "{} L against {INSPIRATORY_CAPACITY:?}",
+        f.added
+    );
+}
+
+#[test]
+#[ignore = "issue 35: M-mode excursion of the posterior right dome in a full inspiration measured 2.25 cm against >= 4.7 cm"]
+fn deep_m_mode_excursion() {
+    let f = full();
+    assert!(
+        within(f.m_mode_excursion, DEEP_EXCURSION_MEN),
+        "{} cm against {DEEP_EXCURSION_MEN:?}",
+        f.m_mode_excursion
+    );
+}
+
+/// The reference of the default man (30 y): 143 - 0.55 x 30 = 126.5 cmH2O, +- 1.96 x 22.4.
+#[test]
+fn pimax_reference_of_the_default_man() {
+    let (lo, hi) = pimax_range(&Config::default().subject);
+    assert!((lo - 82.596).abs() < 1e-9 && (hi - 170.404).abs() < 1e-9);
+}
+
+#[test]
+#[ignore = "issue 35: maximal inspiratory pressure against an occluded airway: no quasi-static \
+            equilibrium holds the relaxed lungs at 2.67 L on the way to RV 1.84 L; at FRC the \
+            occluded effort is solved up to inspiratory activation 0.55 (-41.8 cmH2O), against \
+            82.6-170.4 cmH2O at RV"]
+fn maximal_inspiratory_pressure() {
+    let config = Config::default();
+    let o = occluded_effort(&config, |_, rv| rv).unwrap();
+    println!("{o:?}");
+    assert_eq!(o.activation, 1.0, "{:?}", o.stopped);
+    let range = pimax_range(&config.subject);
+    assert!(
+        within(-o.mouth_pressure, range),
+        "{} cmH2O against {range:?}",
+        o.mouth_pressure
+    );
+}
+
+#[test]
+#[ignore = "issue 35: a paralysed left hemidiaphragm measured moving 0.05 cm caudally in quiet \
+            inspiration (its cranial displacement's correlation with lung volume -0.70) instead \
+            of rising"]
+fn paralysed_hemidiaphragm_rises() {
+    let q = quiet(Posture::Standing, 0.0);
+    assert!(
+        q.hemidiaphragm_motion[0] > 0.0 && q.left_correlation > 0.0,
+        "paralysed left side moves {} cm (cranial +), correlation {}",
+        q.hemidiaphragm_motion[0],
+        q.left_correlation
+    );
+}
+
+#[test]
+fn healthy_hemidiaphragm_descends_beside_a_paralysed_one() {
+    let q = quiet(Posture::Standing, 0.0);
+    assert!(
+        q.hemidiaphragm_motion[1] < 0.0,
+        "healthy right side moves {} cm (cranial +)",
+        q.hemidiaphragm_motion[1]
+    );
+}
+
+#[test]
+fn paralysed_side_share() {
+    let q = quiet(Posture::Standing, 0.0);
+    assert!(
+        within(q.left_share, PARALYSED_SIDE_SHARE),
+        "paralysed side's share {} against {PARALYSED_SIDE_SHARE:?}",
+        q.left_share
+    );
+}
+
+fn sniffed() -> Sniff {
+    let s = sniff(Posture::Standing, LOD, 0.0).unwrap();
+    println!("sniff, left diaphragm paralysed: {s:?}");
+    s
+}
+
+#[test]
+#[ignore = "issue 35: in a sniff a paralysed left hemidiaphragm measured moving 0.30 cm caudally \
+            (the healthy right 4.31 cm) instead of rising"]
+fn paralysed_hemidiaphragm_rises_in_a_sniff() {
+    let s = sniffed();
+    assert!(
+        s.hemidiaphragm_motion[0] > 0.0,
+        "paralysed left side moves {} cm (cranial +)",
+        s.hemidiaphragm_motion[0]
+    );
+}
+
+#[test]
+fn healthy_hemidiaphragm_descends_in_a_sniff_beside_a_paralysed_one() {
+    let s = sniffed();
+    assert!(
+        s.hemidiaphragm_motion[1] < 0.0,
+        "healthy right side moves {} cm (cranial +)",
+        s.hemidiaphragm_motion[1]
+    );
+}
+
+/// `torso bench physiology --json` at level 0 prints every figure with a finite value, its
+/// range and whether the value lies in it; a level of detail out of range is refused by name.
+#[test]
+fn bench_command_prints_json() {
+    use std::process::Command;
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "physiology", "--lod", "0", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let figures = v["figures"].as_array().unwrap();
+    assert_eq!(figures.len(), 13, "{v}");
+    for f in figures {
+        let value = f["value"].as_f64().unwrap();
+        // an open end of a range is written null
+        let lo = f["range"][0].as_f64().unwrap_or(f64::NEG_INFINITY);
+        let hi = f["range"][1].as_f64().unwrap_or(f64::INFINITY);
+        assert!(value.is_finite(), "{f}");
+        assert_eq!(
+            f["met"].as_bool().unwrap(),
+            value >= lo && value <= hi,
+            "{f}"
+        );
+        assert!(!f["source"].as_str().unwrap().is_empty());
+    }
+    // the occluded effort at RV is not solved today: it is listed with its reason
+    assert!(v["failed"].is_array());
+    let out = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["bench", "physiology", "--lod", "3"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("level of detail"));
+}
