@@ -25,6 +25,7 @@
 
 use super::relaxation::CMH2O;
 use crate::anatomy::{MuscleGroup, Posture, Sex, Subject};
+use crate::dynamics::muscle::MuscleLaw;
 use crate::dynamics::pleural::capacity_ratios;
 use crate::dynamics::{Data, Layout, kinematics};
 use crate::fmi::instance::Instance;
@@ -84,28 +85,32 @@ pub const INSPIRATORY_CAPACITY: (f64, f64) = (2.9, 4.3);
 /// The paralysed hemidiaphragm's side takes under 40 % of tidal volume (issue 35).
 pub const PARALYSED_SIDE_SHARE: (f64, f64) = (0.0, 0.4);
 
-/// Maximal inspiratory mouth pressure at residual volume, magnitude [cmH2O], predicted for
-/// sex and age (Black & Hyatt 1969, Am Rev Respir Dis 99:696, the reference equations the
-/// ATS/ERS statement on respiratory muscle testing tabulates, Am J Respir Crit Care Med
-/// 2002, 166:518): men 143 - 0.55 age, women 104 - 0.51 age.
-pub fn pimax_predicted(sex: Sex, age: f64) -> f64 {
-    match sex {
-        Sex::Male => 143.0 - 0.55 * age,
-        Sex::Female => 104.0 - 0.51 * age,
+/// Maximal inspiratory mouth pressure, magnitude [cmH2O], predicted for the subject's sex,
+/// age, mass and stature by the Baltimore Longitudinal Study of Aging's healthy adults
+/// (Harik-Khan, Wise & Fozard 1998, Am J Respir Crit Care Med 158:1459, doi
+/// 10.1164/ajrccm.158.5.9712006; docs/respiratory_muscles.md, row E7): men 126 - 1.028 age +
+/// 0.343 mass [kg], women 171 - 0.694 age + 0.861 mass - 0.743 stature [cm]. The abstract read
+/// does not state the lung volume of the manoeuvre; it is taken as RV, where the ATS/ERS
+/// statement on respiratory muscle testing (2002, Am J Respir Crit Care Med 166:518) has
+/// inspiratory efforts made.
+pub fn pimax_predicted(subject: &Subject) -> f64 {
+    let (age, mass, cm) = (subject.age, subject.mass, 100.0 * subject.stature);
+    match subject.sex {
+        Sex::Male => 126.0 - 1.028 * age + 0.343 * mass,
+        Sex::Female => 171.0 - 0.694 * age + 0.861 * mass - 0.743 * cm,
     }
 }
 
-/// The reference range of the maximal inspiratory mouth pressure at residual volume,
-/// magnitude [cmH2O]: the prediction of [`pimax_predicted`] +- 1.96 standard errors of the
-/// estimate, 22.4 cmH2O in men and 18.5 in women (Harik-Khan, Wise & Fozard 1998, Am J
-/// Respir Crit Care Med 158:1459, the Baltimore Longitudinal Study's healthy adults, whose
-/// regressions give these errors), the interval that holds 95 % of healthy adults.
+/// The reference range of the maximal inspiratory mouth pressure, magnitude [cmH2O]: the
+/// prediction of [`pimax_predicted`] +- 1.96 standard errors of its estimate, 22.4 cmH2O in
+/// men and 18.5 in women (Harik-Khan, Wise & Fozard 1998), the interval that holds 95 % of
+/// healthy adults.
 pub fn pimax_range(subject: &Subject) -> (f64, f64) {
     let see = match subject.sex {
         Sex::Male => 22.4,
         Sex::Female => 18.5,
     };
-    let p = pimax_predicted(subject.sex, subject.age);
+    let p = pimax_predicted(subject);
     (p - 1.96 * see, p + 1.96 * see)
 }
 
@@ -216,10 +221,11 @@ impl Fmu {
 }
 
 /// The FMU's parameters for `posture` at level of detail `lod`, the drive off.
-fn relaxed(posture: Posture, lod: u32) -> Vec<(&'static str, f64)> {
+fn relaxed(posture: Posture, lod: u32, law: MuscleLaw) -> Vec<(&'static str, f64)> {
     vec![
         ("posture", f64::from(posture.code())),
         ("scene.level_of_detail", f64::from(lod)),
+        ("muscle_law", f64::from(law.code())),
         ("drive.enabled", 0.0),
     ]
 }
@@ -268,8 +274,8 @@ pub struct PressureStep {
 /// The respiratory-system compliance of the relaxed default subject in `posture`: the drive
 /// off, the airway-opening pressure stepped from 0 to [`PRESSURE_STEP`] and the lung volume
 /// left to settle, through the FMU.
-pub fn pressure_step(posture: Posture, lod: u32) -> Result<PressureStep> {
-    let mut fmu = Fmu::new(&relaxed(posture, lod))?;
+pub fn pressure_step(posture: Posture, lod: u32, law: MuscleLaw) -> Result<PressureStep> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod, law))?;
     let rest = fmu.get(&["volume.lung"])?[0];
     fmu.set("pressure.airway_opening", PRESSURE_STEP * CMH2O)?;
     let held = settle(&mut fmu, 3.0, 1e-4, 20.0)?;
@@ -320,10 +326,16 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
 /// Quiet breathing (the FMU's start drive, [`Drive::quiet`]) of the default subject in
 /// `posture` with the left hemidiaphragm's gain `left_diaphragm_gain` (1 healthy, 0
 /// paralysed; the FMU's `gain.diaphragm.left`), through the FMU, sampled at 28 Hz.
-pub fn quiet_breath(posture: Posture, lod: u32, left_diaphragm_gain: f64) -> Result<QuietBreath> {
+pub fn quiet_breath(
+    posture: Posture,
+    lod: u32,
+    law: MuscleLaw,
+    left_diaphragm_gain: f64,
+) -> Result<QuietBreath> {
     let mut fmu = Fmu::new(&[
         ("posture", f64::from(posture.code())),
         ("scene.level_of_detail", f64::from(lod)),
+        ("muscle_law", f64::from(law.code())),
         ("gain.diaphragm.left", left_diaphragm_gain),
     ])?;
     let period = 1.0 / Drive::quiet().frequency;
@@ -409,8 +421,13 @@ pub struct Sniff {
 /// `left_diaphragm_gain` (the FMU's `gain.diaphragm.left`): the drive off, the
 /// [`INSPIRATORY`] groups' activation inputs raised from 0 to 1 and back to 0 over
 /// [`SNIFF_HALF`] each way, the airway open, through the FMU sampled every 10 ms.
-pub fn sniff(posture: Posture, lod: u32, left_diaphragm_gain: f64) -> Result<Sniff> {
-    let mut params = relaxed(posture, lod);
+pub fn sniff(
+    posture: Posture,
+    lod: u32,
+    law: MuscleLaw,
+    left_diaphragm_gain: f64,
+) -> Result<Sniff> {
+    let mut params = relaxed(posture, lod, law);
     params.push(("gain.diaphragm.left", left_diaphragm_gain));
     let mut fmu = Fmu::new(&params)?;
     let names = [
@@ -551,8 +568,8 @@ impl DomePoint {
 /// [`EFFORT_RAMP`] and held until the lung volume settles. The volume added is measured
 /// through the FMU, the posterior dome point's excursion through the facade (the same model
 /// and method, the default explicit integrator), since no FMU output reports that point.
-pub fn full_inspiration(posture: Posture, lod: u32) -> Result<FullInspiration> {
-    let mut fmu = Fmu::new(&relaxed(posture, lod))?;
+pub fn full_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Result<FullInspiration> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod, law))?;
     let rest = fmu.get(&["volume.lung"])?[0];
     let h = 0.05;
     while fmu.t < EFFORT_RAMP - 1e-9 {
@@ -566,6 +583,7 @@ pub fn full_inspiration(posture: Posture, lod: u32) -> Result<FullInspiration> {
     let mut config = Config::default();
     config.subject.posture = posture;
     config.scene.level_of_detail = lod;
+    config.muscle_law = law;
     config.drive.enabled = false;
     let mut torso = Torso::new(config)?;
     let line = m_mode_line(&torso);
@@ -690,6 +708,8 @@ pub fn occluded_effort(config: &Config, volume: impl Fn(f64, f64) -> f64) -> Res
 pub struct Physiology {
     /// Level of detail.
     pub level_of_detail: u32,
+    /// The muscle law (the FMU's `muscle_law`).
+    pub muscle_law: MuscleLaw,
     /// The figures against their cited ranges.
     pub figures: Vec<Figure>,
     /// Figures that could not be measured, with the reason.
@@ -698,7 +718,7 @@ pub struct Physiology {
 
 /// Measures every figure of the default subject at level of detail `lod` (a failed
 /// measurement is listed in [`Physiology::failed`], not an error).
-pub fn physiology(lod: u32) -> Result<Physiology> {
+pub fn physiology(lod: u32, law: MuscleLaw) -> Result<Physiology> {
     if lod > 2 {
         return Err(Error::invalid("level of detail", lod, "0, 1 or 2"));
     }
@@ -717,7 +737,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
     };
     let name = |p: Posture| format!("{p:?}").to_lowercase();
     for posture in [Posture::Standing, Posture::Supine] {
-        match pressure_step(posture, lod) {
+        match pressure_step(posture, lod, law) {
             Ok(s) => fig(
                 format!(
                     "respiratory-system compliance, {} ({PRESSURE_STEP} cmH2O airway-opening step)",
@@ -732,7 +752,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
             Err(e) => failed.push((format!("compliance, {}", name(posture)), e.to_string())),
         }
     }
-    match quiet_breath(Posture::Standing, lod, 1.0) {
+    match quiet_breath(Posture::Standing, lod, law, 1.0) {
         Ok(q) => {
             fig(
                 "pleural pressure swing, quiet breathing standing".into(),
@@ -764,7 +784,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
         }
         Err(e) => failed.push(("quiet breathing, standing".into(), e.to_string())),
     }
-    match quiet_breath(Posture::Supine, lod, 1.0) {
+    match quiet_breath(Posture::Supine, lod, law, 1.0) {
         Ok(q) => fig(
             "abdominal share of quiet tidal volume, supine".into(),
             100.0 * (1.0 - q.rib_cage_share),
@@ -778,7 +798,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
         ),
         Err(e) => failed.push(("quiet breathing, supine".into(), e.to_string())),
     }
-    match full_inspiration(Posture::Standing, lod) {
+    match full_inspiration(Posture::Standing, lod, law) {
         Ok(f) => {
             fig(
                 "volume added by full inspiratory activation, airway open, standing".into(),
@@ -801,6 +821,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
     }
     let mut config = Config::default();
     config.scene.level_of_detail = lod;
+    config.muscle_law = law;
     let range = pimax_range(&config.subject);
     let at_rv = occluded_effort(&config, |_, rv| rv);
     let maximal = matches!(&at_rv, Ok(o) if o.stopped.is_none());
@@ -822,7 +843,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
             -o.mouth_pressure,
             "cmH2O",
             range,
-            "Black & Hyatt 1969; Harik-Khan et al. 1998; ATS/ERS 2002",
+            "Harik-Khan, Wise & Fozard 1998; ATS/ERS 2002",
             "facade, quasi-static with the lung volume held (the FMU has no occlusion input)",
         ),
         Err(e) => failed.push(("maximal inspiratory pressure at RV".into(), e.to_string())),
@@ -842,7 +863,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
             Err(e) => failed.push(("the same effort at FRC".into(), e.to_string())),
         }
     }
-    match quiet_breath(Posture::Standing, lod, 0.0) {
+    match quiet_breath(Posture::Standing, lod, law, 0.0) {
         Ok(q) => {
             fig(
                 "paralysed left hemidiaphragm's motion in inspiration, quiet standing (cranial +)"
@@ -876,7 +897,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
         }
         Err(e) => failed.push(("paralysed left hemidiaphragm".into(), e.to_string())),
     }
-    match sniff(Posture::Standing, lod, 0.0) {
+    match sniff(Posture::Standing, lod, law, 0.0) {
         Ok(q) => {
             fig(
                 "paralysed left hemidiaphragm's motion in a sniff, standing (cranial +)".into(),
@@ -899,6 +920,7 @@ pub fn physiology(lod: u32) -> Result<Physiology> {
     }
     Ok(Physiology {
         level_of_detail: lod,
+        muscle_law: law,
         figures,
         failed,
     })

@@ -15,6 +15,9 @@ pub struct PhysiologyArgs {
     /// Print the figures as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Muscle law: thesis or hill (the FMU's `muscle_law`).
+    #[arg(long, default_value = "thesis")]
+    pub muscle_law: String,
 }
 
 /// A range's end for printing (an infinite end as "-").
@@ -28,7 +31,9 @@ fn end(v: f64) -> String {
 
 /// Runs `torso bench physiology`.
 pub fn run(args: &PhysiologyArgs) -> Result<()> {
-    let p = physiology(args.lod)?;
+    let law = crate::dynamics::muscle::MuscleLaw::parse(&args.muscle_law)
+        .map_err(|_| crate::Error::invalid("--muscle-law", &args.muscle_law, "thesis or hill"))?;
+    let p = physiology(args.lod, law)?;
     if args.json {
         let text = serde_json::to_string_pretty(&p)
             .map_err(|e| crate::Error::State(format!("JSON: {e}")))?;
@@ -36,8 +41,8 @@ pub fn run(args: &PhysiologyArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}",
-        p.level_of_detail
+        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}, {:?} muscle law",
+        p.level_of_detail, p.muscle_law
     );
     for f in &p.figures {
         println!(
