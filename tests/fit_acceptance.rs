@@ -13,19 +13,41 @@
 //! - each marker drifting 10 mm over the recording along its own direction;
 //! - one label swap of two neighbouring markers halfway through.
 //!
-//! Each is written to a file and fitted by `torso fit --lod 0 --threads 1` with no other
+//! Each is written to a file and fitted by `torso fit --lod L --threads 1` with no other
 //! flag (size estimated, each marker about its mean, drift projected out, sway removed,
-//! swaps repaired, Ti/Ttot 0.5). Bounds (the issue's): the lung's tidal volume within 10 %
-//! of the truth's mean over the recording's breaths; the breath timing the fit reads off
-//! the recording within the SLP limits of agreement against the drive's breaths (Ti, Te,
-//! Ttot within 0.22, 0.29, 0.32 s; Motamedi-Fakhr et al. 2017), the worst breath counted.
-//! The residual against the noise is printed (the mismatch floor needs a second fit of the
-//! noise-free recording, not made here).
+//! swaps repaired, Ti/Ttot 0.5), at levels of detail 0 and 1. Bounds (the issue's): the
+//! lung's tidal volume within 10 % of the truth's mean over the recording's breaths; the
+//! breath timing the fit reads off the recording within the SLP limits of agreement against
+//! the drive's breaths (Ti, Te, Ttot within 0.22, 0.29, 0.32 s; Motamedi-Fakhr et al.
+//! 2017), the worst breath counted; the marker residual at most 1.15 x the noise plus the
+//! mismatch floor.
 //!
-//! It takes about 4 minutes on one core: `cargo test --release --test fit_acceptance --
-//! --ignored --nocapture`. Measured (docs/fit_report.md): tidal volume -9.4 % (grid), -4.1 %
-//! and -4.1 % (chest30 standing and supine), -10.4 % (oep89, over the bound); breath timing
-//! within the limits in all four.
+//! The residual is the one the fit reports after its nuisance terms,
+//! `quality.variance_explained.split.residual_rms_m`: the root mean square, over every
+//! tracked sample of every marker, of the length of the 3-D vector recorded (after the
+//! sway is removed) minus fitted minus the fitted drift, about each marker's mean, in
+//! metres. The noise in that measure is the rms length of the 3-D noise vector, sqrt(3)
+//! sigma for the recording's sigma = 0.5 mm per coordinate (0.866 mm); the fit's own
+//! estimate of sigma is printed beside it. The mismatch floor is the same residual of the
+//! same command at the same level of detail on the truth's noise-free twin: the same truth
+//! run, breaths, frame and dropped points, with no noise, sway, drift or swap (model
+//! mismatch alone: another level of detail and another subject); one per marker set and
+//! level, the supine case sharing the standing one's. The bound is the issue's linear sum,
+//! 1.15 x sqrt(3) sigma + floor. Noise and mismatch being independent, their residuals add in
+//! quadrature (residual^2 = 3 sigma^2 + floor^2, less what the fit's few parameters take up
+//! of the noise), which the linear sum exceeds: the bound is the looser of the two.
+//!
+//! It takes about 8 minutes on one core (499 s measured on a shared 2-core machine: about 30
+//! s per truth made, 13-34 s per command at level of detail 0 and 33-41 s at level 1, each
+//! including the size estimate): `cargo test --release --test fit_acceptance -- --ignored
+//! --nocapture`. Measured (docs/fit_report.md), tidal volume at levels 0 / 1: grid -9.4 /
+//! -5.4 %, chest30 standing -4.1 / +0.6 %, chest30 supine -4.1 / +0.8 %, oep89 **-10.8** /
+//! -5.9 % (over the bound at level 0). Breath timing within the limits in all eight fits
+//! (worst Ti 0.165 s, Te 0.255 s, Ttot 0.226 s). Residual against 1.15 x 0.866 mm + floor,
+//! levels 0 / 1: grid 1.297 / 1.247 mm (floors 0.977 / 0.906 mm), chest30 standing 0.965 /
+//! 0.945 mm and supine 0.958 / 0.937 mm (floors 0.422 / 0.340 mm), oep89 0.997 / 0.966 mm
+//! (floors 0.473 / 0.398 mm): within the bound in all eight, and within 2 % of the
+//! quadrature sum sqrt(0.866^2 + floor^2).
 
 use breathing_torso::anatomy::skin::RigidTransform;
 use breathing_torso::fit::mismatch::{
@@ -39,6 +61,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 type Frames = Vec<Vec<Option<Point3<f64>>>>;
+
+/// The residual may reach this many times the noise plus the mismatch floor (issue 33,
+/// deliverable 7: 1.15).
+const RESIDUAL_NOISE_FACTOR: f64 = 1.15;
 
 /// The sway of tests/fit_sway.rs (z-up laboratory, pivot on the floor).
 fn sway(frames: &Frames, times: &[f64]) -> Frames {
@@ -119,9 +145,35 @@ struct Case {
     truth_tv: f64,
     truth_breaths: Vec<(f64, f64)>,
     ti_ttot: f64,
+    /// Index of the truth (and of its noise-free twin's file in the floors).
+    truth: usize,
 }
 
-fn write_case(t: &MismatchTruth, standing: bool, dir: &Path, seed: u64) -> Case {
+/// The truth's noise-free twin (same truth run, breaths, frame and dropped points; no noise,
+/// sway, drift or swap), written as its noisy recording is: the file of the mismatch floor.
+fn write_clean(t: &MismatchTruth, dir: &Path) -> PathBuf {
+    let rec = &t.clean;
+    if t.labels.is_empty() {
+        let path = dir.join(format!("{}_clean.csv", t.marker_set));
+        rec.write(&path).unwrap();
+        path
+    } else {
+        let path = dir.join(format!("{}_clean.c3d", t.marker_set));
+        Markers {
+            labels: t.labels.clone(),
+            times: rec.times.clone(),
+            frames: rec.frames.clone(),
+            units: Units::Millimetres,
+            format: Format::C3d,
+            provenance: Vec::new(),
+        }
+        .write(&path)
+        .unwrap();
+        path
+    }
+}
+
+fn write_case(t: &MismatchTruth, truth: usize, standing: bool, dir: &Path, seed: u64) -> Case {
     let rec = &t.synthetic.recording;
     let times = &rec.times;
     let grid = t.labels.is_empty();
@@ -195,6 +247,7 @@ fn write_case(t: &MismatchTruth, standing: bool, dir: &Path, seed: u64) -> Case 
         truth_tv: t.mean_tidal_volume_l(),
         truth_breaths: t.breaths.clone(),
         ti_ttot: t.ti_ttot,
+        truth,
     }
 }
 
@@ -233,16 +286,70 @@ fn timing(json: &serde_json::Value, c: &Case) -> ([f64; 3], usize, usize) {
     (worst, matched, ti.len())
 }
 
+/// Runs `torso fit --lod LOD --threads 1 --slp FILE --out JSON` with no other flag; the
+/// result JSON, the command's wall time and the report lines worth printing.
+fn run_fit(
+    file: &Path,
+    lod: u32,
+    out: &Path,
+) -> Result<(serde_json::Value, f64, Vec<String>), String> {
+    let start = std::time::Instant::now();
+    let run = Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args(["fit", "--lod", &lod.to_string(), "--threads", "1", "--slp"])
+        .arg(file)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
+    let wall = start.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    if !run.status.success() {
+        return Err(format!("torso fit failed:\n{stdout}\n{stderr}"));
+    }
+    let lines = stdout
+        .lines()
+        .chain(stderr.lines())
+        .filter(|line| {
+            [
+                "repaired",
+                "sway",
+                "subject size",
+                "warning",
+                "quality",
+                "explained",
+            ]
+            .iter()
+            .any(|k| line.starts_with(k))
+        })
+        .map(str::to_string)
+        .collect();
+    let json = serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap();
+    Ok((json, wall, lines))
+}
+
+/// The fit's residual after its nuisance terms (`quality.variance_explained.split.
+/// residual_rms_m`, see the module doc) [m].
+fn residual_rms(json: &serde_json::Value) -> f64 {
+    json["quality"]["variance_explained"]["split"]["residual_rms_m"]
+        .as_f64()
+        .unwrap_or(f64::NAN)
+}
+
 #[test]
-#[ignore = "issue 33: 4 minutes, and oep89 at level of detail 0 misses the 10 % tidal volume bound (-10.4 % measured; grid -9.4 %, chest30 -4.1 / -4.1 %): cargo test --release --test fit_acceptance -- --ignored --nocapture"]
+#[ignore = "issue 33: about 8 minutes (499 s measured), and oep89 at level of detail 0 misses the 10 % tidal volume bound (-10.8 % measured; -5.9 % at level 1; grid -9.4 / -5.4 %, chest30 standing -4.1 / +0.6 %, supine -4.1 / +0.8 % at levels 0 / 1); breath timing and the residual bound met in all eight fits: cargo test --release --test fit_acceptance -- --ignored --nocapture"]
 fn recordings_made_differently_with_every_nuisance_are_fitted_by_the_defaults() {
     let dir = std::env::temp_dir().join(format!("torso_fit_acceptance_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let o = MismatchOptions {
-        fit_lods: vec![0],
+        fit_lods: vec![0, 1],
         ..MismatchOptions::default()
     };
+    // The noise's residual in the residual's measure: the root mean square length of a 3-D
+    // vector of independent N(0, sigma^2) coordinates.
+    let noise_rms = 3f64.sqrt() * o.noise;
     let mut cases = Vec::new();
+    let mut clean = Vec::new();
     for k in 0..o.marker_sets.len() {
         let t = make_truth(&o, k).unwrap();
         println!(
@@ -253,83 +360,112 @@ fn recordings_made_differently_with_every_nuisance_are_fitted_by_the_defaults() 
             t.tidal_volumes_l.len(),
             t.wall_s
         );
-        cases.push(write_case(&t, true, &dir, o.seed + k as u64));
+        clean.push((t.marker_set.clone(), write_clean(&t, &dir)));
+        cases.push(write_case(&t, k, true, &dir, o.seed + k as u64));
         if t.marker_set == "chest30" {
-            cases.push(write_case(&t, false, &dir, o.seed + 100));
+            cases.push(write_case(&t, k, false, &dir, o.seed + 100));
         }
     }
     let mut failures = Vec::new();
-    for c in &cases {
-        let out = dir.join(format!("{}.json", c.name.replace(' ', "_")));
-        let start = std::time::Instant::now();
-        let run = Command::new(env!("CARGO_BIN_EXE_torso"))
-            .args(["fit", "--lod", "0", "--threads", "1", "--slp"])
-            .arg(&c.file)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        let wall = start.elapsed().as_secs_f64();
-        let stdout = String::from_utf8_lossy(&run.stdout);
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        if !run.status.success() {
-            println!("{}: torso fit failed:\n{stdout}\n{stderr}", c.name);
-            failures.push(format!("{}: the fit failed", c.name));
-            continue;
+    for &lod in &o.fit_lods {
+        // The mismatch floor of each truth at this level: the residual of the same fit of
+        // its noise-free, nuisance-free twin.
+        let mut floors = Vec::new();
+        for (set, file) in &clean {
+            let out = dir.join(format!("{set}_clean_lod{lod}.json"));
+            let floor = match run_fit(file, lod, &out) {
+                Ok((json, wall, _)) => {
+                    let r = residual_rms(&json);
+                    println!(
+                        "level {lod}, {set} noise-free: residual {:.3} mm rms (the mismatch floor), \
+                         tidal volume {:.4} L, {} evaluations, whole command {wall:.1} s",
+                        r * 1e3,
+                        json["breaths_summary"]["mean"]["tidal_volume_l"]
+                            .as_f64()
+                            .unwrap_or(f64::NAN),
+                        json["evaluations"],
+                    );
+                    r
+                }
+                Err(e) => {
+                    println!("level {lod}, {set} noise-free: {e}");
+                    failures.push(format!("level {lod}, {set} noise-free: the fit failed"));
+                    f64::NAN
+                }
+            };
+            floors.push(floor);
         }
-        for line in stdout.lines().chain(stderr.lines()) {
-            if line.starts_with("repaired")
-                || line.starts_with("sway")
-                || line.starts_with("subject size")
-                || line.starts_with("warning")
-                || line.starts_with("quality")
-                || line.starts_with("explained")
-            {
+        for c in &cases {
+            let out = dir.join(format!("{}_lod{lod}.json", c.name.replace(' ', "_")));
+            let (json, wall, lines) = match run_fit(&c.file, lod, &out) {
+                Ok(r) => r,
+                Err(e) => {
+                    println!("level {lod}, {}: {e}", c.name);
+                    failures.push(format!("level {lod}, {}: the fit failed", c.name));
+                    continue;
+                }
+            };
+            for line in lines {
                 println!("  {line}");
             }
-        }
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-        let tv = json["breaths_summary"]["mean"]["tidal_volume_l"]
-            .as_f64()
-            .unwrap();
-        let e = tv / c.truth_tv - 1.0;
-        let (worst, matched, found) = timing(&json, c);
-        let sigma = json["quality"]["noise"]["sigma_m"]
-            .as_f64()
-            .unwrap_or(f64::NAN);
-        println!(
-            "{}: tidal volume {tv:.4} L against {:.4} L ({:+.1} %); breath timing worst |error| Ti {:.3} s, Te {:.3} s, \
-             Ttot {:.3} s ({matched} of {found} breaths matched); cost {:.3} mm, noise sigma {:.3} mm (floor {:.3} mm); \
-             {} evaluations, fit {:.1} s, whole command {wall:.1} s",
-            c.name,
-            c.truth_tv,
-            100.0 * e,
-            worst[0],
-            worst[1],
-            worst[2],
-            json["cost_m"].as_f64().unwrap_or(f64::NAN) * 1e3,
-            sigma * 1e3,
-            json["quality"]["noise"]["floor_m"]
+            let tv = json["breaths_summary"]["mean"]["tidal_volume_l"]
                 .as_f64()
-                .unwrap_or(f64::NAN)
-                * 1e3,
-            json["evaluations"],
-            json["wall_s"].as_f64().unwrap_or(f64::NAN),
-        );
-        if e.abs() > 0.10 {
-            failures.push(format!("{}: tidal volume {:+.1} %", c.name, 100.0 * e));
-        }
-        for (k, (w, lim)) in worst
-            .iter()
-            .zip([LIMIT_TI_S, LIMIT_TE_S, LIMIT_TTOT_S])
-            .enumerate()
-        {
-            if *w > lim || matched == 0 {
+                .unwrap();
+            let e = tv / c.truth_tv - 1.0;
+            let (worst, matched, found) = timing(&json, c);
+            let residual = residual_rms(&json);
+            let floor = floors[c.truth];
+            let bound = RESIDUAL_NOISE_FACTOR * noise_rms + floor;
+            println!(
+                "level {lod}, {}: tidal volume {tv:.4} L against {:.4} L ({:+.1} %); breath timing worst |error| Ti {:.3} s, \
+                 Te {:.3} s, Ttot {:.3} s ({matched} of {found} breaths matched); residual {:.3} mm rms against \
+                 {RESIDUAL_NOISE_FACTOR} x noise {:.3} mm + mismatch floor {:.3} mm = {:.3} mm (noise sigma {:.3} mm per \
+                 coordinate, the fit's estimate {:.3} mm; cost {:.3} mm); {} evaluations, fit {:.1} s, whole command {wall:.1} s",
+                c.name,
+                c.truth_tv,
+                100.0 * e,
+                worst[0],
+                worst[1],
+                worst[2],
+                residual * 1e3,
+                noise_rms * 1e3,
+                floor * 1e3,
+                bound * 1e3,
+                o.noise * 1e3,
+                json["quality"]["noise"]["sigma_m"]
+                    .as_f64()
+                    .unwrap_or(f64::NAN)
+                    * 1e3,
+                json["cost_m"].as_f64().unwrap_or(f64::NAN) * 1e3,
+                json["evaluations"],
+                json["wall_s"].as_f64().unwrap_or(f64::NAN),
+            );
+            if e.abs() > 0.10 {
                 failures.push(format!(
-                    "{}: {} worst error {w:.3} s over {lim} s",
+                    "level {lod}, {}: tidal volume {:+.1} %",
                     c.name,
-                    ["Ti", "Te", "Ttot"][k]
+                    100.0 * e
+                ));
+            }
+            for (k, (w, lim)) in worst
+                .iter()
+                .zip([LIMIT_TI_S, LIMIT_TE_S, LIMIT_TTOT_S])
+                .enumerate()
+            {
+                if *w > lim || matched == 0 {
+                    failures.push(format!(
+                        "level {lod}, {}: {} worst error {w:.3} s over {lim} s",
+                        c.name,
+                        ["Ti", "Te", "Ttot"][k]
+                    ));
+                }
+            }
+            if residual.is_nan() || residual > bound {
+                failures.push(format!(
+                    "level {lod}, {}: residual {:.3} mm over {:.3} mm",
+                    c.name,
+                    residual * 1e3,
+                    bound * 1e3
                 ));
             }
         }

@@ -235,6 +235,7 @@ pub fn quality_json(q: &super::quality::Quality) -> Value {
                     "drift": finite(*d),
                     "drive": finite(a.above_noise),
                     "drive_overall": finite(a.overall),
+                    "residual_rms_m": a.residual_rms_m,
                     "sway": q.sway_share.map(finite),
                     "note": if q.sway_share.is_some() {
                         "sway: its share of the recorded motion about the means, removed before the fit; drift: its share of the motion (after the sway) about the means; drive: its share of the motion left after the drift, above the noise"
@@ -244,6 +245,7 @@ pub fn quality_json(q: &super::quality::Quality) -> Value {
                 }),
                 _ => json!({
                     "drive": finite(q.explained.above_noise),
+                    "residual_rms_m": q.explained.residual_rms_m,
                     "sway": q.sway_share.map(finite),
                     "drift": Value::Null,
                     "note": if q.sway_share.is_some() {
