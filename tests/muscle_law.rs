@@ -216,3 +216,25 @@ fn the_fmu_parameter_selects_the_law() {
     assert_eq!(hill, library(MuscleLaw::Hill));
     assert_ne!(thesis, hill);
 }
+
+/// A snapshot is restored only into the model it was taken from: the same passive wall under
+/// the two laws gives two fingerprints, so a state saved under one law is refused by the other.
+#[test]
+fn the_two_laws_have_different_fingerprints_on_the_same_wall() {
+    let mut a = Config::default();
+    a.scene.level_of_detail = 0;
+    let mut thesis = Params::for_posture(Posture::Standing);
+    thesis.scale_passive_wall(breathing_torso::dynamics::HILL_PASSIVE_WALL_SCALE);
+    let mut hill = thesis.clone();
+    hill.muscle_law = MuscleLaw::Hill;
+    a.params = Some(thesis);
+    let mut b = a.clone();
+    b.params = Some(hill);
+    let (ta, mut tb) = (Torso::new(a).unwrap(), Torso::new(b).unwrap());
+    let snapshot = ta.snapshot();
+    let err = tb.restore(&snapshot);
+    assert!(
+        err.is_err(),
+        "a thesis-law snapshot was restored into a hill-law model"
+    );
+}

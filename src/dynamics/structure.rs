@@ -666,7 +666,8 @@ impl Structure {
 
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
     /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
-    /// pleural law's asymptotes, barrier pressure and margin, and gravity), so that a snapshot is only restored into the model it was taken from.
+    /// pleural law's asymptotes, barrier pressure and margin, gravity, and under the
+    /// passive-and-active muscle law its muscles' forces and lengths), so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: f64| {
@@ -697,6 +698,16 @@ impl Structure {
         eat(self.params.pleural_barrier_margin);
         eat(self.gravity.x);
         eat(self.gravity.y);
+        // The muscle law changes the forces but not the fields above; a thesis-law model's
+        // fingerprint is the one it had before the law became a parameter.
+        if self.params.muscle_law == MuscleLaw::Hill {
+            for e in 0..self.elements.max_force.len() {
+                eat(self.elements.max_force[e]);
+                eat(self.elements.optimal_length[e]);
+                eat(self.elements.slack_length[e]);
+                eat(self.elements.drive[e]);
+            }
+        }
         h
     }
 
