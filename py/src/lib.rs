@@ -152,6 +152,7 @@ impl Scene {
             breast_size: 0.0,
             posture: posture.into(),
             lod,
+            muscle_law: "thesis".into(),
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {
