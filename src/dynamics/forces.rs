@@ -143,6 +143,9 @@ struct Pass<'a> {
     drive: &'a [f64],
     /// The active stiffness k_A of the passive-and-active law ([`super::muscle`]).
     active_stiffness: f64,
+    /// Whether the model's muscles follow the passive-and-active law (else no element reads
+    /// `max_force` and the rest: the thesis's law pays nothing for the other).
+    hill: bool,
     level: &'a [f64; 256],
     toe: f64,
     transverse: f64,
@@ -175,6 +178,7 @@ impl<'a> Pass<'a> {
             slack_length: &el.slack_length[..n],
             drive: &el.drive[..n],
             active_stiffness: super::muscle::active_stiffness(),
+            hill: model.params.muscle_law == super::muscle::MuscleLaw::Hill,
             level,
             toe: model.params.tension_toe,
             transverse: model.params.transverse_fraction,
@@ -195,6 +199,9 @@ impl<'a> Pass<'a> {
     /// the linear spring-damper's.
     #[inline(always)]
     fn hill_or(&self, e: usize, len: f64, rate: f64, linear: f64) -> f64 {
+        if !self.hill {
+            return linear;
+        }
         let f_max = self.max_force[e];
         if f_max == 0.0 {
             return linear;
