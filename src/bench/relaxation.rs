@@ -80,12 +80,7 @@ pub fn relaxation(config: &Config, points: usize) -> Result<Relaxation> {
             "at least 8 volumes from RV to TLC",
         ));
     }
-    let mut c = config.clone();
-    c.solver.method = Method::QuasiStatic;
-    c.drive = Drive {
-        enabled: false,
-        ..Drive::default()
-    };
+    let c = relaxed(config);
     let mut torso = Torso::new(c.clone())?;
     let frc = torso.read(Quantity::LungVolume)?;
     let (rv_ratio, tlc_ratio) = capacity_ratios(&c.subject);
@@ -127,17 +122,7 @@ pub fn relaxation(config: &Config, points: usize) -> Result<Relaxation> {
         .iter()
         .filter(|p| p.lung >= frc - 1e-9 && p.lung <= frc + TIDAL_RANGE + 1e-9)
         .collect();
-    let slope = |f: &dyn Fn(&Point) -> f64| {
-        let n = tidal.len() as f64;
-        let (mx, my) = (
-            tidal.iter().map(|p| f(p)).sum::<f64>() / n,
-            tidal.iter().map(|p| p.lung).sum::<f64>() / n,
-        );
-        let sxy: f64 = tidal.iter().map(|p| (f(p) - mx) * (p.lung - my)).sum();
-        let sxx: f64 = tidal.iter().map(|p| (f(p) - mx).powi(2)).sum();
-        // L per Pa, to L per cmH2O
-        sxy / sxx * CMH2O
-    };
+    let slope = |f: &dyn Fn(&Point) -> f64| compliance(&tidal, f);
     let crossing = |f: &dyn Fn(&Point) -> f64| {
         solved.windows(2).find_map(|w| {
             let (a, b) = (f(&w[0]), f(&w[1]));
@@ -196,27 +181,39 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
 /// The relaxed chest wall's compliance [L/cmH2O] over FRC to FRC + [`TIDAL_RANGE`] alone (six
 /// equilibria: FRC and five volumes above it), as [`relaxation`] measures it.
 pub fn tidal_chest_wall_compliance(config: &Config) -> Result<f64> {
-    let mut c = config.clone();
-    c.solver.method = Method::QuasiStatic;
-    c.drive = Drive {
-        enabled: false,
-        ..Drive::default()
-    };
+    let c = relaxed(config);
     let mut torso = Torso::new(c)?;
     let frc = torso.read(Quantity::LungVolume)?;
     let mut points = vec![frc_point(&mut torso, frc)?];
     for k in 1..=5 {
         points.push(at_volume(&mut torso, frc + TIDAL_RANGE * k as f64 / 5.0)?);
     }
+    let points: Vec<&Point> = points.iter().collect();
+    Ok(compliance(&points, &|p| p.chest_wall))
+}
+
+/// `config` with the solver, drive and airway the curves are measured with: quasi-static,
+/// every muscle relaxed.
+fn relaxed(config: &Config) -> Config {
+    let mut c = config.clone();
+    c.solver.method = Method::QuasiStatic;
+    c.drive = Drive {
+        enabled: false,
+        ..Drive::default()
+    };
+    c
+}
+
+/// Compliance [L/cmH2O] over `points`: the slope of the least-squares line of lung volume
+/// against the pressure `f` [Pa] reads off each point.
+fn compliance(points: &[&Point], f: &dyn Fn(&Point) -> f64) -> f64 {
     let n = points.len() as f64;
-    let mx = points.iter().map(|p| p.chest_wall).sum::<f64>() / n;
+    let mx = points.iter().map(|p| f(p)).sum::<f64>() / n;
     let my = points.iter().map(|p| p.lung).sum::<f64>() / n;
-    let sxy: f64 = points
-        .iter()
-        .map(|p| (p.chest_wall - mx) * (p.lung - my))
-        .sum();
-    let sxx: f64 = points.iter().map(|p| (p.chest_wall - mx).powi(2)).sum();
-    Ok(sxy / sxx * CMH2O)
+    let sxy: f64 = points.iter().map(|p| (f(p) - mx) * (p.lung - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (f(p) - mx).powi(2)).sum();
+    // L per Pa, to L per cmH2O
+    sxy / sxx * CMH2O
 }
 
 /// One evaluation of [`fit_passive_wall`]: the factor tried and the compliance it gave.
