@@ -6,8 +6,19 @@
 //! respiratory system, the relaxation volume, the curve's stiffening, the energy of a
 //! relaxed motion, and what an activation does. Cited bounds the model misses are ignored
 //! tests stating the measured figure (issue 35).
+//!
+//! Quiet breathing under the law uses the quiet drive calibrated for it
+//! (`Drive::quiet_for`, `HILL_DRIVE_SCALE`: its amplitudes fitted to the default subject's
+//! standing quiet tidal volume, which is therefore not tested); the pleural swing, the
+//! compartments' shares, the excursion per litre and a paralysed side's motion are outcomes,
+//! measured through the FMU by `bench::physiology` (`torso bench physiology --muscle-law
+//! hill` prints them).
 
 use breathing_torso::anatomy::{MuscleGroup, Posture};
+use breathing_torso::bench::physiology::{
+    EXCURSION_PER_LITRE, PARALYSED_SIDE_SHARE, PLEURAL_SWING, QuietBreath, SUPINE_ABDOMINAL_SHARE,
+    UPRIGHT_RIB_CAGE_SHARE, quiet_breath,
+};
 use breathing_torso::bench::relaxation::{Relaxation, relaxation};
 use breathing_torso::dynamics::Params;
 use breathing_torso::dynamics::muscle::MuscleLaw;
@@ -236,5 +247,78 @@ fn the_two_laws_have_different_fingerprints_on_the_same_wall() {
     assert!(
         err.is_err(),
         "a thesis-law snapshot was restored into a hill-law model"
+    );
+}
+
+fn within(value: f64, (lo, hi): (f64, f64)) -> bool {
+    value >= lo && value <= hi
+}
+
+/// Quiet breathing of the default subject at level of detail 1 under the hill law with its
+/// calibrated drive, the left hemidiaphragm's gain `left_gain` (0 paralysed).
+fn hill_quiet(posture: Posture, left_gain: f64) -> QuietBreath {
+    let q = quiet_breath(posture, 1, MuscleLaw::Hill, left_gain).unwrap();
+    println!("hill, {posture:?}, left diaphragm gain {left_gain}: {q:?}");
+    q
+}
+
+#[test]
+fn hill_quiet_pleural_swing() {
+    let q = hill_quiet(Posture::Standing, 1.0);
+    assert!(
+        within(q.pleural_swing, PLEURAL_SWING),
+        "pleural swing {} cmH2O against {PLEURAL_SWING:?}",
+        q.pleural_swing
+    );
+}
+
+#[test]
+#[ignore = "issue 35: with the hill law and its calibrated quiet drive the upright rib-cage share measured 41.3 % against >= 50 %"]
+fn hill_upright_rib_cage_share() {
+    let q = hill_quiet(Posture::Standing, 1.0);
+    assert!(
+        within(q.rib_cage_share, UPRIGHT_RIB_CAGE_SHARE),
+        "rib-cage share {}",
+        q.rib_cage_share
+    );
+}
+
+#[test]
+#[ignore = "issue 35: with the hill law and its calibrated quiet drive the supine abdominal share measured 37.3 % against 52-74 % (62.7 % rib cage: the posture effect reversed; 41.3 % rib cage standing)"]
+fn hill_supine_abdominal_share() {
+    let q = hill_quiet(Posture::Supine, 1.0);
+    let abdominal = 1.0 - q.rib_cage_share;
+    assert!(
+        within(abdominal, SUPINE_ABDOMINAL_SHARE),
+        "supine abdominal share {abdominal} against {SUPINE_ABDOMINAL_SHARE:?}"
+    );
+}
+
+#[test]
+#[ignore = "issue 35: with the hill law and its calibrated quiet drive the diaphragm descends 2.23 cm per litre against 1.18-2.14 cm/L"]
+fn hill_quiet_excursion_per_litre() {
+    let q = hill_quiet(Posture::Standing, 1.0);
+    assert!(
+        within(q.excursion_per_litre, EXCURSION_PER_LITRE),
+        "{} cm/L against {EXCURSION_PER_LITRE:?}",
+        q.excursion_per_litre
+    );
+}
+
+/// The sniff test's paradox in quiet breathing: with its muscle relaxed (a soft passive
+/// curve, not the thesis law's spring) the paralysed left hemidiaphragm rises while the right
+/// one descends, and its side takes under 40 % of the breath.
+#[test]
+fn hill_paralysed_hemidiaphragm_rises_in_quiet_breathing() {
+    let q = hill_quiet(Posture::Standing, 0.0);
+    assert!(
+        q.hemidiaphragm_motion[0] > 0.0 && q.hemidiaphragm_motion[1] < 0.0,
+        "hemidiaphragms move {:?} cm (left, right; cranial +)",
+        q.hemidiaphragm_motion
+    );
+    assert!(
+        within(q.left_share, PARALYSED_SIDE_SHARE),
+        "paralysed side's share {} against {PARALYSED_SIDE_SHARE:?}",
+        q.left_share
     );
 }

@@ -135,6 +135,7 @@ const DRIVE_KEYS: [&str; 8] = [
 ];
 
 impl Scene {
+    #[allow(clippy::too_many_arguments)]
     fn new(
         subject: Option<&Bound<'_, PyDict>>,
         posture: &str,
@@ -143,6 +144,7 @@ impl Scene {
         rtol: f64,
         scenario: &str,
         drive: Option<&Bound<'_, PyDict>>,
+        muscle_law: &str,
     ) -> PyResult<Scene> {
         let mut s = SubjectArgs {
             sex: "male".into(),
@@ -152,7 +154,7 @@ impl Scene {
             breast_size: 0.0,
             posture: posture.into(),
             lod,
-            muscle_law: "thesis".into(),
+            muscle_law: muscle_law.into(),
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {
@@ -200,7 +202,8 @@ impl Scene {
     }
 
     fn config(&self) -> PyResult<breathing_torso::Config> {
-        let drive: Drive = self.drive.drive().map_err(to_py)?;
+        let law = self.subject.law().map_err(to_py)?;
+        let drive: Drive = self.drive.drive(law).map_err(to_py)?;
         self.subject.config(&self.solver, drive).map_err(to_py)
     }
 }
@@ -252,7 +255,7 @@ struct Torso {
 #[pymethods]
 impl Torso {
     #[new]
-    #[pyo3(signature = (subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, scenario="quiet", drive=None))]
+    #[pyo3(signature = (subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, scenario="quiet", drive=None, muscle_law="thesis"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -263,8 +266,12 @@ impl Torso {
         rtol: f64,
         scenario: &str,
         drive: Option<&Bound<'_, PyDict>>,
+        muscle_law: &str,
     ) -> PyResult<Torso> {
-        let config = Scene::new(subject, posture, lod, solver, rtol, scenario, drive)?.config()?;
+        let config = Scene::new(
+            subject, posture, lod, solver, rtol, scenario, drive, muscle_law,
+        )?
+        .config()?;
         let torso = py
             .detach(|| breathing_torso::Torso::new(config))
             .map_err(to_py)?;
@@ -601,7 +608,7 @@ struct Interrupted(PyErr);
 /// Fits the recording at `path` as `torso fit` does, writing the result JSON at `out` (with
 /// its CSV and figure beside it); returns the JSON's path.
 #[pyfunction]
-#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None))]
+#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None, muscle_law="thesis"))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -629,8 +636,11 @@ fn fit(
     anterior: Vec<String>,
     ti_ttot: Option<f64>,
     progress: Option<Py<PyAny>>,
+    muscle_law: &str,
 ) -> PyResult<String> {
-    let scene = Scene::new(subject, posture, lod, solver, rtol, "quiet", None)?;
+    let scene = Scene::new(
+        subject, posture, lod, solver, rtol, "quiet", None, muscle_law,
+    )?;
     let model = ModelArgs {
         subject: scene.subject,
         solver: scene.solver,

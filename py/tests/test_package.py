@@ -57,8 +57,12 @@ def test_the_package_is_the_installed_one():
             ["--lod", "0", "--posture", "supine", "--sex", "female", "--stature", "1.62",
              "--mass", "58", "--solver", "rosenbrock", "--scenario", "forced", "--frequency", "0.3"],
         ),
+        (
+            {"lod": 0, "muscle_law": "hill"},
+            ["--lod", "0", "--muscle-law", "hill"],
+        ),
     ],
-    ids=["default", "female-supine-rosenbrock-forced"],
+    ids=["default", "female-supine-rosenbrock-forced", "hill-law"],
 )
 def test_simulate_is_torso_simulate(torso_cli, tmp_path, options, flags):
     """Torso(...).simulate returns exactly the columns and values `torso simulate` writes."""
@@ -151,6 +155,8 @@ def test_constructor_errors_name_the_parameter_and_range():
         bt.Torso(solver="euler")
     with pytest.raises(ValueError, match="lod|level_of_detail"):
         bt.Torso(lod=7)
+    with pytest.raises(ValueError, match="muscle-law.*thesis or hill"):
+        bt.Torso(muscle_law="hil")
 
 
 def inspect_missing(torso_cli, path):

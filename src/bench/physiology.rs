@@ -323,22 +323,27 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
     sab / (saa * sbb).sqrt()
 }
 
-/// Quiet breathing (the FMU's start drive, [`Drive::quiet`]) of the default subject in
-/// `posture` with the left hemidiaphragm's gain `left_diaphragm_gain` (1 healthy, 0
-/// paralysed; the FMU's `gain.diaphragm.left`), through the FMU, sampled at 28 Hz.
+/// Quiet breathing (the quiet drive calibrated for `law`, [`Drive::quiet_for`]: the FMU's
+/// start drive under the thesis's law) of the default subject in `posture` with the left
+/// hemidiaphragm's gain `left_diaphragm_gain` (1 healthy, 0 paralysed; the FMU's
+/// `gain.diaphragm.left`), through the FMU, sampled at 28 Hz.
 pub fn quiet_breath(
     posture: Posture,
     lod: u32,
     law: MuscleLaw,
     left_diaphragm_gain: f64,
 ) -> Result<QuietBreath> {
+    let drive = Drive::quiet_for(law);
     let mut fmu = Fmu::new(&[
         ("posture", f64::from(posture.code())),
         ("scene.level_of_detail", f64::from(lod)),
         ("muscle_law", f64::from(law.code())),
         ("gain.diaphragm.left", left_diaphragm_gain),
+        ("drive.ribs.amplitude", drive.ribs.amplitude),
+        ("drive.diaphragm.amplitude", drive.diaphragm.amplitude),
+        ("drive.abdominals.amplitude", drive.abdominals.amplitude),
     ])?;
-    let period = 1.0 / Drive::quiet().frequency;
+    let period = 1.0 / drive.frequency;
     let rate = 28.0;
     let names = [
         "volume.lung",

@@ -86,10 +86,15 @@ impl SubjectArgs {
             )
         })?;
         c.solver.rtol = solver.rtol;
-        c.muscle_law = crate::dynamics::muscle::MuscleLaw::parse(&self.muscle_law)
-            .map_err(|_| Error::invalid("--muscle-law", &self.muscle_law, "thesis or hill"))?;
+        c.muscle_law = self.law()?;
         c.validate().map_err(flag_error)?;
         Ok(c)
+    }
+
+    /// The muscle law named by `--muscle-law`.
+    pub fn law(&self) -> Result<crate::dynamics::muscle::MuscleLaw> {
+        crate::dynamics::muscle::MuscleLaw::parse(&self.muscle_law)
+            .map_err(|_| Error::invalid("--muscle-law", &self.muscle_law, "thesis or hill"))
     }
 }
 
@@ -271,9 +276,10 @@ pub struct DriveArgs {
 }
 
 impl DriveArgs {
-    /// The drive described by the options.
-    pub fn drive(&self) -> Result<Drive> {
-        let mut d = Drive::scenario(&self.scenario).map_err(flag_error)?;
+    /// The drive described by the options: the scenario calibrated for the muscle `law`
+    /// ([`Drive::scenario_for`]), then each amplitude, phase or rate given, as given.
+    pub fn drive(&self, law: crate::dynamics::muscle::MuscleLaw) -> Result<Drive> {
+        let mut d = Drive::scenario_for(&self.scenario, law).map_err(flag_error)?;
         if let Some(v) = self.frequency {
             d.frequency = v;
         }

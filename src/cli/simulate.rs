@@ -57,7 +57,7 @@ pub fn main(args: &SimulateArgs) -> Result<()> {
     if !(args.rate > 0.0 && args.rate <= 10_000.0) {
         return Err(Error::invalid("--rate", args.rate, "(0, 10000] Hz"));
     }
-    let drive = args.drive.drive()?;
+    let drive = args.drive.drive(args.subject.law()?)?;
     let solver = args.solver.with_alias(&args.method);
     let mut config = args.subject.config(&solver, drive)?;
     prepare_output_file(&args.out)?;
@@ -129,7 +129,7 @@ pub fn default_summary() -> Result<(crate::model::run::BreathSummary, f64)> {
     let args = Defaults::try_parse_from(["simulate", "--duration", "20"])
         .map_err(|e| Error::State(format!("the default simulate options: {e}")))?
         .args;
-    let drive = args.drive.drive()?;
+    let drive = args.drive.drive(args.subject.law()?)?;
     let config = args
         .subject
         .config(&args.solver.with_alias(&args.method), drive)?;

@@ -360,7 +360,7 @@ pub fn render_skin(args: &RenderSkinArgs) -> Result<()> {
     if !(args.magnify > 0.0 && args.magnify <= 1000.0) {
         return Err(Error::invalid("--magnify", args.magnify, "(0, 1000]"));
     }
-    let drive = args.drive.drive()?;
+    let drive = args.drive.drive(args.subject.law()?)?;
     let config = args
         .subject
         .config(&args.solver.with_alias(&args.method), drive)?;

@@ -66,7 +66,7 @@ pub struct SynthArgs {
 
 /// Runs `torso synth`.
 pub fn main(args: &SynthArgs) -> Result<()> {
-    let drive = args.drive.drive()?;
+    let drive = args.drive.drive(args.model.subject.law()?)?;
     let config = args.model.config(drive)?;
     let (rows, cols) = args.model.grid()?;
     let camera = match args.camera.as_str() {

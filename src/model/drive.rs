@@ -27,6 +27,7 @@
 //! dynamics only ever see a fixed-shape drive.
 
 use crate::anatomy::MuscleGroup;
+use crate::dynamics::muscle::MuscleLaw;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -105,6 +106,18 @@ impl Default for Drive {
     }
 }
 
+/// The factor on [`Drive::quiet`]'s and [`Drive::forced`]'s amplitudes under the
+/// passive-and-active muscle law ([`MuscleLaw::Hill`], with its fitted passive wall): an
+/// activation there is a fraction of the maximal force, where under the thesis's law it is a
+/// fraction of the largest shortening, so the same amplitudes breathe far deeper (a quiet
+/// tidal volume of 1.606 L for the default subject standing at level of detail 1). Scaled by
+/// this factor, the quiet drive gives that subject 0.525 L, the 7 mL/kg of quiet breathing
+/// the thesis-law drive is calibrated to; the forced drive, scaled by the same factor, then
+/// gives 1.895 L, within deep breathing's 1.5-3 L (a check, not fitted).
+/// Fitted: `cargo run --release --example drive_calibration -- --law hill --fit` (secant on
+/// log VT against log factor; prints "fitted factor 0.2695").
+pub const HILL_DRIVE_SCALE: f64 = 0.2695;
+
 /// Allowed range of the drive frequency [Hz].
 pub const FREQUENCY_RANGE: (f64, f64) = (0.05, 2.0);
 /// Allowed range of a phase [rad].
@@ -168,7 +181,8 @@ impl Drive {
         }
     }
 
-    /// A named scenario: `quiet`, `forced` or `rest` (no drive).
+    /// A named scenario: `quiet`, `forced` or `rest` (no drive), calibrated for the thesis's
+    /// muscle law (the default; [`Drive::scenario_for`] for another law).
     pub fn scenario(name: &str) -> Result<Self> {
         match name {
             "quiet" => Ok(Self::quiet()),
@@ -176,6 +190,30 @@ impl Drive {
             "rest" => Ok(Self::default()),
             _ => Err(Error::invalid("scenario", name, "quiet, forced or rest")),
         }
+    }
+
+    /// The named scenario calibrated for `law`: the thesis's amplitudes under its law, and
+    /// the same scaled by [`HILL_DRIVE_SCALE`] under the passive-and-active law (frequency,
+    /// phases and inspiratory fraction unchanged).
+    pub fn scenario_for(name: &str, law: MuscleLaw) -> Result<Self> {
+        Ok(Self::scenario(name)?.for_law(law))
+    }
+
+    /// [`Drive::quiet`] calibrated for `law` ([`Drive::scenario_for`]).
+    pub fn quiet_for(law: MuscleLaw) -> Self {
+        Self::quiet().for_law(law)
+    }
+
+    /// This drive's amplitudes, calibrated under the thesis's law, carried over to `law`.
+    fn for_law(mut self, law: MuscleLaw) -> Self {
+        let scale = match law {
+            MuscleLaw::Thesis => return self,
+            MuscleLaw::Hill => HILL_DRIVE_SCALE,
+        };
+        for w in [&mut self.ribs, &mut self.diaphragm, &mut self.abdominals] {
+            w.amplitude *= scale;
+        }
+        self
     }
 
     /// Checks every field; the error names the FMI parameter.
@@ -302,6 +340,34 @@ pub(crate) fn check(name: &str, v: f64, (lo, hi): (f64, f64)) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each law's scenario: the thesis's amplitudes under its law, scaled by the fitted factor
+    /// under the passive-and-active law, the timing untouched; `rest` stays off.
+    #[test]
+    fn scenarios_follow_the_muscle_law() {
+        for name in ["quiet", "forced", "rest"] {
+            let base = Drive::scenario(name).unwrap();
+            assert_eq!(Drive::scenario_for(name, MuscleLaw::Thesis).unwrap(), base);
+            let hill = Drive::scenario_for(name, MuscleLaw::Hill).unwrap();
+            assert_eq!(
+                (hill.enabled, hill.frequency, hill.inspiratory_fraction),
+                (base.enabled, base.frequency, base.inspiratory_fraction)
+            );
+            for (h, b) in [
+                (hill.ribs, base.ribs),
+                (hill.diaphragm, base.diaphragm),
+                (hill.abdominals, base.abdominals),
+            ] {
+                assert_eq!(h.phase, b.phase);
+                assert_eq!(h.amplitude, b.amplitude * HILL_DRIVE_SCALE);
+            }
+        }
+        assert_eq!(
+            Drive::quiet_for(MuscleLaw::Hill),
+            Drive::scenario_for("quiet", MuscleLaw::Hill).unwrap()
+        );
+        assert!(Drive::scenario_for("deep", MuscleLaw::Hill).is_err());
+    }
 
     /// At F = 1/2 the raised-cosine halves are the sine of eq. 2.4 (to rounding), and the
     /// drive evaluates that sine itself, bit for bit.

@@ -108,6 +108,9 @@ class Torso:
         drive: overrides of the drive: ``frequency`` [Hz], ``ti_ttot``,
             ``ribs_amplitude``, ``ribs_phase``, ``diaphragm_amplitude``,
             ``diaphragm_phase``, ``abdominals_amplitude``, ``abdominals_phase``.
+        muscle_law: "thesis" (the seed thesis's shortening spring) or "hill" (passive and
+            active parts, its passive wall fitted to the adult chest wall's compliance); the
+            scenario's amplitudes are the ones calibrated for that law (``--muscle-law``).
 
     The same values give the model ``torso simulate`` builds from the same options, and
     :meth:`simulate` returns what it writes. Raises ValueError naming a bad value and its
@@ -123,6 +126,7 @@ class Torso:
         rtol: float = 1e-6,
         scenario: str = "quiet",
         drive: Optional[Mapping[str, float]] = None,
+        muscle_law: str = "thesis",
     ) -> None:
         self._native = _native.Torso(
             dict(subject) if subject is not None else None,
@@ -132,6 +136,7 @@ class Torso:
             rtol,
             scenario,
             dict(drive) if drive is not None else None,
+            muscle_law,
         )
 
     @property
@@ -320,6 +325,7 @@ def fit(
     ti_ttot: Optional[float] = 0.5,
     progress: Optional[Callable[[int, float], Any]] = None,
     as_frame: Optional[bool] = None,
+    muscle_law: str = "thesis",
 ) -> Dict[str, Any]:
     """Fits the model to a marker recording, as ``torso fit`` does (registration, frequency,
     the drive's amplitudes and phases; docs/fit_report.md).
@@ -329,7 +335,7 @@ def fit(
             :class:`Recording`.
         out: the result JSON to write (its folder is created), with ``<stem>_lung_volume.csv`` and the report
             figure beside it; None writes them to a temporary folder removed afterwards.
-        subject, posture, lod, solver, rtol: the model, as for :class:`Torso`; with no
+        subject, posture, lod, solver, rtol, muscle_law: the model, as for :class:`Torso`; with no
             ``stature`` or ``mass`` in ``subject`` the size is estimated from the recording
             (``torso fit``'s rule).
         grid: the model's marker grid "ROWSxCOLS".
@@ -395,6 +401,7 @@ def fit(
             [str(a) for a in anterior],
             ti_ttot,
             progress,
+            muscle_law,
         )
         with open(written, encoding="utf-8") as f:
             result: Dict[str, Any] = json.load(f)
