@@ -155,7 +155,7 @@ def test_constructor_errors_name_the_parameter_and_range():
         bt.Torso(solver="euler")
     with pytest.raises(ValueError, match="lod|level_of_detail"):
         bt.Torso(lod=7)
-    with pytest.raises(ValueError, match="muscle-law.*thesis or hill"):
+    with pytest.raises(ValueError, match="hil for `muscle_law`: allowed range is thesis or hill"):
         bt.Torso(muscle_law="hil")
 
 
