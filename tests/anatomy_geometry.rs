@@ -213,14 +213,14 @@ fn clavicles_run_from_the_jugular_notch_to_the_acromia() {
 }
 
 /// The diaphragm is the same muscle at every level of detail: every insertion (costal-margin
-/// rim) vertex carries a fibre, the force per metre of insertion arc is the same (600 N over
-/// the margin), and no fibre stops short of the central tendon: at every muscular dome
-/// vertex a fibre passes through, the force arriving from below equals the force leaving
-/// upward, and the whole force arrives at the tendon. Printed: fibres, elements and the
+/// rim) vertex carries a fibre, the force per metre of insertion arc is the same
+/// (`DIAPHRAGM_FORCE` over the margin), and no fibre stops short of the central tendon: at
+/// every muscular dome vertex a fibre passes through, the force arriving from below equals the
+/// force leaving upward, and the whole force arrives at the tendon. Printed: fibres, elements and the
 /// muscular dome vertices no fibre crosses (held only by the dome's membrane).
 #[test]
 fn diaphragm_fibres_reach_the_tendon_from_every_insertion_at_every_level_of_detail() {
-    use breathing_torso::anatomy::{CENTRAL_TENDON, VertexRole};
+    use breathing_torso::anatomy::{CENTRAL_TENDON, DIAPHRAGM_FORCE, VertexRole};
     use std::collections::HashMap;
     for lod in 0..3 {
         let a = Anatomy::build(&Subject::default(), lod).unwrap();
@@ -253,7 +253,7 @@ fn diaphragm_fibres_reach_the_tendon_from_every_insertion_at_every_level_of_deta
         let rim_force: Vec<f64> = ab.rim.iter().map(|&r| up[r as usize]).collect();
         let total: f64 = rim_force.iter().sum();
         assert!(
-            (total - 600.0).abs() < 1e-9,
+            (total - DIAPHRAGM_FORCE).abs() < 1e-9,
             "level {lod}: {total} N leave the rim"
         );
         let arrived: f64 = (0..ab.len())
@@ -261,7 +261,7 @@ fn diaphragm_fibres_reach_the_tendon_from_every_insertion_at_every_level_of_deta
             .map(|v| down[v] - up[v])
             .sum();
         assert!(
-            (arrived - 600.0).abs() < 1e-9,
+            (arrived - DIAPHRAGM_FORCE).abs() < 1e-9,
             "level {lod}: {arrived} N reach the tendon"
         );
         let mut uncovered = 0;
@@ -289,14 +289,14 @@ fn diaphragm_fibres_reach_the_tendon_from_every_insertion_at_every_level_of_deta
             let arc = 0.5 * ((at(i + 1) - at(i)).norm() + (at(i + m - 1) - at(i)).norm());
             let f = force / arc;
             assert!(
-                (f - 600.0 / margin).abs() < 1e-6 * f,
+                (f - DIAPHRAGM_FORCE / margin).abs() < 1e-6 * f,
                 "level {lod}: insertion {i} carries {f} N/m"
             );
         }
         println!(
             "level {lod}: {m} fibres, {elements} elements, margin {margin:.4} m \
              ({:.1} N/m), {uncovered} of {muscular} muscular dome vertices on no fibre",
-            600.0 / margin
+            DIAPHRAGM_FORCE / margin
         );
     }
 }

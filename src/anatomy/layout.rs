@@ -67,11 +67,16 @@ pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
 /// Maximal total force of the diaphragm's fibres [N]: a transdiaphragmatic pressure of about
 /// 150 cmH2O (maximal combined efforts) over about 0.04 m^2 of dome.
 /// Unsourced: the pressure is cited (maximal combined efforts 150-180 cmH2O, physiology
-/// reference), the 0.04 m^2 is not. Literature: the diaphragm's muscle area at necropsy is
-/// 647 +- 160 cm^2 (18 adults with COPD, within 8 % of 22 without; Arora & Rochester 1987,
-/// PMID 3568775); 150 cmH2O over 0.065 m^2 is 950 N against ours 600 N (an area measured
-/// along the curved sheet overstates the area the pressure acts on, so this bounds ours from
-/// above rather than refuting it).
+/// reference), the 0.04 m^2 is not. Cross-section x specific tension (docs/respiratory_muscles.md,
+/// section F): the in-vivo thickness at FRC, 1.7 +- 0.2 mm (Ueki et al. 1995, Thorax 50:1157),
+/// over the default man's 92.6 cm insertion line (`cargo run --release --example
+/// muscle_forces`) at 26.8 N/cm^2 (Persad et al. 2024, J Appl Physiol) gives 422 (372-472) N;
+/// the necropsy thickness, 3.20 +- 0.55 mm (Arora & Rochester 1987, PMID 3568775), an upper
+/// bound of 794 N. Ours lies between, inside neither's spread. 422 N with today's drives moves
+/// quiet tidal volume by -5.5 % and full inspiratory activation by -6 % (section F), and under
+/// the hill law, whose passive wall (`HILL_PASSIVE_WALL_SCALE`) was fitted with 600 N, the
+/// relaxed motion of `tests/muscle_law.rs` then gains 2.2e-6 J between samples (allowed:
+/// 1e-6 of 0.95 J), so it waits for the passive wall's re-fit and the drives' re-calibration.
 pub const DIAPHRAGM_FORCE: f64 = 600.0;
 /// Maximal forces of the abdominal wall muscles, both sides together [N] (about 25 N/cm^2 over
 /// the physiological cross-sections): rectus, transversus, external and internal obliques.
@@ -435,9 +440,13 @@ fn diaphragm(abdomen: &Abdomen, anchors: &[Anchor], f: f64, out: &mut Vec<Muscle
 /// Unsourced: no source: chosen by hand in commit 16087cb. On the unit sphere the cap above
 /// 0.85 is 0.15 / 0.65 = 23 % of the muscular band between `anatomy::abdomen`'s dome cut
 /// (0.2) and it (a zone's area is proportional to its height); in 104 adult diaphragms the
-/// tendon-to-muscle area ratio was 10-15 % in the commonest class (56.7 % of specimens; "The
-/// clinical anatomy of the musculotendinous part of the diaphragm", 2016): ours is larger
-/// (parametric areas; the deformed dome's were not measured).
+/// tendon-to-muscle area ratio was 10-15 % in the commonest class (56.7 % of specimens;
+/// du Plessis, Ramai, Shah, Holland, Tubbs & Loukas 2015, "The clinical anatomy of the
+/// musculotendinous part of the diaphragm", Surg Radiol Anat 37:1013): ours is larger
+/// (parametric areas; the deformed dome's were not measured). 0.91 would give 12.7 %, but
+/// level 0's fibres then run along an edge near the apex (44-51) whose chords do not converge
+/// to its arc as `tests/anatomy_geometry.rs` requires (arc 23.77 mm, chords 23.63 / 23.64 /
+/// 23.68 mm at levels 0 / 1 / 2): the dome's parametrisation has to be looked at first.
 pub const CENTRAL_TENDON: f64 = 0.85;
 
 /// The mirror image (z -> -z) of anchor `n`: for a vertex of the abdominal surface, the

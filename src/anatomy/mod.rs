@@ -17,7 +17,9 @@ pub mod skin;
 mod subject;
 
 pub use abdomen::{Abdomen, VertexRole, azimuth};
-pub use layout::{CENTRAL_TENDON, DIAPHRAGM_FORCE, Joint, MuscleElement};
+pub use layout::{
+    ABDOMINAL_FORCES, CENTRAL_TENDON, DIAPHRAGM_FORCE, INTERCOSTAL_TENSION, Joint, MuscleElement,
+};
 pub use muscles::MuscleGroup;
 pub use prepared::{CavityFit, SubjectMesh};
 pub use skeleton::{Rib, Scale, Side, Spine, Sternum, rib_index};
