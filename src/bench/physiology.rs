@@ -640,6 +640,10 @@ pub const EXPIRATORY: [MuscleGroup; 5] = [
 /// 2, volitional tests: maximal static mouth pressures).
 pub const OCCLUDED_HOLD: f64 = 2.0;
 
+/// How long the relaxed system is held against the occlusion after the expiratory muscles'
+/// release, before the inspiratory effort [s] (the relaxation pressure is read at its end).
+pub const RELAXED_HOLD: f64 = 1.0;
+
 /// The window of the sustained mouth pressure [s]: the largest mean over 1 s (ATS/ERS 2002).
 pub const SUSTAINED_WINDOW: f64 = 1.0;
 
@@ -656,6 +660,13 @@ pub struct Occluded {
     /// The lung volume at the end of the occluded effort [L]: more than `volume` by the
     /// gas's rarefaction under the suction.
     pub volume_end: f64,
+    /// The mouth pressure with every muscle relaxed against the occlusion before the effort
+    /// [cmH2O]: the relaxed respiratory system's recoil at that volume (a point of the
+    /// relaxation curve, Rahn et al. 1946), part of what the effort's mouth pressure holds.
+    pub relaxed_pressure: f64,
+    /// The lungs' share of it, `pressure.mouth` less `pressure.pleural` (the lungs' recoil,
+    /// transpulmonary pressure) at the same instant [cmH2O].
+    pub relaxed_lung_recoil: f64,
     /// The largest mean mouth pressure over [`SUSTAINED_WINDOW`] of the effort [cmH2O]
     /// (negative: suction).
     pub mouth_pressure: f64,
@@ -672,8 +683,9 @@ pub struct Occluded {
 /// airway, through the FMU and its `airway.occluded` input: the drive off; a maximal
 /// expiration with the airway open (the [`EXPIRATORY`] groups ramped to 1 over
 /// [`EFFORT_RAMP`] and held until the lung volume settles), as a subject empties the lungs
-/// towards RV before the manoeuvre; the airway occluded there; then the expiratory groups
-/// released and the [`INSPIRATORY`] groups ramped to 1 over [`EFFORT_RAMP`] (the full
+/// towards RV before the manoeuvre; the airway occluded there; the expiratory groups released
+/// over [`EFFORT_RAMP`] and the relaxed mouth pressure read after [`RELAXED_HOLD`]; then the
+/// [`INSPIRATORY`] groups ramped to 1 over [`EFFORT_RAMP`] (the full
 /// inspiratory activation of [`full_inspiration`]) and held for [`OCCLUDED_HOLD`], sampled
 /// every 0.05 s. The figure is the largest mean of `pressure.mouth` over
 /// [`SUSTAINED_WINDOW`] (ATS/ERS 2002).
@@ -698,17 +710,27 @@ pub fn occluded_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Resul
         .try_into()
         .map_err(|_| Error::State("two outputs expected".into()))?;
     let dry = crate::dynamics::airway::DRY_GAS_PRESSURE;
-    let t1 = fmu.t;
-    let mut samples = Vec::new();
     let mut occluded_flow: f64 = 0.0;
-    let (mut v_end, mut p_end) = (v0, p0);
-    while fmu.t - t1 < EFFORT_RAMP + OCCLUDED_HOLD - 1e-9 {
-        let a = effort(fmu.t - t1 + h);
+    let t1 = fmu.t;
+    while fmu.t - t1 < EFFORT_RAMP + RELAXED_HOLD - 1e-9 {
         for g in EXPIRATORY {
-            fmu.set(&format!("activation.{}", g.name()), 1.0 - a)?;
+            fmu.set(
+                &format!("activation.{}", g.name()),
+                1.0 - effort(fmu.t - t1 + h),
+            )?;
         }
+        fmu.step(h)?;
+        occluded_flow = occluded_flow.max(fmu.get(&["flow.airway"])?[0].abs());
+    }
+    let relaxed = fmu.get(&["pressure.mouth", "pressure.pleural"])?;
+    let relaxed_pressure = relaxed[0] / CMH2O;
+    let relaxed_lung_recoil = (relaxed[0] - relaxed[1]) / CMH2O;
+    let t2 = fmu.t;
+    let mut samples = Vec::new();
+    let (mut v_end, mut p_end) = (v0, p0);
+    while fmu.t - t2 < EFFORT_RAMP + OCCLUDED_HOLD - 1e-9 {
         for g in INSPIRATORY {
-            fmu.set(&format!("activation.{}", g.name()), a)?;
+            fmu.set(&format!("activation.{}", g.name()), effort(fmu.t - t2 + h))?;
         }
         fmu.step(h)?;
         let o = fmu.get(&["pressure.mouth", "volume.lung", "flow.airway"])?;
@@ -726,6 +748,8 @@ pub fn occluded_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Resul
         residual_volume: rest * rv_ratio,
         volume,
         volume_end: v_end,
+        relaxed_pressure,
+        relaxed_lung_recoil,
         mouth_pressure: sustained,
         peak: samples.iter().copied().fold(f64::INFINITY, f64::min),
         gas_ratio: ((dry + p_end) * v_end) / ((dry + p0) * v0),
