@@ -22,14 +22,17 @@ use super::{Activations, Structure};
 
 /// Barometric pressure [Pa]: one standard atmosphere, 101 325 Pa = 1033 cmH2O (the
 /// International Standard Atmosphere at sea level, ISO 2533:1975; 1 cmH2O = 98.0665 Pa).
+/// Source: ISO 2533:1975, sea-level pressure of the standard atmosphere, 101 325 Pa.
 pub const BAROMETRIC_PRESSURE: f64 = 101_325.0;
 
 /// Partial pressure of water vapour in the saturated alveolar gas at 37 degC [Pa]: 47 mmHg =
 /// 6.27 kPa (West & Luks, Respiratory Physiology: The Essentials, 10th ed. 2016, ch. 1 and
 /// Appendix; 1 mmHg = 133.322 Pa).
+/// Source: West & Luks 2016, saturated water vapour pressure at 37 degC, 47 mmHg.
 pub const WATER_VAPOUR_PRESSURE: f64 = 47.0 * 133.322;
 
 /// The pressure of the dry gas at the body surface's pressure [Pa]: P_B - P_H2O.
+/// Derived: [`BAROMETRIC_PRESSURE`] less [`WATER_VAPOUR_PRESSURE`].
 pub const DRY_GAS_PRESSURE: f64 = BAROMETRIC_PRESSURE - WATER_VAPOUR_PRESSURE;
 
 /// The dry gas content of lungs holding `gas_volume` [m^3] at alveolar pressure `alveolar`
