@@ -8,7 +8,7 @@ use breathing_torso::anatomy::MuscleGroup;
 use breathing_torso::capi::*;
 use breathing_torso::fmi::variables::Input;
 use breathing_torso::fmi::{FMI2, Instance, Status, table};
-use breathing_torso::model::{Config, Quantity, Torso};
+use breathing_torso::model::{Config, Drive, Quantity, Torso};
 use breathing_torso::solver::Method;
 
 /// 1 cmH2O [Pa].
@@ -146,6 +146,49 @@ fn released_occlusion_returns_to_normal_flow() {
         "{a} L after release, {b} L never occluded"
     );
     assert!(torso.read(Quantity::AirwayFlow).unwrap().abs() < 0.01);
+}
+
+/// Energy: occluded while moving (a forced breath's inspiration, then every muscle
+/// relaxed), the model's mechanical energy plus the trapped gas's isothermal potential,
+/// U(V) = P_dry V - n ln V (whose -dU/dV is the alveolar pressure n / V - P_dry the gas puts
+/// on the wall), never rises between samples: the wall's dampers dissipate, the gas stores
+/// and returns. The motion settles at the occluded equilibrium.
+#[test]
+fn occluded_motion_dissipates_energy() {
+    let mut config = Config::default();
+    config.scene.level_of_detail = 0;
+    config.drive = Drive::forced();
+    let mut torso = Torso::new(config).unwrap();
+    torso.advance_to(1.2).unwrap();
+    torso.set_drive(Drive::default()).unwrap();
+    torso.set_airway_occluded(true).unwrap();
+    let n = torso.occluded_gas_content().unwrap();
+    let energy = |torso: &mut Torso| {
+        let v = torso.read(Quantity::LungVolume).unwrap() * 1e-3;
+        torso.mechanical_energy() + DRY * v - n * v.ln()
+    };
+    let start = energy(&mut torso);
+    let mut last = start;
+    let mut worst_rise: f64 = 0.0;
+    let mut volumes = Vec::new();
+    for i in 1..=200 {
+        torso.advance_to(1.2 + 0.02 * f64::from(i)).unwrap();
+        let e = energy(&mut torso);
+        worst_rise = worst_rise.max(e - last);
+        last = e;
+        volumes.push(torso.read(Quantity::LungVolume).unwrap());
+    }
+    let spent = start - last;
+    println!("energy spent {spent:.4e} J, largest rise between samples {worst_rise:.2e} J");
+    assert!(spent > 0.0);
+    assert!(worst_rise <= 1e-6 * spent, "energy rose by {worst_rise} J");
+    let tail = &volumes[volumes.len() - 50..];
+    let spread = tail.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - tail.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(
+        spread < 1e-3,
+        "still moving by {spread} L over the last second"
+    );
 }
 
 /// An occluded torso's snapshot restores the occlusion and its gas content: the run goes on
