@@ -328,6 +328,41 @@ fn the_fmu_occludes_the_airway() {
     assert!((ratio - 1.0).abs() < 1e-9, "PV ratio {ratio}");
 }
 
+/// The FMU under the quasi-static method refuses the occlusion with an error naming the
+/// variable and goes on with the airway open.
+#[test]
+fn the_quasi_static_fmu_refuses_the_occlusion_and_goes_on() {
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let mut inst = Instance::new(&FMI2, "quasi", None, None, false);
+    for (name, value) in [("scene.level_of_detail", 0), ("solver.method", 4)] {
+        assert_eq!(
+            inst.set_integer("fmi2SetInteger", &[vr(name)], &[value]),
+            Status::Ok
+        );
+    }
+    assert_eq!(
+        inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None),
+        Status::Ok
+    );
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
+    assert_eq!(
+        inst.set_boolean("fmi2SetBoolean", &[vr("airway.occluded")], &[1]),
+        Status::Error
+    );
+    let mut occluded = [1];
+    assert_eq!(
+        inst.get_boolean("fmi2GetBoolean", &[vr("airway.occluded")], &mut occluded),
+        Status::Ok
+    );
+    assert_eq!(occluded, [0]);
+    assert_eq!(inst.do_step("fmi2DoStep", 0.0, 0.05), Status::Ok);
+}
+
 /// The C ABI's setter: 0 and 1 accepted, anything else refused with the variable's name and
 /// nothing changed.
 #[test]

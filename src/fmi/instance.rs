@@ -941,6 +941,16 @@ impl Instance {
             return Err(self.error(&format!("{function}: {e}; the value was not applied")));
         }
         match var.role {
+            Role::Input(Input::AirwayOccluded)
+                if numeric == Some(1.0)
+                    && self.config.solver.method == crate::solver::Method::QuasiStatic =>
+            {
+                Err(self.error(&format!(
+                    "{function}: `airway.occluded` = true is refused under solver.method 4 \
+                     (quasi-static): an occluded airway is simulated by the inertial methods \
+                     (0-3) only; the value was not applied"
+                )))
+            }
             Role::Input(input) => Ok(Change::Input(input, numeric.unwrap_or_default())),
             Role::Parameter(p) => {
                 let before_run =
