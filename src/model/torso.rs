@@ -758,13 +758,18 @@ impl Torso {
             })
             .collect();
         format!(
-            "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa",
+            "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa{}",
             s.sex,
             s.stature,
             s.mass,
             s.posture,
             act.join(", "),
-            self.airway_opening
+            self.airway_opening,
+            if self.occlusion.is_some() {
+                ", airway occluded"
+            } else {
+                ""
+            }
         )
     }
 
