@@ -65,9 +65,9 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
     let mut data = Data::new(&model);
     positions_and_velocities(&model, &mut data, &l, &start);
     let compartments = Compartments::new(&model);
-    let rest = observe(&model, &compartments, &data.pos, &data.vel, 0.0);
+    let rest = observe(&model, &compartments, &data.pos, &data.vel, 0.0, None);
     positions_and_velocities(&model, &mut data, &l, &eq.state);
-    let o = observe(&model, &compartments, &data.pos, &data.vel, 0.0);
+    let o = observe(&model, &compartments, &data.pos, &data.vel, 0.0, None);
     // force-weighted mean strain of the diaphragm's elements, and the pull of the fibres on
     // the insertions: outward (from the cavity's axis) and cranial components [N]
     let el = &model.elements;

@@ -344,6 +344,18 @@ int bt_set_activation_by_name(struct BtTorso *h, const char *name, double value)
 int bt_set_airway_opening(struct BtTorso *h, double pascal);
 
 /**
+ * Occludes the airway at the mouth (`occluded` 1) or opens it (0) (FMI input
+ * `airway.occluded`): while occluded no gas flows, the lungs' gas follows Boyle's law from
+ * its volume and alveolar pressure at the moment of occlusion, and the mouth pressure
+ * (`pressure.mouth`) equals the alveolar pressure. Any other value, or an occlusion under
+ * the quasi-static method, is refused (`BT_ERR_INVALID`) and changes nothing.
+ *
+ * # Safety
+ * `h` must be NULL or a live handle.
+ */
+int bt_set_airway_occluded(struct BtTorso *h, int occluded);
+
+/**
  * Puts the model at the static equilibrium of the activations applied now (the activation
  * inputs plus the drive's value at the current time) and the airway-opening pressure, every
  * velocity zero (docs/dynamics.md, "The start state"): call it after setting the inputs a
@@ -574,7 +586,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{04cde9ee-4695-3196-e1de-14825e67080b}"
+#define BT_FMI_GUID "{b803a625-7f1c-8b3f-cc91-a7c4ec4cc989}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -586,6 +598,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_ACTIVATION_EXTERNAL_OBLIQUES 7u
 #define BT_VR_ACTIVATION_INTERNAL_OBLIQUES 8u
 #define BT_VR_PRESSURE_AIRWAY_OPENING 9u
+#define BT_VR_AIRWAY_OCCLUDED 10u
 #define BT_VR_SUBJECT_SEX 200u
 #define BT_VR_SUBJECT_AGE 100u
 #define BT_VR_SUBJECT_STATURE 101u
@@ -641,6 +654,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_PRESSURE_PLEURAL 1011u
 #define BT_VR_PRESSURE_ALVEOLAR 1012u
 #define BT_VR_FLOW_AIRWAY 1013u
+#define BT_VR_PRESSURE_MOUTH 1022u
 #define BT_VR_VOLUME_LUNG_RIGHT 1014u
 #define BT_VR_VOLUME_LUNG_LEFT 1015u
 #define BT_VR_VOLUME_RIB_CAGE_DISPLACED_RIGHT 1016u

@@ -8,7 +8,9 @@
 
 use breathing_torso::fmi::instance::Instance;
 use breathing_torso::fmi::table;
-use breathing_torso::fmi::variables::{Causality, Role, ScalarType, VR_AIRWAY_OPENING, Variable};
+use breathing_torso::fmi::variables::{
+    Causality, Role, ScalarType, VR_AIRWAY_OCCLUDED, VR_AIRWAY_OPENING, Variable,
+};
 use breathing_torso::fmi::xml::model_description;
 use breathing_torso::fmi::{FMI2, Status};
 
@@ -20,7 +22,19 @@ fn outputs() -> Vec<&'static Variable> {
         .collect()
 }
 
+/// The Real inputs (the activations and the airway opening; `airway.occluded` is the one
+/// Boolean input).
 fn inputs() -> Vec<u32> {
+    table()
+        .variables()
+        .iter()
+        .filter(|v| v.causality == Causality::Input && v.ty == ScalarType::Real)
+        .map(|v| v.vr)
+        .collect()
+}
+
+/// Every input's value reference.
+fn all_inputs() -> Vec<u32> {
     table()
         .variables()
         .iter()
@@ -71,7 +85,19 @@ fn false_claims(a: &[u64], b: &[u64]) -> Vec<String> {
 }
 
 /// The outputs the airway-opening pressure reaches without a step.
-const FED_THROUGH: [&str; 2] = ["pressure.pleural", "pressure.alveolar"];
+const FED_THROUGH: [&str; 3] = ["pressure.pleural", "pressure.alveolar", "pressure.mouth"];
+
+/// The inputs an output declares it depends on at once: the airway opening and the occlusion
+/// for the pressures, the occlusion alone for the airflow (0 behind it), none for the rest.
+fn declared(name: &str) -> &'static [u32] {
+    if FED_THROUGH.contains(&name) {
+        &[VR_AIRWAY_OPENING, VR_AIRWAY_OCCLUDED]
+    } else if name == "flow.airway" {
+        &[VR_AIRWAY_OCCLUDED]
+    } else {
+        &[]
+    }
+}
 
 #[test]
 fn every_output_declares_its_input_dependencies() {
@@ -79,16 +105,16 @@ fn every_output_declares_its_input_dependencies() {
     let outputs = outputs();
     assert_eq!(
         outputs.len(),
-        8 + 3 + 8 + 3 + 3 * 60 + 3,
+        8 + 4 + 8 + 3 + 3 * 60 + 3,
         "volumes and pressures, pressures and flow, sides, sternum, markers, solver"
     );
     for v in &outputs {
-        let (expected, deps): (&[u32], String) = if FED_THROUGH.contains(&v.name.as_str()) {
-            let input = table().index_of(VR_AIRWAY_OPENING).unwrap();
-            (&[VR_AIRWAY_OPENING], input.to_string())
-        } else {
-            (&[], String::new())
-        };
+        let expected = declared(&v.name);
+        let deps = expected
+            .iter()
+            .map(|&vr| table().index_of(vr).unwrap().to_string())
+            .collect::<Vec<_>>()
+            .join(" ");
         assert_eq!(
             v.input_dependencies.as_deref(),
             Some(expected),
@@ -101,37 +127,41 @@ fn every_output_declares_its_input_dependencies() {
         assert!(md.contains(&line), "{} ({line}) not in <Outputs>", v.name);
     }
     // The initial unknowns depend on the parameters, never on time, and on an input only
-    // where the output declares it (the pressures on the airway opening).
+    // where the output declares it (the pressures on the airway opening and the occlusion,
+    // the airflow on the occlusion).
     let start = md.find("<InitialUnknowns>").unwrap();
-    let inputs: Vec<String> = inputs()
+    let inputs: Vec<String> = all_inputs()
         .iter()
         .map(|&vr| table().index_of(vr).unwrap().to_string())
         .collect();
-    let fed: Vec<String> = FED_THROUGH
-        .iter()
-        .map(|n| {
-            table()
-                .index_of(table().by_name(n).unwrap().vr)
-                .unwrap()
-                .to_string()
-        })
-        .collect();
-    let opening = table().index_of(VR_AIRWAY_OPENING).unwrap().to_string();
+    // the inputs each initial unknown (by index) declares
+    let declared_at = |index: &str| -> Vec<String> {
+        table()
+            .variables()
+            .iter()
+            .find(|v| table().index_of(v.vr).unwrap().to_string() == index)
+            .map(|v| {
+                declared(&v.name)
+                    .iter()
+                    .map(|&vr| table().index_of(vr).unwrap().to_string())
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
     let time = table().index_of(0).unwrap().to_string();
     for line in md[start..].lines().filter(|l| l.contains("<Unknown ")) {
         let index = line.split("index=\"").nth(1).unwrap();
         let index = &index[..index.find('"').unwrap()];
         let deps = line.split("dependencies=\"").nth(1).unwrap();
         let deps: Vec<&str> = deps[..deps.find('"').unwrap()].split(' ').collect();
-        let allowed = |d: &&str| {
-            !inputs.iter().any(|i| i == d) || (fed.iter().any(|f| f == index) && *d == opening)
-        };
-        assert!(!deps.is_empty() && deps.iter().all(allowed), "{line}");
-        assert_eq!(
-            deps.contains(&opening.as_str()),
-            fed.iter().any(|f| f == index),
-            "{line}"
-        );
+        let own = declared_at(index);
+        let on_inputs: Vec<String> = deps
+            .iter()
+            .filter(|d| inputs.iter().any(|i| i == *d))
+            .map(|d| d.to_string())
+            .collect();
+        assert!(!deps.is_empty(), "{line}");
+        assert_eq!(on_inputs, own, "{line}");
         assert!(!deps.contains(&time.as_str()), "{line}");
         let mut sorted: Vec<usize> = deps.iter().map(|d| d.parse().unwrap()).collect();
         sorted.sort_unstable();

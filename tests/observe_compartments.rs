@@ -35,11 +35,11 @@ fn compartments_add_up_to_the_trunk_volume_change() {
         let model = compile(lod);
         let c = Compartments::new(&model);
         let still = vec![nalgebra::Vector3::zeros(); model.rest.len()];
-        let rest = observe(&model, &c, &model.rest, &still, 0.0);
+        let rest = observe(&model, &c, &model.rest, &still, 0.0, None);
         assert!(rest.rib_cage_displaced.abs() < 1e-15 && rest.abdomen_displaced.abs() < 1e-15);
         for scale in [1e-3, 5e-3] {
             let pos = deform(&model.rest, scale);
-            let o = observe(&model, &c, &pos, &still, 0.0);
+            let o = observe(&model, &c, &pos, &still, 0.0, None);
             let trunk_change = o.trunk - rest.trunk;
             let sum = o.rib_cage_displaced + o.abdomen_displaced;
             println!(

@@ -128,17 +128,17 @@ fn pimax_reference_of_the_default_man() {
     assert!((lo - 76.981).abs() < 1e-9 && (hi - 164.789).abs() < 1e-9);
 }
 
+/// Full inspiratory activation against the airway occluded after a maximal expiration,
+/// through the FMU's `airway.occluded` input; the largest 1-s mean of `pressure.mouth` against
+/// the default man's reference range (Harik-Khan, Wise & Fozard 1998; ATS/ERS 2002).
 #[test]
-#[ignore = "issue 35: maximal inspiratory pressure against an occluded airway: no quasi-static \
-            equilibrium holds the relaxed lungs at 2.67 L on the way to RV 1.84 L; at FRC the \
-            occluded effort is solved up to inspiratory activation 0.55 (-41.8 cmH2O), against \
-            77.0-164.8 cmH2O at RV"]
 fn maximal_inspiratory_pressure() {
-    let config = Config::default();
-    let o = occluded_effort(&config, |_, rv| rv).unwrap();
+    let o = occluded_inspiration(Posture::Standing, LOD, MuscleLaw::Thesis).unwrap();
     println!("{o:?}");
-    assert_eq!(o.activation, 1.0, "{:?}", o.stopped);
-    let range = pimax_range(&config.subject);
+    // the occlusion holds: no gas passes (Boyle's law on the outputs within their rounding)
+    assert_eq!(o.occluded_flow, 0.0);
+    assert!((o.gas_ratio - 1.0).abs() < 1e-6, "{}", o.gas_ratio);
+    let range = pimax_range(&Config::default().subject);
     assert!(
         within(-o.mouth_pressure, range),
         "{} cmH2O against {range:?}",
@@ -224,7 +224,7 @@ fn bench_command_prints_json() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let figures = v["figures"].as_array().unwrap();
-    assert_eq!(figures.len(), 13, "{v}");
+    assert_eq!(figures.len(), 14, "{v}");
     for f in figures {
         let value = f["value"].as_f64().unwrap();
         // an open end of a range is written null
@@ -238,8 +238,8 @@ fn bench_command_prints_json() {
         );
         assert!(!f["source"].as_str().unwrap().is_empty());
     }
-    // the occluded effort at RV is not solved today: it is listed with its reason
-    assert!(v["failed"].is_array());
+    // every figure is measured: none failed
+    assert_eq!(v["failed"].as_array().map(Vec::len), Some(0), "{v}");
     let out = Command::new(env!("CARGO_BIN_EXE_torso"))
         .args(["bench", "physiology", "--lod", "3"])
         .output()

@@ -2,7 +2,8 @@
 declares its input dependencies, and the ones declared empty are measured: setting every input
 to 1 at a communication point, without a step, leaves those outputs unchanged (in
 initialization mode and after breathing steps), while the next step responds to the inputs.
-The alveolar and pleural pressures declare the airway-opening pressure, and move with it.
+The alveolar, pleural and mouth pressures declare the airway-opening pressure and the
+occlusion, and move with the former; the airflow declares the occlusion.
 
 Needs fmu/BreathingTorso.fmu (scripts/test.sh builds it).
 """
@@ -52,28 +53,37 @@ def false_claims(md, before, after):
     return sorted(n for n in free if before[n] != after[n])
 
 
-FED_THROUGH = {"pressure.pleural", "pressure.alveolar"}
+FED_THROUGH = {"pressure.pleural", "pressure.alveolar", "pressure.mouth"}
+
+
+def declared(name):
+    """The inputs an output depends on at once: the airway opening and the occlusion for the
+    pressures, the occlusion alone for the airflow (0 behind it)."""
+    if name in FED_THROUGH:
+        return ["pressure.airway_opening", "airway.occluded"]
+    return ["airway.occluded"] if name == "flow.airway" else []
 
 
 def test_every_output_declares_its_dependencies(md):
     inputs = {v.name for v in md.modelVariables if v.causality == "input"}
     outputs = [v for v in md.modelVariables if v.causality == "output"]
-    assert len(md.outputs) == len(outputs) == 25 + 3 * 60  # 60 markers: the default 10 x 6 grid
+    assert len(md.outputs) == len(outputs) == 26 + 3 * 60  # 60 markers: the default 10 x 6 grid
     for u in md.outputs:
         assert u.dependencies is not None, f"{u.variable.name} would depend on all knowns"
-        expected = ["pressure.airway_opening"] if u.variable.name in FED_THROUGH else []
-        assert [d.name for d in u.dependencies] == expected, u.variable.name
+        assert [d.name for d in u.dependencies] == declared(u.variable.name), u.variable.name
     for u in md.initialUnknowns:
         assert u.dependencies, u.variable.name
-        fed = u.variable.name in FED_THROUGH
-        assert all(d.causality == "parameter" or (fed and d.name == "pressure.airway_opening")
+        own = declared(u.variable.name)
+        assert all(d.causality == "parameter" or d.name in own
                    for d in u.dependencies), u.variable.name
-        assert (inputs & {d.name for d in u.dependencies}) == ({"pressure.airway_opening"} if fed else set())
+        assert (inputs & {d.name for d in u.dependencies}) == set(own)
 
 
 def test_setting_every_input_without_a_step_changes_no_output(md, slave):
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    inputs = [v.valueReference for v in md.modelVariables if v.causality == "input"]
+    # the Real inputs (airway.occluded, the one Boolean, is tests/occlusion.rs's)
+    inputs = [v.valueReference for v in md.modelVariables
+              if v.causality == "input" and v.type == "Real"]
     n = len(inputs)
     assert n == 9
     slave.setupExperiment(startTime=0.0)

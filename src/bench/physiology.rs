@@ -12,13 +12,11 @@
 //! - the maximal inspiratory mouth pressure against an occluded airway;
 //! - the paralysed hemidiaphragm's motion and its side's share of tidal volume.
 //!
-//! Most are measured through the FMU's instance ([`Instance`], the object every `fmi2*` call
-//! of the shared library acts on) with its own inputs, parameters and outputs. Two are not,
-//! and say so in their [`Figure::through`]: the dome point of the M-mode excursion is no FMU
-//! output (it is read off the facade's state), and the FMU has no airway occlusion, so the maximal
-//! inspiratory pressure is measured in the quasi-static mode with the lung volume held
-//! ([`Torso::set_lung_volume`]), which is what an occlusion does when gas compression is
-//! neglected: no airflow, the mouth pressure equal to the alveolar pressure.
+//! All but one are measured through the FMU's instance ([`Instance`], the object every
+//! `fmi2*` call of the shared library acts on) with its own inputs, parameters and outputs,
+//! the maximal inspiratory pressure with its `airway.occluded` input and `pressure.mouth`
+//! output. The exception says so in its [`Figure::through`]: the dome point of the M-mode
+//! excursion is no FMU output (it is read off the facade's state).
 //!
 //! Nothing here prints; `torso bench physiology` (`src/cli/bench_physiology.rs`) formats the
 //! figures, and `tests/physiology_figures.rs` asserts each cited bound.
@@ -33,7 +31,6 @@ use crate::fmi::variables::ScalarType;
 use crate::fmi::{FMI2, Status, table};
 use crate::model::run::{Frame, summarise};
 use crate::model::{Config, Drive, Quantity, Torso};
-use crate::solver::Method;
 use crate::{Error, Result};
 use serde::Serialize;
 
@@ -630,80 +627,138 @@ pub fn full_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Result<Fu
     })
 }
 
-/// The maximal inspiratory effort against an occluded airway.
+/// The expiratory muscle groups a maximal expiration activates: the internal intercostals
+/// (the model's expiratory intercostal group, the drive's counterpart of the external ones)
+/// and the four abdominal muscles (the expiratory muscles of the abdominal wall; De Troyer &
+/// Estenne 1988, J Appl Physiol 65:2319, on the respiratory muscles' actions).
+pub const EXPIRATORY: [MuscleGroup; 5] = [
+    MuscleGroup::InternalIntercostals,
+    MuscleGroup::TransversusAbdominis,
+    MuscleGroup::RectusAbdominis,
+    MuscleGroup::ExternalObliques,
+    MuscleGroup::InternalObliques,
+];
+
+/// How long the maximal inspiratory effort against the occlusion is held after its ramp [s]:
+/// at least 1.5 s, so that the largest pressure sustained over 1 s can be read (ATS/ERS
+/// statement on respiratory muscle testing 2002, Am J Respir Crit Care Med 166:518, section
+/// 2, volitional tests: maximal static mouth pressures).
+pub const OCCLUDED_HOLD: f64 = 2.0;
+
+/// How long the relaxed system is held against the occlusion after the expiratory muscles'
+/// release, before the inspiratory effort [s] (the relaxation pressure is read at its end).
+pub const RELAXED_HOLD: f64 = 1.0;
+
+/// The window of the sustained mouth pressure [s]: the largest mean over 1 s (ATS/ERS 2002).
+pub const SUSTAINED_WINDOW: f64 = 1.0;
+
+/// The maximal inspiratory effort against an occluded airway, through the FMU.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Occluded {
-    /// The lung volume held [L].
+    /// The lung volume at rest (FRC, muscles relaxed, airway open) [L].
+    pub rest: f64,
+    /// The subject's residual volume where the reference places the manoeuvre: the ECSC
+    /// ratio RV/FRC times the rest volume [L] ([`capacity_ratios`]).
+    pub residual_volume: f64,
+    /// The lung volume at the moment of occlusion, after the maximal expiration [L].
     pub volume: f64,
-    /// The highest inspiratory activation whose equilibrium was solved (1 for a maximal
-    /// effort).
-    pub activation: f64,
-    /// Mouth pressure at that activation, the alveolar pressure with no airflow [cmH2O]
+    /// The lung volume at the end of the occluded effort [L]: more than `volume` by the
+    /// gas's rarefaction under the suction.
+    pub volume_end: f64,
+    /// The mouth pressure with every muscle relaxed against the occlusion before the effort
+    /// [cmH2O]: the relaxed respiratory system's recoil at that volume (a point of the
+    /// relaxation curve, Rahn et al. 1946), part of what the effort's mouth pressure holds.
+    pub relaxed_pressure: f64,
+    /// The lungs' share of it, `pressure.mouth` less `pressure.pleural` (the lungs' recoil,
+    /// transpulmonary pressure) at the same instant [cmH2O].
+    pub relaxed_lung_recoil: f64,
+    /// The largest mean mouth pressure over [`SUSTAINED_WINDOW`] of the effort [cmH2O]
     /// (negative: suction).
     pub mouth_pressure: f64,
-    /// Why the next activation step could not be solved (`None` when the effort was maximal).
-    pub stopped: Option<String>,
+    /// The most negative mouth pressure sampled [cmH2O].
+    pub peak: f64,
+    /// Boyle's law checked on the FMU's outputs: (P_B - P_H2O + P_mouth) V_lung at the end of
+    /// the effort over its value at occlusion (1 when no gas passed).
+    pub gas_ratio: f64,
+    /// The largest airflow read while occluded [L/s] (0: no gas passes).
+    pub occluded_flow: f64,
 }
 
-/// Activation increment of the occluded effort: each equilibrium warm-starts the next.
-pub const EFFORT_INCREMENT: f64 = 0.05;
-
-/// The inspiratory mouth pressure of `config`'s subject and posture against an occluded
-/// airway at the lung volume `volume(frc, rv)` [L] chooses: the quasi-static mode holding
-/// that volume (no airflow, gas compression neglected), the drive off, reached from the
-/// relaxed FRC in four steps of volume, then the [`INSPIRATORY`] groups' activation inputs
-/// raised to 1 in steps of [`EFFORT_INCREMENT`] (each equilibrium warm-starting the next),
-/// the mouth pressure read as the alveolar pressure. Where an activation step cannot be
-/// solved, the effort stops there and says why ([`Occluded::stopped`]). Through the facade:
-/// the FMU has no occlusion input. An error if the relaxed volume itself cannot be held.
-pub fn occluded_effort(config: &Config, volume: impl Fn(f64, f64) -> f64) -> Result<Occluded> {
-    let mut c = config.clone();
-    c.solver.method = Method::QuasiStatic;
-    c.drive = Drive {
-        enabled: false,
-        ..Drive::default()
-    };
-    let (rv_ratio, _) = capacity_ratios(&c.subject);
-    let mut torso = Torso::new(c)?;
-    let frc = torso.read(Quantity::LungVolume)?;
-    let target = volume(frc, frc * rv_ratio);
-    let mut pressure = f64::NAN;
-    for k in 1..=4 {
-        let v = frc + (target - frc) * f64::from(k) / 4.0;
-        torso.set_lung_volume(0.0, v)?;
-        pressure = torso.read(Quantity::AlveolarPressure)?;
-        if !pressure.is_finite() {
-            return Err(Error::Numerical {
-                time: 0.0,
-                reason: format!("no relaxed equilibrium holds {v:.3} L"),
-            });
+/// The maximal inspiratory effort of the default subject in `posture` against an occluded
+/// airway, through the FMU and its `airway.occluded` input: the drive off; a maximal
+/// expiration with the airway open (the [`EXPIRATORY`] groups ramped to 1 over
+/// [`EFFORT_RAMP`] and held until the lung volume settles), as a subject empties the lungs
+/// towards RV before the manoeuvre; the airway occluded there; the expiratory groups released
+/// over [`EFFORT_RAMP`] and the relaxed mouth pressure read after [`RELAXED_HOLD`]; then the
+/// [`INSPIRATORY`] groups ramped to 1 over [`EFFORT_RAMP`] (the full
+/// inspiratory activation of [`full_inspiration`]) and held for [`OCCLUDED_HOLD`], sampled
+/// every 0.05 s. The figure is the largest mean of `pressure.mouth` over
+/// [`SUSTAINED_WINDOW`] (ATS/ERS 2002).
+pub fn occluded_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Result<Occluded> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod, law))?;
+    let rest = fmu.get(&["volume.lung"])?[0];
+    let mut subject = Config::default().subject;
+    subject.posture = posture;
+    let (rv_ratio, _) = capacity_ratios(&subject);
+    let h = 0.05;
+    let t0 = fmu.t;
+    while fmu.t - t0 < EFFORT_RAMP - 1e-9 {
+        for g in EXPIRATORY {
+            fmu.set(&format!("activation.{}", g.name()), effort(fmu.t - t0 + h))?;
         }
+        fmu.step(h)?;
     }
-    let steps = (1.0 / EFFORT_INCREMENT).round() as u32;
-    let mut reached = 0.0;
-    let mut stopped = None;
-    for k in 1..=steps {
-        let a = f64::from(k) / f64::from(steps);
+    let volume = settle(&mut fmu, 3.0, 1e-3, 20.0)?;
+    fmu.set("airway.occluded", 1.0)?;
+    let [v0, p0]: [f64; 2] = fmu
+        .get(&["volume.lung", "pressure.mouth"])?
+        .try_into()
+        .map_err(|_| Error::State("two outputs expected".into()))?;
+    let dry = crate::dynamics::airway::DRY_GAS_PRESSURE;
+    let mut occluded_flow: f64 = 0.0;
+    let t1 = fmu.t;
+    while fmu.t - t1 < EFFORT_RAMP + RELAXED_HOLD - 1e-9 {
+        for g in EXPIRATORY {
+            fmu.set(
+                &format!("activation.{}", g.name()),
+                1.0 - effort(fmu.t - t1 + h),
+            )?;
+        }
+        fmu.step(h)?;
+        occluded_flow = occluded_flow.max(fmu.get(&["flow.airway"])?[0].abs());
+    }
+    let relaxed = fmu.get(&["pressure.mouth", "pressure.pleural"])?;
+    let relaxed_pressure = relaxed[0] / CMH2O;
+    let relaxed_lung_recoil = (relaxed[0] - relaxed[1]) / CMH2O;
+    let t2 = fmu.t;
+    let mut samples = Vec::new();
+    let (mut v_end, mut p_end) = (v0, p0);
+    while fmu.t - t2 < EFFORT_RAMP + OCCLUDED_HOLD - 1e-9 {
         for g in INSPIRATORY {
-            torso.set_activation(g, a)?;
+            fmu.set(&format!("activation.{}", g.name()), effort(fmu.t - t2 + h))?;
         }
-        torso.set_lung_volume(0.0, target)?;
-        let p = torso.read(Quantity::AlveolarPressure)?;
-        if !p.is_finite() {
-            let why = torso.quasi_rate(0.0, target).err().map_or_else(
-                || "the pressure is not finite".to_string(),
-                |e| e.to_string(),
-            );
-            stopped = Some(format!("no equilibrium at activation {a:.2}: {why}"));
-            break;
-        }
-        (reached, pressure) = (a, p);
+        fmu.step(h)?;
+        let o = fmu.get(&["pressure.mouth", "volume.lung", "flow.airway"])?;
+        samples.push(o[0] / CMH2O);
+        occluded_flow = occluded_flow.max(o[2].abs());
+        (p_end, v_end) = (o[0], o[1]);
     }
+    let n = (SUSTAINED_WINDOW / h).round() as usize;
+    let sustained = samples
+        .windows(n)
+        .map(|w| w.iter().sum::<f64>() / n as f64)
+        .fold(f64::INFINITY, f64::min);
     Ok(Occluded {
-        volume: target,
-        activation: reached,
-        mouth_pressure: pressure / CMH2O,
-        stopped,
+        rest,
+        residual_volume: rest * rv_ratio,
+        volume,
+        volume_end: v_end,
+        relaxed_pressure,
+        relaxed_lung_recoil,
+        mouth_pressure: sustained,
+        peak: samples.iter().copied().fold(f64::INFINITY, f64::min),
+        gas_ratio: ((dry + p_end) * v_end) / ((dry + p0) * v0),
+        occluded_flow,
     })
 }
 
@@ -824,49 +879,24 @@ pub fn physiology(lod: u32, law: MuscleLaw) -> Result<Physiology> {
         }
         Err(e) => failed.push(("full inspiration, standing".into(), e.to_string())),
     }
-    let mut config = Config::default();
-    config.scene.level_of_detail = lod;
-    config.muscle_law = law;
-    let range = pimax_range(&config.subject);
-    let at_rv = occluded_effort(&config, |_, rv| rv);
-    let maximal = matches!(&at_rv, Ok(o) if o.stopped.is_none());
-    match at_rv {
-        Ok(o) if o.stopped.is_some() => failed.push((
-            format!("maximal inspiratory pressure at RV ({:.2} L)", o.volume),
-            format!(
-                "{:.1} cmH2O at inspiratory activation {:.2}, the highest solved; {}",
-                o.mouth_pressure,
-                o.activation,
-                o.stopped.unwrap_or_default()
-            ),
-        )),
+    let range = pimax_range(&Config::default().subject);
+    match occluded_inspiration(Posture::Standing, lod, law) {
         Ok(o) => fig(
             format!(
-                "maximal inspiratory mouth pressure at RV ({:.2} L), occluded, standing (magnitude)",
-                o.volume
+                "maximal inspiratory mouth pressure, occluded at {:.2} L after a maximal \
+                 expiration (RV {:.2} L), standing, 1-s sustained (magnitude)",
+                o.volume, o.residual_volume
             ),
             -o.mouth_pressure,
             "cmH2O",
             range,
             "Harik-Khan, Wise & Fozard 1998; ATS/ERS 2002",
-            "facade, quasi-static with the lung volume held (the FMU has no occlusion input)",
+            FMU,
         ),
-        Err(e) => failed.push(("maximal inspiratory pressure at RV".into(), e.to_string())),
-    }
-    if !maximal {
-        // the same effort at FRC, for the record (the reference is at RV)
-        match occluded_effort(&config, |frc, _| frc) {
-            Ok(o) => failed.push((
-                format!("the same effort at FRC ({:.2} L), for the record", o.volume),
-                format!(
-                    "{:.1} cmH2O at inspiratory activation {:.2}, the highest solved{}",
-                    o.mouth_pressure,
-                    o.activation,
-                    o.stopped.map_or(String::new(), |w| format!("; {w}"))
-                ),
-            )),
-            Err(e) => failed.push(("the same effort at FRC".into(), e.to_string())),
-        }
+        Err(e) => failed.push((
+            "maximal inspiratory pressure, occluded".into(),
+            e.to_string(),
+        )),
     }
     match quiet_breath(Posture::Standing, lod, law, 0.0) {
         Ok(q) => {

@@ -1,5 +1,5 @@
 //! The model's inputs on a handle: the muscle groups' activations (by index or name), the
-//! airway-opening pressure, the built-in drive (replaced or read), and the start at the
+//! airway-opening pressure and occlusion, the built-in drive (replaced or read), and the start at the
 //! equilibrium of the inputs applied now.
 
 use super::convert::{drive_from_c, drive_to_c};
@@ -63,6 +63,33 @@ pub unsafe extern "C" fn bt_set_activation_by_name(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn bt_set_airway_opening(h: *mut BtTorso, pascal: f64) -> c_int {
     unsafe { with_handle(h, |b| Ok(b.torso.set_airway_opening(pascal)?)) }
+}
+
+/// Occludes the airway at the mouth (`occluded` 1) or opens it (0) (FMI input
+/// `airway.occluded`): while occluded no gas flows, the lungs' gas follows Boyle's law from
+/// its volume and alveolar pressure at the moment of occlusion, and the mouth pressure
+/// (`pressure.mouth`) equals the alveolar pressure. Any other value, or an occlusion under
+/// the quasi-static method, is refused (`BT_ERR_INVALID`) and changes nothing.
+///
+/// # Safety
+/// `h` must be NULL or a live handle.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn bt_set_airway_occluded(h: *mut BtTorso, occluded: c_int) -> c_int {
+    unsafe {
+        with_handle(h, |b| {
+            let occluded = match occluded {
+                0 => false,
+                1 => true,
+                v => {
+                    return Err(Failure(
+                        BT_ERR_INVALID,
+                        format!("airway.occluded: {v}, allowed 0 (open) or 1 (occluded)"),
+                    ));
+                }
+            };
+            Ok(b.torso.set_airway_occluded(occluded)?)
+        })
+    }
 }
 
 /// Puts the model at the static equilibrium of the activations applied now (the activation

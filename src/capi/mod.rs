@@ -48,8 +48,8 @@ mod header;
 pub use external::{bt_get_state, bt_rhs, bt_set_state, bt_state_dim};
 pub use header::header_value_references;
 pub use inputs::{
-    bt_get_drive, bt_set_activation, bt_set_activation_by_name, bt_set_airway_opening,
-    bt_set_drive, bt_start_at_equilibrium,
+    bt_get_drive, bt_set_activation, bt_set_activation_by_name, bt_set_airway_occluded,
+    bt_set_airway_opening, bt_set_drive, bt_start_at_equilibrium,
 };
 pub use lifecycle::{
     bt_config_default, bt_config_set, bt_create, bt_creation_error, bt_destroy, bt_last_error,

@@ -18,6 +18,10 @@ pub struct Activations {
     /// Pressure at the airway opening relative to the body surface [Pa]: it reaches the
     /// alveoli through the airway resistance and pushes the thoracic wall outward.
     pub airway_opening: f64,
+    /// The airway occluded at the mouth: `Some(n)`, the dry gas content of the lungs
+    /// (P_B + P_alv - P_H2O) V_gas [Pa m^3] fixed when the airway closed, so that the alveolar
+    /// pressure follows Boyle's law ([`super::airway`]) and no gas flows; `None`: open.
+    pub occlusion: Option<f64>,
 }
 
 impl Activations {
@@ -42,6 +46,7 @@ impl Activations {
         Activations {
             level,
             airway_opening: 0.0,
+            occlusion: None,
         }
     }
 
@@ -49,6 +54,15 @@ impl Activations {
     pub fn with_airway_opening(self, pressure: f64) -> Activations {
         Activations {
             airway_opening: pressure,
+            ..self
+        }
+    }
+
+    /// The same activations with the airway occluded on the dry gas content `content`
+    /// [Pa m^3] (`None`: open; [`super::airway::gas_content`]).
+    pub fn with_occlusion(self, content: Option<f64>) -> Activations {
+        Activations {
+            occlusion: content,
             ..self
         }
     }
@@ -64,9 +78,11 @@ impl Activations {
         table
     }
 
-    /// Whether every group is inactive and the airway opening at the surface pressure.
+    /// Whether every group is inactive and the airway open at the surface pressure.
     pub fn is_zero(&self) -> bool {
-        self.airway_opening == 0.0 && self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
+        self.airway_opening == 0.0
+            && self.occlusion.is_none()
+            && self.level.iter().all(|s| s.iter().all(|a| *a == 0.0))
     }
 }
 

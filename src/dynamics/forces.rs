@@ -26,7 +26,9 @@
 //!   pressure at the airway opening (`Activations::airway_opening`, 0 breathing air) less the
 //!   lungs' recoil and the pressure drop of the airflow through the airway resistance R
 //!   (`Structure::airway_resistance`); dV/dt is the sum over the triangles of A n . (v_a + v_b +
-//!   v_c) / 3, exact on a closed surface. All relative to rest, where the chest wall's rest
+//!   v_c) / 3, exact on a closed surface. With the airway occluded (`Activations::occlusion`)
+//!   no gas flows and P_ao - R dV/dt is replaced by the alveolar pressure of Boyle's law on
+//!   the lungs' gas (`super::airway`). All relative to rest, where the chest wall's rest
 //!   forces balance the lungs' recoil at FRC.
 
 use super::structure::{PASSIVE, Structure, VIA, via_segment_length};
@@ -37,7 +39,7 @@ use nalgebra::{Point3, Vector3};
 pub fn accumulate(model: &Structure, data: &mut Data, act: &Activations) {
     local_forces(model, data, act);
     abdominal_pressure(model, data);
-    pleural_pressure(model, data, act.airway_opening);
+    pleural_pressure(model, data, act);
 }
 
 /// As [`accumulate`], but with the abdominal and pleural pressures held at the given values
@@ -679,10 +681,11 @@ fn abdominal_pressure(model: &Structure, data: &mut Data) {
 /// lungs' elastic recoil, the pressure-volume law of [`super::pleural::PleuralLaw`] (linear
 /// with the lung elastance about rest, with inverse barriers at the residual volume and total
 /// lung capacity), and less the pressure drop R dV/dt of the airflow through the airway
-/// resistance. The dome's
+/// resistance; with the airway occluded, the alveolar pressure of Boyle's law on the lungs'
+/// gas instead ([`Structure::alveolar`]). The dome's
 /// triangles, reversed copies of abdominal ones, take the abdominal pass's face vectors and
 /// volume terms negated (exactly what recomputing them would give).
-fn pleural_pressure(model: &Structure, data: &mut Data, airway_opening: f64) {
+fn pleural_pressure(model: &Structure, data: &mut Data, act: &Activations) {
     let tris = &model.thorax_triangles;
     let (na, nt) = (model.abdomen_triangles.len(), tris.len());
     let Data {
@@ -738,7 +741,7 @@ fn pleural_pressure(model: &Structure, data: &mut Data, airway_opening: f64) {
         (sum, rate)
     };
     let (v, rate) = (sum / 6.0, rate / 6.0);
-    let p = airway_opening - model.pleural.recoil(v) - model.airway_resistance * rate;
+    let p = model.alveolar(act, v, rate).pressure - model.pleural.recoil(v);
     apply_pressure(tris, &model.thorax_moving, thorax_face, p, force);
     data.thorax_volume = v;
     data.pleural_pressure = p;

@@ -13,10 +13,11 @@
 //!   triangle with. S is estimated by forward differences, one evaluation per colour of a
 //!   distance-2 column colouring (Curtis, Powell & Reid 1974).
 //! - The two global pressures (thesis eq. 2.5: P_A = K (V0/V - 1) - mu dV/dt; lung recoil
-//!   and airway flow P_T = -P_L(V_T) - R dV_T/dt) couple every wall point to every other.
+//!   and airway flow P_T = P_ao - P_L(V_T) - R dV_T/dt, or with the airway occluded Boyle's
+//!   law's P_alv(V_T) - P_L(V_T), `super::airway`) couple every wall point to every other.
 //!   Their part is exact in rank: u = ∂f/∂P, the response of the accelerations to a unit
 //!   pressure (f is linear in each pressure, so one evaluation with P + 1 gives it exactly),
-//!   times dP/dV (-K V0 / V^2 and -E_L), times the volume gradient dV/dy, plus the viscous
+//!   times dP/dV (-K V0 / V^2 and -E_L, less n / V^2 occluded), times the volume gradient dV/dy, plus the viscous
 //!   terms' -eta dV/dy on the matching velocities: for a free vertex the area-weighted
 //!   normal Σ (b x c)/6 over its triangles (divergence theorem), for the ribs and the
 //!   sternum (whose anchors carry wall points) central differences of the volume.
@@ -245,9 +246,11 @@ impl TorsoJacobian {
             volume_rate(model, data, &model.abdomen_triangles),
             volume_rate(model, data, &model.thorax_triangles),
         ];
-        let viscous = [model.abdomen_viscosity, model.airway_resistance];
+        // the airway's alveolar pressure: -R dV/dt open, Boyle's law's slope occluded
+        let alveolar = model.alveolar(act, vt, rates[1]);
+        let viscous = [model.abdomen_viscosity, -alveolar.per_rate];
         let pa = p.bulk_modulus * (model.abdomen_rest_volume / va - 1.0) - viscous[0] * rates[0];
-        let pt = -model.pleural.recoil(vt) - viscous[1] * rates[1];
+        let pt = alveolar.pressure - model.pleural.recoil(vt);
         let frozen = [pa, pt];
         // the base of the differences: the frozen right-hand side itself (the block-diagonal
         // mass solve of `rhs_frozen` differs from the full one's by the volume inertances)
@@ -267,7 +270,7 @@ impl TorsoJacobian {
         // u = ∂f/∂P (exact: f is affine in each pressure); V = (dP/dV) dV/dy
         let slopes = [
             -p.bulk_modulus * model.abdomen_rest_volume / (va * va),
-            -model.pleural.slope(vt),
+            alveolar.per_volume - model.pleural.slope(vt),
         ];
         for k in 0..2 {
             let mut bumped = frozen;

@@ -19,6 +19,7 @@
 //! the pipeline that runs the stages ([`rhs`], [`rhs_local`]) in this file.
 
 pub mod accelerations;
+pub mod airway;
 mod data;
 pub mod energy;
 pub mod equilibrium;

@@ -218,7 +218,9 @@ struct Saved {
     phase: Phase,
     config: Config,
     rtol_explicit: bool,
-    inputs: [f64; Input::COUNT],
+    /// The inputs in [`Input::all`] order (states saved before `airway.occluded` existed have
+    /// one fewer: the airway open).
+    inputs: Vec<f64>,
     start_time: f64,
     stop_time: Option<f64>,
     tolerance: Option<f64>,
@@ -289,12 +291,26 @@ impl FmuState {
         let mut paths_aside = saved.config.clone();
         paths_aside.subject_mesh_dir = None;
         paths_aside.validate()?;
-        for (input, v) in Input::all().into_iter().zip(saved.inputs) {
-            let vr = match input {
-                Input::Activation(g) => super::variables::VR_ACTIVATION + g.index() as u32,
-                Input::AirwayOpening => super::variables::VR_AIRWAY_OPENING,
-            };
-            if let Some(var) = table.by_vr(vr) {
+        let mut saved = saved;
+        if saved.inputs.len() == Input::COUNT - 1 {
+            saved.inputs.push(0.0);
+        }
+        if saved.inputs.len() != Input::COUNT {
+            return Err(bad(format!(
+                "{} inputs, this FMU has {}",
+                saved.inputs.len(),
+                Input::COUNT
+            )));
+        }
+        for (input, &v) in Input::all().into_iter().zip(&saved.inputs) {
+            if input == Input::AirwayOccluded && v != 0.0 && v != 1.0 {
+                return Err(Error::invalid(
+                    "airway.occluded",
+                    v,
+                    "0 (open) or 1 (occluded)",
+                ));
+            }
+            if let Some(var) = table.by_vr(input.vr()) {
                 var.check(v)?;
             }
         }
@@ -827,6 +843,9 @@ impl Instance {
         let var = self.variable(function, vr, ty)?;
         let value = match var.role {
             Role::Time => Ok(Value::Real(self.time)),
+            Role::Input(Input::AirwayOccluded) => Ok(Value::Boolean(
+                self.inputs[Input::AirwayOccluded.index()] != 0.0,
+            )),
             Role::Input(input) => Ok(Value::Real(self.inputs[input.index()])),
             Role::Parameter(p) => Ok(p.get(&self.config)),
             Role::Output(q) => self
@@ -913,7 +932,8 @@ impl Instance {
         let numeric = match &value {
             Value::Real(x) => Some(*x),
             Value::Integer(i) => Some(f64::from(*i)),
-            Value::Boolean(_) | Value::String(_) => None,
+            Value::Boolean(b) => Some(f64::from(u8::from(*b))),
+            Value::String(_) => None,
         };
         if let Some(x) = numeric
             && let Err(e) = var.check(x)
@@ -921,6 +941,16 @@ impl Instance {
             return Err(self.error(&format!("{function}: {e}; the value was not applied")));
         }
         match var.role {
+            Role::Input(Input::AirwayOccluded)
+                if numeric == Some(1.0)
+                    && self.config.solver.method == crate::solver::Method::QuasiStatic =>
+            {
+                Err(self.error(&format!(
+                    "{function}: `airway.occluded` = true is refused under solver.method 4 \
+                     (quasi-static): an occluded airway is simulated by the inertial methods \
+                     (0-3) only; the value was not applied"
+                )))
+            }
             Role::Input(input) => Ok(Change::Input(input, numeric.unwrap_or_default())),
             Role::Parameter(p) => {
                 let before_run =
@@ -1175,7 +1205,7 @@ impl Instance {
                 phase: self.phase,
                 config: self.config.clone(),
                 rtol_explicit: self.rtol_explicit,
-                inputs: self.inputs,
+                inputs: self.inputs.to_vec(),
                 start_time: self.start_time,
                 stop_time: self.stop_time,
                 tolerance: self.tolerance,
@@ -1250,7 +1280,7 @@ impl Instance {
         self.phase = s.phase;
         self.config = s.config.clone();
         self.rtol_explicit = s.rtol_explicit;
-        self.inputs = s.inputs;
+        self.inputs.copy_from_slice(&s.inputs);
         self.start_time = s.start_time;
         self.stop_time = s.stop_time;
         self.tolerance = s.tolerance;

@@ -71,7 +71,8 @@ impl Compiled {
                 &model.layout,
                 &y,
             );
-            let o = crate::observe::observe(model, &self.compartments, &data.pos, &data.vel, 0.0);
+            let o =
+                crate::observe::observe(model, &self.compartments, &data.pos, &data.vel, 0.0, None);
             let litres = 1e3;
             [o.thorax * litres, o.abdomen * litres, o.trunk * litres]
         })

@@ -31,9 +31,14 @@ pub enum Quantity {
     /// lungs' elastic recoil (about -5 cmH2O at rest).
     PleuralPressure,
     /// Alveolar pressure relative to the body surface [Pa]: the airway opening's less the
-    /// drop across the airway resistance.
+    /// drop across the airway resistance; with the airway occluded, Boyle's law on the
+    /// lungs' gas.
     AlveolarPressure,
-    /// Airflow into the lungs [L/s], positive in inspiration.
+    /// Pressure at the mouth relative to the body surface [Pa]: the airway opening's with
+    /// the airway open, the alveolar pressure behind an occlusion (no gas flows).
+    MouthPressure,
+    /// Airflow into the lungs through the airway [L/s], positive in inspiration (0 with the
+    /// airway occluded).
     AirwayFlow,
     /// One lung's volume [L], side 0 right, 1 left: the right lung's rest share of the lungs
     /// (`observe::RIGHT_LUNG_FRACTION`) plus the change of its side's share of the thorax.

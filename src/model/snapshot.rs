@@ -28,6 +28,11 @@ pub struct Snapshot {
     /// Pressure at the airway opening [Pa]; snapshots written before it existed read 0.
     #[serde(default)]
     pub airway_opening: f64,
+    /// The airway occluded: the lungs' dry gas content (P_B + P_alv - P_H2O) V_gas [Pa m^3]
+    /// fixed when it closed ([`crate::dynamics::airway`]); `None` open, as snapshots written
+    /// before it existed read.
+    #[serde(default)]
+    pub occlusion: Option<f64>,
     /// The drive.
     pub drive: super::Drive,
     /// Solver memory and statistics, serialised by the solver.
@@ -77,6 +82,7 @@ pub struct Checkpoint {
     pub(super) state: Vec<f64>,
     pub(super) inputs: [f64; 8],
     pub(super) airway_opening: f64,
+    pub(super) occlusion: Option<f64>,
     pub(super) drive: Option<super::Drive>,
     pub(super) solver: Option<Integrator>,
     pub(super) quasi: Option<super::torso::QuasiMemory>,

@@ -178,6 +178,8 @@ struct Applied<'a> {
     inputs: [f64; 8],
     /// Pressure at the airway opening [Pa].
     airway_opening: f64,
+    /// The occluded airway's dry gas content [Pa m^3] (`None`: open).
+    occlusion: Option<f64>,
     drive: &'a Drive,
     /// Gain of each group on the right and left sides (overall side gain times group gain).
     gains: ([f64; 8], [f64; 8]),
@@ -192,6 +194,7 @@ impl Applied<'_> {
         }
         Activations::per_group(&groups, &self.gains.0, &self.gains.1)
             .with_airway_opening(self.airway_opening)
+            .with_occlusion(self.occlusion)
     }
 }
 
@@ -261,6 +264,9 @@ pub struct Torso {
     inputs: [f64; 8],
     /// Pressure at the airway opening [Pa] (an input, like the activations).
     airway_opening: f64,
+    /// The airway occluded: the lungs' dry gas content [Pa m^3] fixed when it closed
+    /// ([`Torso::set_airway_occluded`]); `None` open.
+    occlusion: Option<f64>,
     integrator: Integrator,
     observation: Option<Observation>,
     /// Each side's share of the observation (right, left), computed when first read.
@@ -343,6 +349,7 @@ impl Torso {
             time: 0.0,
             inputs: [0.0; 8],
             airway_opening: 0.0,
+            occlusion: None,
             integrator,
             observation: None,
             sides: None,
@@ -374,7 +381,9 @@ impl Torso {
             groups[g.index()] =
                 (self.inputs[g.index()] + self.config.drive.activation(g, t)).clamp(0.0, 1.0);
         }
-        Activations::per_group(&groups, &right, &left).with_airway_opening(self.airway_opening)
+        Activations::per_group(&groups, &right, &left)
+            .with_airway_opening(self.airway_opening)
+            .with_occlusion(self.occlusion)
     }
 
     /// Puts the model at the static equilibrium of the activations applied now (inputs plus
@@ -489,6 +498,51 @@ impl Torso {
         self.airway_opening
     }
 
+    /// Occludes the airway at the mouth (`true`) or opens it (`false`). Occluding fixes the
+    /// lungs' dry gas content at the current state, (P_B + P_alv - P_H2O) V_lung with the
+    /// alveolar pressure of that moment; from then on no gas flows (`flow.airway` reads 0),
+    /// the alveolar pressure follows Boyle's law as the thoracic wall moves, and the mouth
+    /// pressure equals it ([`crate::dynamics::airway`]). Opening restores the airflow through
+    /// the airway resistance from the pressure difference of the moment. Occluding an occluded
+    /// airway or opening an open one changes nothing. The quasi-static formulation
+    /// (`solver.method` quasi-static) refuses an occlusion: its state is the lung volume,
+    /// which an occluded airway ties to the equilibrium by the gas law instead of the airflow,
+    /// and that constraint is not solved there; the state is then left as it was.
+    pub fn set_airway_occluded(&mut self, occluded: bool) -> Result<()> {
+        if occluded == self.occlusion.is_some() {
+            return Ok(());
+        }
+        if occluded && self.quasi.is_some() {
+            return Err(Error::invalid(
+                "airway.occluded",
+                "true",
+                "false under solver.method quasi-static (an occluded airway is simulated by \
+                 the inertial methods only)",
+            ));
+        }
+        self.occlusion = if occluded {
+            let o = self.observation();
+            Some(dynamics::airway::gas_content(o.lung, o.alveolar_pressure))
+        } else {
+            None
+        };
+        self.integrator.invalidate();
+        self.observation = None;
+        self.sides = None;
+        Ok(())
+    }
+
+    /// Whether the airway is occluded ([`Torso::set_airway_occluded`]).
+    pub fn airway_occluded(&self) -> bool {
+        self.occlusion.is_some()
+    }
+
+    /// The occluded lungs' dry gas content (P_B + P_alv - P_H2O) V_gas [Pa m^3] fixed when the
+    /// airway closed; `None` while it is open.
+    pub fn occluded_gas_content(&self) -> Option<f64> {
+        self.occlusion
+    }
+
     /// The activation input of `group`.
     pub fn activation_input(&self, group: MuscleGroup) -> f64 {
         self.inputs[group.index()]
@@ -523,6 +577,7 @@ impl Torso {
             time,
             inputs,
             airway_opening,
+            occlusion,
             integrator,
             config,
             jacobian,
@@ -535,6 +590,7 @@ impl Torso {
             applied: Applied {
                 inputs: *inputs,
                 airway_opening: *airway_opening,
+                occlusion: *occlusion,
                 drive: &config.drive,
                 gains: side_gains(config),
             },
@@ -619,6 +675,7 @@ impl Torso {
             time,
             inputs,
             airway_opening,
+            occlusion,
             integrator,
             config,
             quasi,
@@ -641,6 +698,7 @@ impl Torso {
             applied: Applied {
                 inputs: *inputs,
                 airway_opening: *airway_opening,
+                occlusion: *occlusion,
                 drive: &config.drive,
                 gains: side_gains(config),
             },
@@ -657,6 +715,7 @@ impl Torso {
         q.held = Applied {
             inputs: self.inputs,
             airway_opening: self.airway_opening,
+            occlusion: self.occlusion,
             drive: &self.config.drive,
             gains: side_gains(&self.config),
         }
@@ -699,13 +758,18 @@ impl Torso {
             })
             .collect();
         format!(
-            "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa",
+            "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa{}",
             s.sex,
             s.stature,
             s.mass,
             s.posture,
             act.join(", "),
-            self.airway_opening
+            self.airway_opening,
+            if self.occlusion.is_some() {
+                ", airway occluded"
+            } else {
+                ""
+            }
         )
     }
 
@@ -728,6 +792,7 @@ impl Torso {
             &self.data.pos,
             &self.data.vel,
             self.airway_opening,
+            self.occlusion,
         );
         let o = match self.quasi.as_deref() {
             // the flow and the pressures are the reduced system's, not the positions'
@@ -782,6 +847,7 @@ impl Torso {
             Quantity::DiaphragmDisplacement => self.observation().diaphragm_displacement,
             Quantity::PleuralPressure => self.observation().pleural_pressure,
             Quantity::AlveolarPressure => self.observation().alveolar_pressure,
+            Quantity::MouthPressure => self.observation().mouth_pressure,
             Quantity::AirwayFlow => self.observation().airway_flow * litres,
             Quantity::LungVolumeSide(s) if s < 2 => {
                 let m = &self.compiled.model;
@@ -921,6 +987,7 @@ impl Torso {
             data,
             inputs,
             airway_opening,
+            occlusion,
             config,
             ..
         } = self;
@@ -931,6 +998,7 @@ impl Torso {
             applied: Applied {
                 inputs: *inputs,
                 airway_opening: *airway_opening,
+                occlusion: *occlusion,
                 drive: &config.drive,
                 gains: side_gains(config),
             },
@@ -954,6 +1022,7 @@ impl Torso {
             state: self.y.clone(),
             inputs: self.inputs,
             airway_opening: self.airway_opening,
+            occlusion: self.occlusion,
             drive: self.config.drive,
             solver: serde_json::to_value(&self.integrator).unwrap_or(serde_json::Value::Null),
             quasi: self.quasi.as_deref().map(Quasi::memory),
@@ -975,6 +1044,13 @@ impl Torso {
             return Err(Error::State("snapshot state is malformed".into()));
         }
         snapshot.drive.validate()?;
+        if let Some(n) = snapshot.occlusion
+            && !(n.is_finite() && n > 0.0)
+        {
+            return Err(Error::State(format!(
+                "snapshot occlusion: gas content {n} Pa m^3, allowed a finite positive value"
+            )));
+        }
         for (g, v) in MuscleGroup::ALL.iter().zip(snapshot.inputs) {
             super::check(&format!("activation.{}", g.name()), v, (0.0, 1.0))?;
         }
@@ -1007,6 +1083,7 @@ impl Torso {
         self.y.copy_from_slice(&snapshot.state);
         self.inputs = snapshot.inputs;
         self.airway_opening = snapshot.airway_opening;
+        self.occlusion = snapshot.occlusion;
         self.config.drive = snapshot.drive;
         self.observation = None;
         self.sides = None;
@@ -1023,6 +1100,7 @@ impl Torso {
         checkpoint.state.clone_from(&self.y);
         checkpoint.inputs = self.inputs;
         checkpoint.airway_opening = self.airway_opening;
+        checkpoint.occlusion = self.occlusion;
         checkpoint.drive = Some(self.config.drive);
         match &mut checkpoint.solver {
             Some(solver) => solver.copy_memory_from(&self.integrator),
@@ -1063,6 +1141,7 @@ impl Torso {
         self.y.copy_from_slice(&checkpoint.state);
         self.inputs = checkpoint.inputs;
         self.airway_opening = checkpoint.airway_opening;
+        self.occlusion = checkpoint.occlusion;
         self.config.drive = drive;
         self.observation = None;
         self.sides = None;
@@ -1070,12 +1149,14 @@ impl Torso {
         Ok(())
     }
 
-    /// Back to the freshly built state (time 0, zero inputs and airway pressure, the static
+    /// Back to the freshly built state (time 0, zero inputs and airway pressure, the airway
+    /// open, the static
     /// equilibrium of the drive's start, solver memory cleared).
     pub fn reset(&mut self) {
         self.time = 0.0;
         self.inputs = [0.0; 8];
         self.airway_opening = 0.0;
+        self.occlusion = None;
         self.integrator.reset();
         self.start_at_equilibrium();
     }

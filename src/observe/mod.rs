@@ -23,7 +23,7 @@ pub mod markers;
 pub mod skinning;
 
 use crate::anatomy::{Side, rib_index};
-use crate::dynamics::{Model, volume};
+use crate::dynamics::{Activations, Model, volume};
 use nalgebra::{Point3, Vector3};
 
 /// Volumes and displacements of one state (SI units: m^3, Pa, m).
@@ -48,12 +48,18 @@ pub struct Observation {
     pub diaphragm_displacement: f64,
     /// Displacement of the middle of the sternum since rest [m].
     pub sternum_displacement: Vector3<f64>,
-    /// Airflow into the lungs [m^3/s], the rate of the thoracic volume (positive in
-    /// inspiration).
+    /// Airflow into the lungs through the airway [m^3/s], the rate of the thoracic volume
+    /// (positive in inspiration); 0 with the airway occluded, where a change of the lung
+    /// volume is the gas's compression, not a flow.
     pub airway_flow: f64,
     /// Alveolar pressure relative to the body surface [Pa]: the airway opening's less the
-    /// drop R V' across the airway resistance.
+    /// drop R V' across the airway resistance; with the airway occluded, Boyle's law on the
+    /// lungs' gas ([`crate::dynamics::airway`]).
     pub alveolar_pressure: f64,
+    /// Pressure at the mouth relative to the body surface [Pa]: the airway opening's with
+    /// the airway open; behind an occlusion (between the lips and the shutter), the alveolar
+    /// pressure, since no gas flows.
+    pub mouth_pressure: f64,
     /// Pleural pressure relative to the body surface [Pa]: the alveolar pressure less the
     /// lungs' elastic recoil, -[`crate::dynamics::Params::lung_recoil_at_frc`] at rest.
     pub pleural_pressure: f64,
@@ -406,19 +412,22 @@ pub fn with_flow(
     Observation {
         airway_flow: flow,
         alveolar_pressure: airway_opening - model.airway_resistance * flow,
+        mouth_pressure: airway_opening,
         pleural_pressure: pleural - model.params.lung_recoil_at_frc,
         ..observation
     }
 }
 
 /// Observes the state whose anchor positions are `pos` and velocities `vel`, with the airway
-/// opening at `airway_opening` [Pa] (0 breathing air).
+/// opening at `airway_opening` [Pa] (0 breathing air) and the airway occluded on the dry gas
+/// content `occlusion` ([`crate::dynamics::Activations::occlusion`]; `None`: open).
 pub fn observe(
     model: &Model,
     compartments: &Compartments,
     pos: &[Point3<f64>],
     vel: &[Vector3<f64>],
     airway_opening: f64,
+    occlusion: Option<f64>,
 ) -> Observation {
     // The mesh's volumes (the dynamics' own), then corrected for the dome's faceting so
     // that every level of detail reports the volumes of the smooth surfaces.
@@ -427,7 +436,18 @@ pub fn observe(
     let thorax = thorax_mesh - model.dome_faceting_volume;
     let abdomen = abdomen_mesh + model.dome_faceting_volume;
     let airway_flow = volume_rate(pos, vel, &model.thorax_triangles);
-    let alveolar_pressure = airway_opening - model.airway_resistance * airway_flow;
+    let alveolar = model.alveolar(
+        &Activations::default()
+            .with_airway_opening(airway_opening)
+            .with_occlusion(occlusion),
+        thorax_mesh,
+        airway_flow,
+    );
+    let alveolar_pressure = alveolar.pressure;
+    let (airway_flow, mouth_pressure) = match occlusion {
+        None => (airway_flow, airway_opening),
+        Some(_) => (0.0, alveolar_pressure),
+    };
     let pleural_pressure =
         alveolar_pressure - model.params.lung_recoil_at_frc - model.pleural.recoil(thorax_mesh);
     let o = &compartments.origin;
@@ -450,6 +470,7 @@ pub fn observe(
         sternum_displacement: pos[probe] - model.rest[probe],
         airway_flow,
         alveolar_pressure,
+        mouth_pressure,
         pleural_pressure,
     }
 }

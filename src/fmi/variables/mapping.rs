@@ -249,26 +249,30 @@ fn non_negative(v: i32) -> Result<usize> {
     usize::try_from(v).map_err(|_| Error::State(format!("negative value {v}")))
 }
 
-/// An input of the model: a muscle group's activation or the pressure at the airway opening.
+/// An input of the model: a muscle group's activation, the pressure at the airway opening or
+/// the airway's occlusion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Input {
     /// The activation input of a muscle group, in [0, 1].
     Activation(MuscleGroup),
     /// The pressure at the airway opening relative to the body surface [Pa].
     AirwayOpening,
+    /// The airway occluded at the mouth (a Boolean held as 1.0 true, 0.0 false).
+    AirwayOccluded,
 }
 
 impl Input {
     /// Number of inputs.
-    pub const COUNT: usize = 9;
+    pub const COUNT: usize = 10;
 
     /// Every input, in value-reference order (the activations in [`MuscleGroup::ALL`] order,
-    /// then the airway opening).
+    /// then the airway opening, then the occlusion).
     pub fn all() -> [Input; Input::COUNT] {
         let mut all = [Input::AirwayOpening; Input::COUNT];
         for (slot, g) in all.iter_mut().zip(MuscleGroup::ALL) {
             *slot = Input::Activation(g);
         }
+        all[Input::COUNT - 1] = Input::AirwayOccluded;
         all
     }
 
@@ -276,23 +280,44 @@ impl Input {
     pub fn index(self) -> usize {
         match self {
             Input::Activation(g) => g.index(),
-            Input::AirwayOpening => Input::COUNT - 1,
+            Input::AirwayOpening => Input::COUNT - 2,
+            Input::AirwayOccluded => Input::COUNT - 1,
+        }
+    }
+
+    /// The input's value reference.
+    pub fn vr(self) -> u32 {
+        match self {
+            Input::Activation(g) => super::VR_ACTIVATION + g.index() as u32,
+            Input::AirwayOpening => super::VR_AIRWAY_OPENING,
+            Input::AirwayOccluded => super::VR_AIRWAY_OCCLUDED,
         }
     }
 
     /// Applies `value` to `torso` (range-checked there; a rejected value changes nothing).
+    /// The occlusion takes 0 (open) or 1 (occluded).
     pub fn apply(self, torso: &mut Torso, value: f64) -> Result<()> {
         match self {
             Input::Activation(g) => torso.set_activation(g, value),
             Input::AirwayOpening => torso.set_airway_opening(value),
+            Input::AirwayOccluded => match value {
+                0.0 => torso.set_airway_occluded(false),
+                1.0 => torso.set_airway_occluded(true),
+                v => Err(crate::Error::invalid(
+                    "airway.occluded",
+                    v,
+                    "0 (open) or 1 (occluded)",
+                )),
+            },
         }
     }
 
-    /// The value `torso` holds.
+    /// The value `torso` holds (the occlusion as 1.0 or 0.0).
     pub fn value(self, torso: &Torso) -> f64 {
         match self {
             Input::Activation(g) => torso.activation_input(g),
             Input::AirwayOpening => torso.airway_opening(),
+            Input::AirwayOccluded => f64::from(u8::from(torso.airway_occluded())),
         }
     }
 }

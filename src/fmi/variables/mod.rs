@@ -59,6 +59,8 @@ pub const VR_TIME: u32 = 0;
 pub const VR_ACTIVATION: u32 = 1;
 /// Value reference of `pressure.airway_opening`, the input after the activations.
 pub const VR_AIRWAY_OPENING: u32 = 9;
+/// Value reference of `airway.occluded`, the Boolean input after the airway opening.
+pub const VR_AIRWAY_OCCLUDED: u32 = 10;
 /// Value reference of `marker[1].x`; `marker[i].<axis>` is `VR_MARKER + 3 (i - 1) + axis`.
 pub const VR_MARKER: u32 = 2000;
 

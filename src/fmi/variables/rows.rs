@@ -5,7 +5,7 @@
 
 use super::mapping::{Family, Input, Parameter, Value, start_config};
 use super::types::{Causality, Initial, Role, ScalarType, Start, Variability, Variable};
-use super::{VR_ACTIVATION, VR_AIRWAY_OPENING, VR_TIME, marker_vr};
+use super::{VR_ACTIVATION, VR_AIRWAY_OCCLUDED, VR_AIRWAY_OPENING, VR_TIME, marker_vr};
 use crate::anatomy::skin::MarkerSet;
 use crate::anatomy::{MuscleGroup, SUBJECT_RANGES, Side};
 use crate::model::{Config, Quantity};
@@ -219,6 +219,18 @@ pub(super) fn build(markers: &MarkerOutputs) -> Vec<Variable> {
     .0;
     r.causality = Causality::Input;
     r.start = Start::Real(0.0);
+    rows.push(r);
+    let mut r = Row::new(
+        "airway.occluded",
+        VR_AIRWAY_OCCLUDED,
+        Boolean,
+        Role::Input(Input::AirwayOccluded),
+        "The airway occluded at the mouth: no gas flows, the lungs' gas follows Boyle's law from its volume and pressure when it closed, the mouth pressure is the alveolar pressure (the maximal inspiratory pressure manoeuvre); refused by solver.method 4 (quasi-static)",
+    )
+    .0;
+    r.causality = Causality::Input;
+    r.variability = Variability::Discrete;
+    r.start = Start::Boolean(false);
     rows.push(r);
 
     let methods = (Method::ALL.len() - 1) as f64;
@@ -468,25 +480,36 @@ pub(super) fn build(markers: &MarkerOutputs) -> Vec<Variable> {
             "Pleural pressure relative to the body surface: alveolar pressure less the lungs' elastic recoil (about -5 cmH2O at rest)",
         )
         .display("cmH2O")
-        .depends_on(&[VR_AIRWAY_OPENING])
+        .depends_on(&[VR_AIRWAY_OPENING, VR_AIRWAY_OCCLUDED])
         .0,
         out(
             "pressure.alveolar",
             1012,
             Q::AlveolarPressure,
             "Pa",
-            "Alveolar pressure relative to the body surface: the airway opening's less the drop across the airway resistance",
+            "Alveolar pressure relative to the body surface: the airway opening's less the drop across the airway resistance; with the airway occluded, Boyle's law on the lungs' gas",
         )
         .display("cmH2O")
-        .depends_on(&[VR_AIRWAY_OPENING])
+        .depends_on(&[VR_AIRWAY_OPENING, VR_AIRWAY_OCCLUDED])
         .0,
         out(
             "flow.airway",
             1013,
             Q::AirwayFlow,
             "L/s",
-            "Airflow into the lungs (rate of the lung volume), positive in inspiration",
+            "Airflow into the lungs through the airway (rate of the lung volume), positive in inspiration; 0 with the airway occluded",
         )
+        .depends_on(&[VR_AIRWAY_OCCLUDED])
+        .0,
+        out(
+            "pressure.mouth",
+            1022,
+            Q::MouthPressure,
+            "Pa",
+            "Pressure at the mouth relative to the body surface: the airway opening's with the airway open; behind an occlusion the alveolar pressure (no gas flows), the maximal inspiratory pressure's reading",
+        )
+        .display("cmH2O")
+        .depends_on(&[VR_AIRWAY_OPENING, VR_AIRWAY_OCCLUDED])
         .0,
     ]);
     // 1014 + 2 k + side (0 right, 1 left) for lung, rib-cage and abdominal displaced

@@ -280,6 +280,7 @@ impl Torso {
                 applied: Applied {
                     inputs: *inputs,
                     airway_opening: *airway_opening,
+                    occlusion: None,
                     drive: &config.drive,
                     gains: super::side_gains(config),
                 },
