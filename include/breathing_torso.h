@@ -230,6 +230,10 @@ typedef struct BtConfig {
    * and active parts with the passive wall fitted to the adult chest wall's compliance.
    */
   int muscle_law;
+  /**
+   * Gravitational acceleration [m/s^2], 0 to 3 x 9.81 (FMI `gravity`; 9.81 by default).
+   */
+  double gravity;
 } BtConfig;
 
 /**
@@ -574,7 +578,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{04cde9ee-4695-3196-e1de-14825e67080b}"
+#define BT_FMI_GUID "{53102732-64dd-4058-b3c3-d1af1d054564}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -611,6 +615,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_SUBJECT_MESH_DIR 301u
 #define BT_VR_SOLVER_METHOD 205u
 #define BT_VR_MUSCLE_LAW 206u
+#define BT_VR_GRAVITY 207u
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u
 #define BT_VR_SOLVER_MAX_STEP 132u

@@ -153,6 +153,7 @@ impl Scene {
             posture: posture.into(),
             lod,
             muscle_law: "thesis".into(),
+            gravity: breathing_torso::dynamics::GRAVITY,
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {

@@ -188,6 +188,8 @@ pub struct BtConfig {
     /// Muscle law (FMI `muscle_law`): 0 the seed thesis's shortening linear spring, 1 passive
     /// and active parts with the passive wall fitted to the adult chest wall's compliance.
     pub muscle_law: c_int,
+    /// Gravitational acceleration [m/s^2], 0 to 3 x 9.81 (FMI `gravity`; 9.81 by default).
+    pub gravity: f64,
 }
 
 /// Statistics of one `bt_advance_to` call.

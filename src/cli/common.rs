@@ -42,6 +42,9 @@ pub struct SubjectArgs {
     /// active parts, the passive wall fitted to the adult chest wall's compliance).
     #[arg(long, default_value = "thesis")]
     pub muscle_law: String,
+    /// Gravitational acceleration [m/s^2], 0 (weightless) to 3 x 9.81.
+    #[arg(long, default_value_t = crate::dynamics::GRAVITY)]
+    pub gravity: f64,
 }
 
 impl SubjectArgs {
@@ -88,6 +91,7 @@ impl SubjectArgs {
         c.solver.rtol = solver.rtol;
         c.muscle_law = crate::dynamics::muscle::MuscleLaw::parse(&self.muscle_law)
             .map_err(|_| Error::invalid("--muscle-law", &self.muscle_law, "thesis or hill"))?;
+        c.gravity = self.gravity;
         c.validate().map_err(flag_error)?;
         Ok(c)
     }
@@ -140,6 +144,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "grid.rows" | "grid.cols" => "--grid",
         "solver.method" => "--solver",
         "muscle_law" => "--muscle-law",
+        "gravity" => "--gravity",
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",

@@ -161,6 +161,18 @@ pub const TRANSVERSE_FRACTION: f64 = 0.1;
 /// properties"): neither separates the abdominal wall.
 pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
 
+/// Default [`Params::gravity`] [m/s^2]: standard gravity, 9.80665 m/s^2 (3rd CGPM, 1901),
+/// rounded.
+/// Source: standard gravity 9.80665 m/s^2 (3rd CGPM, 1901); ours 9.81 (agrees).
+pub const GRAVITY: f64 = 9.81;
+
+/// Largest gravitational acceleration the model accepts ([`Params::gravity`], FMI `gravity`)
+/// [m/s^2]: three times [`GRAVITY`], a few g, the order of sustained accelerations in human
+/// centrifuge studies, far beyond any posture on the ground. Nothing in the model is checked
+/// above it.
+/// Numerical: the upper end of the accepted input range, not a property of the body.
+pub const GRAVITY_MAX: f64 = 3.0 * GRAVITY;
+
 fn default_abdominal_wall_resistance() -> f64 {
     ABDOMINAL_WALL_RESISTANCE
 }
@@ -398,12 +410,13 @@ pub struct Params {
     /// Derived: default [`ABDOMINAL_WALL_RESISTANCE`].
     #[serde(default = "default_abdominal_wall_resistance")]
     pub abdominal_wall_resistance: f64,
-    /// Gravitational acceleration [m/s^2]. Default 9.81: standard gravity, 9.80665 m/s^2
-    /// (3rd CGPM, 1901), rounded. It acts on the true masses, and constant preloads hold the
+    /// Gravitational acceleration [m/s^2], 0 to [`GRAVITY_MAX`] (FMI `gravity`, C ABI
+    /// `BtConfig.gravity`, CLI `--gravity`). Default [`GRAVITY`]: standard gravity, 9.80665
+    /// m/s^2 (3rd CGPM, 1901), rounded. It acts on the true masses, and constant preloads hold the
     /// rest pose against it (the rest state is the generated anatomy, not an equilibrium
     /// found under gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture
     /// effects come from the tables above.
-    /// Source: standard gravity 9.80665 m/s^2 (3rd CGPM, 1901); ours 9.81 (agrees).
+    /// Derived: default [`GRAVITY`].
     pub gravity: f64,
     /// The muscle law ([`super::muscle::MuscleLaw`]): the seed thesis's shortening spring
     /// (the default) or passive and active parts. Configurations written before it existed
@@ -498,7 +511,7 @@ impl Params {
             tendon_stiffness: 2000.0,
             abdominal_wall_compliance: 2.0e-6 * compliance_factor,
             abdominal_wall_resistance: ABDOMINAL_WALL_RESISTANCE,
-            gravity: 9.81,
+            gravity: GRAVITY,
             muscle_law: super::muscle::MuscleLaw::Thesis,
         }
     }
@@ -571,11 +584,11 @@ impl Params {
                 return Err(crate::Error::invalid(name, v, "(0, 1)"));
             }
         }
-        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+        if !(self.gravity.is_finite() && (0.0..=GRAVITY_MAX).contains(&self.gravity)) {
             return Err(crate::Error::invalid(
                 "params.gravity",
                 self.gravity,
-                ">= 0",
+                format!("finite and in [0, {GRAVITY_MAX}] m/s^2"),
             ));
         }
         Ok(())

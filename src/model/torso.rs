@@ -95,7 +95,9 @@ impl Compiled {
             config.subject_mesh_dir.as_deref(),
         )?;
         let params = config.params.clone().unwrap_or_else(|| {
-            Params::for_posture_and_law(config.subject.posture, config.muscle_law)
+            let mut p = Params::for_posture_and_law(config.subject.posture, config.muscle_law);
+            p.gravity = config.gravity;
+            p
         });
         let mut model = Model::compile(&anatomy, params);
         model.set_lung_fraction(config.lung_ratio);

@@ -97,6 +97,8 @@ pub enum Parameter {
     SolverMethod,
     /// `muscle_law` (Integer: 0 thesis, 1 hill).
     MuscleLaw,
+    /// `gravity` [m/s^2].
+    Gravity,
     /// `solver.rtol`.
     SolverRtol,
     /// `solver.atol`.
@@ -174,6 +176,7 @@ impl Parameter {
             ),
             SolverMethod => Value::Integer(config.solver.method.code()),
             MuscleLaw => Value::Integer(config.muscle_law.code()),
+            Gravity => Value::Real(config.gravity),
             SolverRtol => Value::Real(config.solver.rtol),
             SolverAtol => Value::Real(config.solver.atol),
             SolverMaxStep => Value::Real(config.solver.max_step),
@@ -236,6 +239,7 @@ impl Parameter {
             (MuscleLaw, Value::Integer(v)) => {
                 config.muscle_law = crate::dynamics::muscle::MuscleLaw::from_code(v.into())?
             }
+            (Gravity, Value::Real(v)) => config.gravity = v,
             (SolverRtol, Value::Real(v)) => config.solver.rtol = v,
             (SolverAtol, Value::Real(v)) => config.solver.atol = v,
             (SolverMaxStep, Value::Real(v)) => config.solver.max_step = v,
