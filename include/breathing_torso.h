@@ -234,6 +234,12 @@ typedef struct BtConfig {
    * Gravitational acceleration [m/s^2], 0 to 3 x 9.81 (FMI `gravity`; 9.81 by default).
    */
   double gravity;
+  /**
+   * How gravity loads the model (FMI `gravity_loads`): 0 preloads cancel it at each
+   * posture's rest (default), 1 it acts (the abdominal contents' hydrostatic pressure, the
+   * tissues' tensions from the standing reference, the rest found under the loads).
+   */
+  int gravity_loads;
 } BtConfig;
 
 /**
@@ -578,7 +584,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{53102732-64dd-4058-b3c3-d1af1d054564}"
+#define BT_FMI_GUID "{71269ed6-3e73-9899-3ea1-39e5e174dd99}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -616,6 +622,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_SOLVER_METHOD 205u
 #define BT_VR_MUSCLE_LAW 206u
 #define BT_VR_GRAVITY 207u
+#define BT_VR_GRAVITY_LOADS 208u
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u
 #define BT_VR_SOLVER_MAX_STEP 132u

@@ -154,6 +154,7 @@ impl Scene {
             lod,
             muscle_law: "thesis".into(),
             gravity: breathing_torso::dynamics::GRAVITY,
+            gravity_loads: "preloaded".into(),
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {

@@ -109,6 +109,7 @@ pub(super) unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         params: None,
         muscle_law: crate::dynamics::muscle::MuscleLaw::from_code(c.muscle_law.into())?,
         gravity: c.gravity,
+        gravity_loads: crate::dynamics::GravityLoads::from_code(c.gravity_loads.into())?,
     };
     Ok(config)
 }
@@ -145,5 +146,6 @@ pub(super) fn config_to_c(
         group_gain_left: c.group_gains.left,
         muscle_law: c.muscle_law.code(),
         gravity: c.gravity,
+        gravity_loads: c.gravity_loads.code(),
     }
 }

@@ -45,6 +45,11 @@ pub struct SubjectArgs {
     /// Gravitational acceleration [m/s^2], 0 (weightless) to 3 x 9.81.
     #[arg(long, default_value_t = crate::dynamics::GRAVITY)]
     pub gravity: f64,
+    /// How gravity loads the model: preloaded (preloads cancel it at each posture's rest, the
+    /// posture effects from tables) or acting (the abdominal contents' hydrostatic pressure,
+    /// the rest found under the loads).
+    #[arg(long, default_value = "preloaded")]
+    pub gravity_loads: String,
 }
 
 impl SubjectArgs {
@@ -92,6 +97,14 @@ impl SubjectArgs {
         c.muscle_law = crate::dynamics::muscle::MuscleLaw::parse(&self.muscle_law)
             .map_err(|_| Error::invalid("--muscle-law", &self.muscle_law, "thesis or hill"))?;
         c.gravity = self.gravity;
+        c.gravity_loads =
+            crate::dynamics::GravityLoads::parse(&self.gravity_loads).map_err(|_| {
+                Error::invalid(
+                    "--gravity-loads",
+                    &self.gravity_loads,
+                    "preloaded or acting",
+                )
+            })?;
         c.validate().map_err(flag_error)?;
         Ok(c)
     }
@@ -145,6 +158,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "solver.method" => "--solver",
         "muscle_law" => "--muscle-law",
         "gravity" => "--gravity",
+        "gravity_loads" => "--gravity-loads",
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",

@@ -865,6 +865,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             lod: Some(0),
             muscle_law: "thesis".into(),
             gravity: crate::dynamics::GRAVITY,
+            gravity_loads: "preloaded".into(),
         },
         solver: SolverArgs {
             solver: "dopri5".into(),

@@ -173,6 +173,71 @@ pub const GRAVITY: f64 = 9.81;
 /// Numerical: the upper end of the accepted input range, not a property of the body.
 pub const GRAVITY_MAX: f64 = 3.0 * GRAVITY;
 
+/// Density of the abdominal contents as a fluid [kg/m^3], for their hydrostatic pressure
+/// gradient rho g under [`GravityLoads::Acting`]. Pressures measured next to the ventral
+/// abdominal wall (saline-filled catheters, anaesthetised dogs in several postures) rise
+/// with depth by about 0.89 cmH2O per cm of height (Loring et al. 1994, J Appl Physiol
+/// 77:1375), a fluid of 0.89 times water's density (water's gradient is 1 cmH2O/cm): the
+/// contents are mostly water-like tissue with some gas (100-300 mL, seed thesis 2.3).
+/// Source: Loring et al. 1994, J Appl Physiol 77:1375: a gravitational gradient of about
+/// 0.89 cmH2O/cm next to the abdominal wall; ours 890 kg/m^3 x g = 0.89 cmH2O/cm at
+/// standard gravity (agrees: copied).
+pub const ABDOMINAL_CONTENTS_DENSITY: f64 = 890.0;
+
+/// How gravity loads the model ([`Params::gravity_loads`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GravityLoads {
+    /// Each posture's generated anatomy is its rest: gravity acts on the true masses (the
+    /// abdominal contents lumped on the free vertices of their surface), and constant
+    /// preloads computed on that posture's rest cancel every load there, so the posture
+    /// effects come from the posture tables (the dome's apex rise, the wall's compliance
+    /// factors, the diaphragm's length ratio). The default.
+    #[default]
+    Preloaded,
+    /// Gravity acts: the abdominal contents are a fluid of density
+    /// [`ABDOMINAL_CONTENTS_DENSITY`] whose hydrostatic pressure rho g . (x - x_c) acts on
+    /// the cavity's surfaces on top of its mean pressure (their weight, no longer lumped on
+    /// the vertices); the tissues' rest tensions are derived once, on the standing anatomy
+    /// under standard gravity; every posture is that anatomy with gravity turned, and its
+    /// rest is the equilibrium under the loads.
+    Acting,
+}
+
+impl GravityLoads {
+    /// Both, by code (FMI `gravity_loads`: 0 preloaded, 1 acting).
+    pub const ALL: [GravityLoads; 2] = [GravityLoads::Preloaded, GravityLoads::Acting];
+
+    /// The code (FMI `gravity_loads`).
+    pub fn code(self) -> i32 {
+        match self {
+            GravityLoads::Preloaded => 0,
+            GravityLoads::Acting => 1,
+        }
+    }
+
+    /// The variant of code `code`; the error names `gravity_loads` and the codes.
+    pub fn from_code(code: i64) -> crate::Result<GravityLoads> {
+        usize::try_from(code)
+            .ok()
+            .and_then(|c| GravityLoads::ALL.get(c).copied())
+            .ok_or_else(|| crate::Error::invalid("gravity_loads", code, "0 preloaded or 1 acting"))
+    }
+
+    /// The variant named `name` (`preloaded` or `acting`).
+    pub fn parse(name: &str) -> crate::Result<GravityLoads> {
+        match name {
+            "preloaded" => Ok(GravityLoads::Preloaded),
+            "acting" => Ok(GravityLoads::Acting),
+            other => Err(crate::Error::invalid(
+                "gravity_loads",
+                other,
+                "preloaded or acting",
+            )),
+        }
+    }
+}
+
 fn default_abdominal_wall_resistance() -> f64 {
     ABDOMINAL_WALL_RESISTANCE
 }
@@ -423,6 +488,12 @@ pub struct Params {
     /// read the thesis's.
     #[serde(default)]
     pub muscle_law: super::muscle::MuscleLaw,
+    /// How gravity loads the model ([`GravityLoads`]): preloads cancelling it at each
+    /// posture's generated rest (the default), or acting, with the abdominal contents'
+    /// hydrostatic pressure and the rest found under the loads. Configurations written
+    /// before it existed read the preloaded model.
+    #[serde(default)]
+    pub gravity_loads: GravityLoads,
 }
 
 /// The factor on the passive chest wall's hand-set stiffnesses (and divisor of the abdominal
@@ -513,6 +584,7 @@ impl Params {
             abdominal_wall_resistance: ABDOMINAL_WALL_RESISTANCE,
             gravity: GRAVITY,
             muscle_law: super::muscle::MuscleLaw::Thesis,
+            gravity_loads: GravityLoads::Preloaded,
         }
     }
 

@@ -114,6 +114,11 @@ pub struct Config {
     /// Configurations written before it existed read [`crate::dynamics::GRAVITY`].
     #[serde(default = "default_gravity")]
     pub gravity: f64,
+    /// How gravity loads the model (FMI `gravity_loads`, [`crate::dynamics::GravityLoads`])
+    /// when `params` is `None`; `params` carries its own. Configurations written before it
+    /// existed read the preloaded model.
+    #[serde(default)]
+    pub gravity_loads: crate::dynamics::GravityLoads,
 }
 
 fn default_gravity() -> f64 {
@@ -135,6 +140,7 @@ impl Default for Config {
             params: None,
             muscle_law: crate::dynamics::muscle::MuscleLaw::Thesis,
             gravity: crate::dynamics::GRAVITY,
+            gravity_loads: crate::dynamics::GravityLoads::Preloaded,
         }
     }
 }
