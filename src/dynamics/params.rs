@@ -477,10 +477,12 @@ pub struct Params {
     pub abdominal_wall_resistance: f64,
     /// Gravitational acceleration [m/s^2], 0 to [`GRAVITY_MAX`] (FMI `gravity`, C ABI
     /// `BtConfig.gravity`, CLI `--gravity`). Default [`GRAVITY`]: standard gravity, 9.80665
-    /// m/s^2 (3rd CGPM, 1901), rounded. It acts on the true masses, and constant preloads hold the
-    /// rest pose against it (the rest state is the generated anatomy, not an equilibrium
-    /// found under gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture
-    /// effects come from the tables above.
+    /// m/s^2 (3rd CGPM, 1901), rounded. It acts on the true masses. Under
+    /// [`GravityLoads::Preloaded`] (the default) constant preloads hold each posture's rest
+    /// pose against it (the rest state is the generated anatomy, not an equilibrium found under
+    /// gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture effects come
+    /// from the tables above; under [`GravityLoads::Acting`] it also loads the abdominal
+    /// contents' hydrostatic pressure and each posture's rest is found under it.
     /// Derived: default [`GRAVITY`].
     pub gravity: f64,
     /// The muscle law ([`super::muscle::MuscleLaw`]): the seed thesis's shortening spring
