@@ -289,7 +289,9 @@ pub fn fit_passive_wall(config: &Config, target: f64) -> Result<Vec<FitStep>> {
 /// volume to 0.01 Pa. Under [`crate::dynamics::GravityLoads::Preloaded`] that is the rest
 /// volume itself (the preloads make the rest the equilibrium); with gravity acting it is
 /// where the loads of the posture move it. Returns the volume and the pleural pressure
-/// there [Pa].
+/// there [Pa]. The rest is an equilibrium; whether it is stable is not checked when the
+/// first solve needs no new factorisation (the model already at it, as the preloaded rest
+/// and the standing reference under gravity acting are).
 pub fn relaxed_frc(config: &Config) -> Result<(f64, f64)> {
     let c = relaxed(config);
     let mut torso = Torso::new(c)?;
