@@ -230,6 +230,16 @@ typedef struct BtConfig {
    * and active parts with the passive wall fitted to the adult chest wall's compliance.
    */
   int muscle_law;
+  /**
+   * Gravitational acceleration [m/s^2], 0 to 3 x 9.81 (FMI `gravity`; 9.81 by default).
+   */
+  double gravity;
+  /**
+   * How gravity loads the model (FMI `gravity_loads`): 0 preloads cancel it at each
+   * posture's rest (default), 1 it acts (the abdominal contents' hydrostatic pressure, the
+   * tissues' tensions from the standing reference, the rest found under the loads).
+   */
+  int gravity_loads;
 } BtConfig;
 
 /**
@@ -586,7 +596,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{b803a625-7f1c-8b3f-cc91-a7c4ec4cc989}"
+#define BT_FMI_GUID "{6e8a3429-b8bb-ac83-f5b6-c008c2ebbfa7}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -624,6 +634,8 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_SUBJECT_MESH_DIR 301u
 #define BT_VR_SOLVER_METHOD 205u
 #define BT_VR_MUSCLE_LAW 206u
+#define BT_VR_GRAVITY 207u
+#define BT_VR_GRAVITY_LOADS 208u
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u
 #define BT_VR_SOLVER_MAX_STEP 132u

@@ -155,6 +155,8 @@ impl Scene {
             posture: posture.into(),
             lod,
             muscle_law: muscle_law.into(),
+            gravity: breathing_torso::dynamics::GRAVITY,
+            gravity_loads: "preloaded".into(),
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {

@@ -282,3 +282,52 @@ pub fn fit_passive_wall(config: &Config, target: f64) -> Result<Vec<FitStep>> {
         ),
     })
 }
+
+/// The relaxed respiratory system's rest, its FRC under the loads: the lung volume [L] at
+/// which the alveolar pressure of the relaxed equilibrium, with the airway shut, is zero (so
+/// that with the airway open no air flows), found by secant steps from the model's rest
+/// volume to 0.01 Pa. Under [`crate::dynamics::GravityLoads::Preloaded`] that is the rest
+/// volume itself (the preloads make the rest the equilibrium); with gravity acting it is
+/// where the loads of the posture move it. Returns the volume and the pleural pressure
+/// there [Pa]. The rest is an equilibrium; whether it is stable is not checked when the
+/// first solve needs no new factorisation (the model already at it, as the preloaded rest
+/// and the standing reference under gravity acting are).
+pub fn relaxed_frc(config: &Config) -> Result<(f64, f64)> {
+    let c = relaxed(config);
+    let mut torso = Torso::new(c)?;
+    let rest = torso.read(Quantity::LungVolume)?;
+    let first = at_volume(&mut torso, rest)?;
+    if first.system.abs() < 0.01 {
+        return Ok((first.lung, first.chest_wall));
+    }
+    // a first step with the adult's respiratory-system compliance, 0.1 L/cmH2O, at most 0.5 L
+    let step = (-first.system / CMH2O * 0.1).clamp(-0.5, 0.5);
+    let mut a = first;
+    let mut b = at_volume(&mut torso, rest + step)?;
+    for _ in 0..30 {
+        if b.system.abs() < 0.01 {
+            return Ok((b.lung, b.chest_wall));
+        }
+        let slope = (b.system - a.system) / (b.lung - a.lung);
+        if !(slope.is_finite() && slope > 0.0) {
+            return Err(Error::Numerical {
+                time: 0.0,
+                reason: format!(
+                    "the relaxed system's recoil does not rise with volume between {:.4} L \
+                     ({:.2} Pa) and {:.4} L ({:.2} Pa)",
+                    a.lung, a.system, b.lung, b.system
+                ),
+            });
+        }
+        let next = b.lung - (b.system / slope).clamp(-0.5, 0.5);
+        a = b;
+        b = at_volume(&mut torso, next)?;
+    }
+    Err(Error::Numerical {
+        time: 0.0,
+        reason: format!(
+            "the relaxed rest was not found in 30 secant steps (last {:.4} L, {:.3} Pa)",
+            b.lung, b.system
+        ),
+    })
+}

@@ -108,6 +108,8 @@ pub(super) unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         // the C ABI builds the default constants; overrides are a library-level study tool
         params: None,
         muscle_law: crate::dynamics::muscle::MuscleLaw::from_code(c.muscle_law.into())?,
+        gravity: c.gravity,
+        gravity_loads: crate::dynamics::GravityLoads::from_code(c.gravity_loads.into())?,
     };
     Ok(config)
 }
@@ -143,5 +145,7 @@ pub(super) fn config_to_c(
         group_gain_right: c.group_gains.right,
         group_gain_left: c.group_gains.left,
         muscle_law: c.muscle_law.code(),
+        gravity: c.gravity,
+        gravity_loads: c.gravity_loads.code(),
     }
 }

@@ -188,6 +188,12 @@ pub struct BtConfig {
     /// Muscle law (FMI `muscle_law`): 0 the seed thesis's shortening linear spring, 1 passive
     /// and active parts with the passive wall fitted to the adult chest wall's compliance.
     pub muscle_law: c_int,
+    /// Gravitational acceleration [m/s^2], 0 to 3 x 9.81 (FMI `gravity`; 9.81 by default).
+    pub gravity: f64,
+    /// How gravity loads the model (FMI `gravity_loads`): 0 preloads cancel it at each
+    /// posture's rest (default), 1 it acts (the abdominal contents' hydrostatic pressure, the
+    /// tissues' tensions from the standing reference, the rest found under the loads).
+    pub gravity_loads: c_int,
 }
 
 /// Statistics of one `bt_advance_to` call.

@@ -193,6 +193,11 @@ pub struct RelaxationArgs {
     /// with the fitted factor.
     #[arg(long)]
     pub fit: bool,
+    /// How gravity loads the model: preloaded (each posture's generated anatomy is its rest)
+    /// or acting (the standing anatomy with gravity turned; each posture's rest, its relaxed
+    /// FRC, found under the loads and printed).
+    #[arg(long, default_value = "preloaded")]
+    pub gravity_loads: String,
 }
 
 /// Runs `torso bench relaxation`: the default subject's curves in each posture.
@@ -215,6 +220,14 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
     use crate::dynamics::CHEST_WALL_COMPLIANCE;
     let law = crate::dynamics::muscle::MuscleLaw::parse(&args.muscle_law)
         .map_err(|_| Error::invalid("--muscle-law", &args.muscle_law, "thesis or hill"))?;
+    let loads = crate::dynamics::GravityLoads::parse(&args.gravity_loads).map_err(|_| {
+        Error::invalid(
+            "--gravity-loads",
+            &args.gravity_loads,
+            "preloaded or acting",
+        )
+    })?;
+    let acting = loads == crate::dynamics::GravityLoads::Acting;
     let mut fitted: Option<f64> = None;
     for name in args.posture.split(',') {
         let posture = Posture::from_name(name.trim())
@@ -222,15 +235,28 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
         let mut config = Config::default();
         config.scene.level_of_detail = args.lod;
         config.subject.posture = posture;
-        let mut params = crate::dynamics::Params::for_posture_and_law(posture, law);
+        // gravity acting: every posture has the standing anatomy's constants
+        let tables = if acting { Posture::Standing } else { posture };
+        let mut params = crate::dynamics::Params::for_posture_and_law(tables, law);
         if let Some(f) = fitted {
-            params = crate::dynamics::Params::for_posture(posture);
+            params = crate::dynamics::Params::for_posture(tables);
             params.muscle_law = law;
             params.scale_passive_wall(f);
         }
+        params.gravity_loads = loads;
+        if acting {
+            let mut c = config.clone();
+            c.params = Some(params.clone());
+            let (v, p) = crate::bench::relaxation::relaxed_frc(&c)?;
+            println!(
+                "{posture:?}, gravity acting: relaxed FRC {v:.4} L, pleural pressure {:.2} cmH2O",
+                p / CMH2O
+            );
+        }
         if args.fit && fitted.is_none() {
-            let mut unscaled = crate::dynamics::Params::for_posture(posture);
+            let mut unscaled = crate::dynamics::Params::for_posture(tables);
             unscaled.muscle_law = law;
+            unscaled.gravity_loads = loads;
             config.params = Some(unscaled.clone());
             let steps = fit_passive_wall(&config, CHEST_WALL_COMPLIANCE)?;
             for s in &steps {
@@ -250,6 +276,7 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
             params = unscaled;
             params.scale_passive_wall(f);
         }
+        params.gravity_loads = loads;
         config.params = Some(params);
         let r = relaxation(&config, args.points)?;
         let pct = |f: Option<f64>| f.map_or("none".to_string(), |f| format!("{:.1} %", 100.0 * f));

@@ -42,6 +42,14 @@ pub struct SubjectArgs {
     /// active parts, the passive wall fitted to the adult chest wall's compliance).
     #[arg(long, default_value = "thesis")]
     pub muscle_law: String,
+    /// Gravitational acceleration [m/s^2], 0 (weightless) to 3 x 9.81.
+    #[arg(long, default_value_t = crate::dynamics::GRAVITY)]
+    pub gravity: f64,
+    /// How gravity loads the model: preloaded (preloads cancel it at each posture's rest, the
+    /// posture effects from tables) or acting (the abdominal contents' hydrostatic pressure,
+    /// the rest found under the loads).
+    #[arg(long, default_value = "preloaded")]
+    pub gravity_loads: String,
 }
 
 impl SubjectArgs {
@@ -87,6 +95,15 @@ impl SubjectArgs {
         })?;
         c.solver.rtol = solver.rtol;
         c.muscle_law = self.law()?;
+        c.gravity = self.gravity;
+        c.gravity_loads =
+            crate::dynamics::GravityLoads::parse(&self.gravity_loads).map_err(|_| {
+                Error::invalid(
+                    "--gravity-loads",
+                    &self.gravity_loads,
+                    "preloaded or acting",
+                )
+            })?;
         c.validate().map_err(flag_error)?;
         Ok(c)
     }
@@ -145,6 +162,8 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "grid.rows" | "grid.cols" => "--grid",
         "solver.method" => "--solver",
         "muscle_law" => "--muscle-law",
+        "gravity" => "--gravity",
+        "gravity_loads" => "--gravity-loads",
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",

@@ -864,6 +864,8 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             posture: "standing".into(),
             lod: Some(0),
             muscle_law: "thesis".into(),
+            gravity: crate::dynamics::GRAVITY,
+            gravity_loads: "preloaded".into(),
         },
         solver: SolverArgs {
             solver: "dopri5".into(),

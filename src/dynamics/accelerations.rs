@@ -68,7 +68,7 @@ impl Preload {
                 .vertex_anchor
                 .iter()
                 .zip(&structure.vertex_mass)
-                .map(|(&a, m)| -data.force[a as usize] - structure.gravity * *m)
+                .map(|(&a, m)| -data.force[a as usize] - structure.vertex_gravity * *m)
                 .collect(),
         }
     }
@@ -215,7 +215,8 @@ fn vertices(
         .enumerate()
     {
         let v = Vector3::new(v[0], v[1], v[2]);
-        let f = data.force[a as usize] + model.gravity * mass[j] + preload[j] - v * damping[j];
+        let f =
+            data.force[a as usize] + model.vertex_gravity * mass[j] + preload[j] - v * damping[j];
         acc.copy_from_slice(f.as_slice());
     }
 }

@@ -71,10 +71,35 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     for (j, m) in model.vertex_mass.iter().enumerate() {
         let px = l.vertex_x + 3 * j;
         let x = Vector3::new(y[px], y[px + 1], y[px + 2]);
-        e -= (model.gravity * *m + model.preload.vertex[j]).dot(&x);
+        e -= (model.vertex_gravity * *m + model.preload.vertex[j]).dot(&x);
     }
+    e += hydrostatic_energy(model, &data.pos);
     let _: &mut Data = data;
     e
+}
+
+/// Potential energy [J] of the abdominal contents' hydrostatic pressure
+/// ([`super::forces`]): -rho g . integral over the cavity of (x - x_c) dV, the contents'
+/// weight's potential relative to their rest centroid x_c, written by the divergence theorem
+/// as a sum over the cavity's triangles, -rho (g . A_2) Q / (24 |g|^2) with A_2 the doubled
+/// area vector and Q = s_a^2 + s_b^2 + s_c^2 + s_a s_b + s_b s_c + s_c s_a, s = g . (x - x_c)
+/// at the corners. Zero without gravity or contents.
+pub fn hydrostatic_energy(model: &super::Structure, pos: &[nalgebra::Point3<f64>]) -> f64 {
+    let (rho, g) = (model.contents_density, model.gravity);
+    let g2 = g.norm_squared();
+    if rho == 0.0 || g2 == 0.0 {
+        return 0.0;
+    }
+    let c = model.contents_centre;
+    let mut sum = 0.0;
+    for t in &model.abdomen_triangles {
+        let [a, b, d] = t.map(|i| pos[i as usize]);
+        let face = (b - a).cross(&(d - a));
+        let [sa, sb, sd] = [a, b, d].map(|p| g.dot(&(p - c)));
+        let q = sa * sa + sb * sb + sd * sd + sa * sb + sb * sd + sd * sa;
+        sum += g.dot(&face) * q;
+    }
+    -rho * sum / (24.0 * g2)
 }
 
 /// The integral of the softplus eps ln(1 + exp(u / eps)) from 0 to `x`. Beyond 40 eps from

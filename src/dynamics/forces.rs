@@ -22,6 +22,8 @@
 //! - Abdominal pressure (eq. 2.5): P = K (V0/V - 1) - mu dV/dt; each triangle pushes each of
 //!   its corners with P A n / 3 (eq. 2.6), which on a closed surface is exactly P dV/dx. The
 //!   viscous term mu (`Structure::abdomen_viscosity`) damps the cavity's volume mode.
+//! - The abdominal contents' hydrostatic pressure rho g . (x - x_c) under
+//!   [`super::GravityLoads::Acting`] (`hydrostatic_pressure`), on top of the mean pressure.
 //! - Pleural pressure: P_pl = P_ao - P_L(V_th) - R dV_th/dt on the thoracic surface: the
 //!   pressure at the airway opening (`Activations::airway_opening`, 0 breathing air) less the
 //!   lungs' recoil and the pressure drop of the airflow through the airway resistance R
@@ -65,11 +67,44 @@ pub fn accumulate_frozen(
     apply_pressure(tris, &model.thorax_moving, thorax, pressures[1], force);
 }
 
-/// Element and vector-spring forces (everything but the pressures).
+/// The abdominal contents' hydrostatic pressure p = rho g . (x - x_c)
+/// ([`Structure::contents_density`], [`Structure::contents_centre`]) on the moving triangles
+/// of the abdominal surface, on top of the cavity's mean pressure. A pressure linear over a
+/// flat triangle loads corner i with A n (2 p_i + p_j + p_k) / 12 (its integral against the
+/// corner's hat function), which is exactly minus the derivative of the contents' potential
+/// ([`super::energy::hydrostatic_energy`]) with respect to the corner (Reynolds transport:
+/// moving a corner moves the surface by its hat function). Over the whole closed surface the
+/// loads add up to the contents' weight, rho g V; the fixed triangles' share is carried by
+/// the skeleton.
+fn hydrostatic_pressure(model: &Structure, data: &mut Data) {
+    let (rho, g) = (model.contents_density, model.gravity);
+    if rho == 0.0 || g == Vector3::zeros() {
+        return;
+    }
+    let c = model.contents_centre;
+    let Data { pos, force, .. } = data;
+    for (t, &moving) in model.abdomen_triangles.iter().zip(&model.abdomen_moving) {
+        if !moving {
+            continue;
+        }
+        let [a, b, d] = t.map(|i| pos[i as usize]);
+        // (b - a) x (d - a) = 2 A n
+        let face = (b - a).cross(&(d - a));
+        let p = [a, b, d].map(|x| rho * g.dot(&(x - c)));
+        let sum = p[0] + p[1] + p[2];
+        for k in 0..3 {
+            force[t[k] as usize] += face * ((p[k] + sum) / 24.0);
+        }
+    }
+}
+
+/// Element and vector-spring forces, and the abdominal contents' hydrostatic pressure
+/// (everything but the cavities' mean pressures).
 fn local_forces(model: &Structure, data: &mut Data, act: &Activations) {
     data.force.fill(Vector3::zeros());
     elements(model, data, act);
     vector_springs(model, data);
+    hydrostatic_pressure(model, data);
 }
 
 /// Muscle and membrane elements. An element along a path p_0 .. p_m has length
@@ -772,6 +807,67 @@ mod tests {
             y[l.vertex_v + i] = 0.02 * ((i as f64) * 0.11).cos();
         }
         y
+    }
+
+    /// The contents' hydrostatic loads are minus the gradient of their potential
+    /// ([`crate::dynamics::energy::hydrostatic_energy`]) at every free vertex of a deformed
+    /// abdomen (central differences), standing and supine, and that potential changes by
+    /// -rho g . d V when the whole cavity moves by d: the loads add up to the contents' weight.
+    #[test]
+    fn hydrostatic_loads_are_the_contents_weight() {
+        use crate::anatomy::Posture;
+        use crate::dynamics::energy::hydrostatic_energy;
+        use crate::dynamics::{GravityLoads, Structure, kinematics};
+        let anatomy = Anatomy::build(&Subject::default(), 0).unwrap();
+        for posture in [Posture::Standing, Posture::Supine] {
+            let mut params = Params::for_posture(Posture::Standing);
+            params.gravity_loads = GravityLoads::Acting;
+            let mut structure = Structure::compile(&anatomy, params);
+            structure.turn_gravity(posture);
+            let mut without = structure.clone();
+            without.contents_density = 0.0;
+            let (model, without) = (Model::new(structure), Model::new(without));
+            let y = deformed(&model);
+            let (mut data, mut bare) = (Data::new(&model), Data::new(&without));
+            let l = model.layout;
+            let act = Activations::default();
+            kinematics::positions_and_velocities(&model, &mut data, &l, &y);
+            kinematics::positions_and_velocities(&without, &mut bare, &l, &y);
+            local_forces(&model, &mut data, &act);
+            local_forces(&without, &mut bare, &act);
+            let scale = model.contents_density * model.gravity.norm() * 0.1 * 0.01;
+            let mut checked = 0;
+            for &a in model.vertex_anchor.iter().step_by(7) {
+                let a = a as usize;
+                let load = data.force[a] - bare.force[a];
+                for k in 0..3 {
+                    let h = 1e-6;
+                    let mut pos = data.pos.clone();
+                    pos[a][k] += h;
+                    let up = hydrostatic_energy(&model, &pos);
+                    pos[a][k] -= 2.0 * h;
+                    let down = hydrostatic_energy(&model, &pos);
+                    let gradient = (up - down) / (2.0 * h);
+                    assert!(
+                        (load[k] + gradient).abs() < 1e-6 * scale,
+                        "{posture:?}, anchor {a}, axis {k}: load {} against -dE/dx {}",
+                        load[k],
+                        -gradient
+                    );
+                }
+                checked += 1;
+            }
+            assert!(checked > 10);
+            let d = Vector3::new(0.01, -0.02, 0.005);
+            let moved: Vec<_> = data.pos.iter().map(|p| p + d).collect();
+            let v = volume(&data.pos, &model.abdomen_triangles);
+            let de = hydrostatic_energy(&model, &moved) - hydrostatic_energy(&model, &data.pos);
+            let expected = -model.contents_density * model.gravity.dot(&d) * v;
+            assert!(
+                (de - expected).abs() < 1e-9 * expected.abs().max(1.0),
+                "{posture:?}: {de} J against -rho g . d V = {expected} J"
+            );
+        }
     }
 
     /// The element loop in batches of four two-point elements (the baseline arrays, and the

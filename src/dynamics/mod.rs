@@ -38,9 +38,9 @@ mod structure;
 pub use data::{Activations, Data};
 pub use model::Model;
 pub use params::{
-    CHEST_WALL_COMPLIANCE, DIAPHRAGM_CONTRACTION_UPRIGHT, HILL_PASSIVE_WALL_SCALE,
-    LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE, Params,
-    diaphragm_contraction, diaphragm_length_ratio,
+    ABDOMINAL_CONTENTS_DENSITY, CHEST_WALL_COMPLIANCE, DIAPHRAGM_CONTRACTION_UPRIGHT, GRAVITY,
+    GRAVITY_MAX, GravityLoads, HILL_PASSIVE_WALL_SCALE, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN,
+    PLEURAL_BARRIER_PRESSURE, Params, diaphragm_contraction, diaphragm_length_ratio,
 };
 pub use state::{Layout, error_weights, rest_state};
 pub use structure::{

@@ -18,11 +18,23 @@
 
 use super::accelerations::Preload;
 use super::inertia::MassMatrix;
-use super::params::Params;
+use super::params::{GRAVITY, GravityLoads, Params};
 use super::state::Layout;
 use super::structure::Structure;
 use crate::anatomy::Anatomy;
 use std::ops::Deref;
+
+/// The reference whose rest tensions the tissues keep under [`GravityLoads::Acting`]: the
+/// structure's own anatomy (the generated standing one) standing under standard gravity
+/// ([`GRAVITY`]), its abdominal contents' hydrostatic pressure included. The preloads that
+/// make it an equilibrium there are the tissues' rest tensions; every other posture and
+/// gravity only changes the loads, and its rest is the equilibrium under them.
+fn reference_loads(structure: &Structure) -> Structure {
+    let mut reference = structure.clone();
+    let g = Params::gravity_direction(crate::anatomy::Posture::Standing);
+    reference.gravity = nalgebra::Vector3::new(g[0], g[1], g[2]) * GRAVITY;
+    reference
+}
 
 /// The compiled model (module doc): the structure, the state's layout, the mass matrix and
 /// the preloads.
@@ -71,7 +83,10 @@ impl Model {
             ],
             structure.airway_resistance,
         );
-        let preload = Preload::at_rest(&structure);
+        let preload = match structure.params.gravity_loads {
+            GravityLoads::Preloaded => Preload::at_rest(&structure),
+            GravityLoads::Acting => Preload::at_rest(&reference_loads(&structure)),
+        };
         Model {
             layout: Layout::new(&structure),
             structure,
@@ -83,6 +98,18 @@ impl Model {
     /// Length of the state vector.
     pub fn state_len(&self) -> usize {
         self.layout.len
+    }
+
+    /// Compiles `anatomy` (built standing) with constants `params` under
+    /// [`GravityLoads::Acting`], with gravity turned to `posture` ([`Structure::turn_gravity`]).
+    pub fn compile_in(
+        anatomy: &Anatomy,
+        params: Params,
+        posture: crate::anatomy::Posture,
+    ) -> Model {
+        let mut structure = Structure::compile(anatomy, params);
+        structure.turn_gravity(posture);
+        Model::new(structure)
     }
 
     /// [`Structure::set_lung_fraction`]. The mass matrix and the preloads stay as compiled

@@ -161,6 +161,83 @@ pub const TRANSVERSE_FRACTION: f64 = 0.1;
 /// properties"): neither separates the abdominal wall.
 pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
 
+/// Default [`Params::gravity`] [m/s^2]: standard gravity, 9.80665 m/s^2 (3rd CGPM, 1901),
+/// rounded.
+/// Source: standard gravity 9.80665 m/s^2 (3rd CGPM, 1901); ours 9.81 (agrees).
+pub const GRAVITY: f64 = 9.81;
+
+/// Largest gravitational acceleration the model accepts ([`Params::gravity`], FMI `gravity`)
+/// [m/s^2]: three times [`GRAVITY`], a few g, the order of sustained accelerations in human
+/// centrifuge studies, far beyond any posture on the ground. Nothing in the model is checked
+/// above it.
+/// Numerical: the upper end of the accepted input range, not a property of the body.
+pub const GRAVITY_MAX: f64 = 3.0 * GRAVITY;
+
+/// Density of the abdominal contents as a fluid [kg/m^3], for their hydrostatic pressure
+/// gradient rho g under [`GravityLoads::Acting`]. Pressures measured next to the ventral
+/// abdominal wall (saline-filled catheters, anaesthetised dogs in several postures) rise
+/// with depth by about 0.89 cmH2O per cm of height (Loring et al. 1994, J Appl Physiol
+/// 77:1375), a fluid of 0.89 times water's density (water's gradient is 1 cmH2O/cm): the
+/// contents are mostly water-like tissue with some gas (100-300 mL, seed thesis 2.3).
+/// Source: Loring et al. 1994, J Appl Physiol 77:1375: a gravitational gradient of about
+/// 0.89 cmH2O/cm next to the abdominal wall; ours 890 kg/m^3 x g = 0.89 cmH2O/cm at
+/// standard gravity (agrees: copied).
+pub const ABDOMINAL_CONTENTS_DENSITY: f64 = 890.0;
+
+/// How gravity loads the model ([`Params::gravity_loads`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GravityLoads {
+    /// Each posture's generated anatomy is its rest: gravity acts on the true masses (the
+    /// abdominal contents lumped on the free vertices of their surface), and constant
+    /// preloads computed on that posture's rest cancel every load there, so the posture
+    /// effects come from the posture tables (the dome's apex rise, the wall's compliance
+    /// factors, the diaphragm's length ratio). The default.
+    #[default]
+    Preloaded,
+    /// Gravity acts: the abdominal contents are a fluid of density
+    /// [`ABDOMINAL_CONTENTS_DENSITY`] whose hydrostatic pressure rho g . (x - x_c) acts on
+    /// the cavity's surfaces on top of its mean pressure (their weight, no longer lumped on
+    /// the vertices); the tissues' rest tensions are derived once, on the standing anatomy
+    /// under standard gravity; every posture is that anatomy with gravity turned, and its
+    /// rest is the equilibrium under the loads.
+    Acting,
+}
+
+impl GravityLoads {
+    /// Both, by code (FMI `gravity_loads`: 0 preloaded, 1 acting).
+    pub const ALL: [GravityLoads; 2] = [GravityLoads::Preloaded, GravityLoads::Acting];
+
+    /// The code (FMI `gravity_loads`).
+    pub fn code(self) -> i32 {
+        match self {
+            GravityLoads::Preloaded => 0,
+            GravityLoads::Acting => 1,
+        }
+    }
+
+    /// The variant of code `code`; the error names `gravity_loads` and the codes.
+    pub fn from_code(code: i64) -> crate::Result<GravityLoads> {
+        usize::try_from(code)
+            .ok()
+            .and_then(|c| GravityLoads::ALL.get(c).copied())
+            .ok_or_else(|| crate::Error::invalid("gravity_loads", code, "0 preloaded or 1 acting"))
+    }
+
+    /// The variant named `name` (`preloaded` or `acting`).
+    pub fn parse(name: &str) -> crate::Result<GravityLoads> {
+        match name {
+            "preloaded" => Ok(GravityLoads::Preloaded),
+            "acting" => Ok(GravityLoads::Acting),
+            other => Err(crate::Error::invalid(
+                "gravity_loads",
+                other,
+                "preloaded or acting",
+            )),
+        }
+    }
+}
+
 fn default_abdominal_wall_resistance() -> f64 {
     ABDOMINAL_WALL_RESISTANCE
 }
@@ -398,18 +475,27 @@ pub struct Params {
     /// Derived: default [`ABDOMINAL_WALL_RESISTANCE`].
     #[serde(default = "default_abdominal_wall_resistance")]
     pub abdominal_wall_resistance: f64,
-    /// Gravitational acceleration [m/s^2]. Default 9.81: standard gravity, 9.80665 m/s^2
-    /// (3rd CGPM, 1901), rounded. It acts on the true masses, and constant preloads hold the
-    /// rest pose against it (the rest state is the generated anatomy, not an equilibrium
-    /// found under gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture
-    /// effects come from the tables above.
-    /// Source: standard gravity 9.80665 m/s^2 (3rd CGPM, 1901); ours 9.81 (agrees).
+    /// Gravitational acceleration [m/s^2], 0 to [`GRAVITY_MAX`] (FMI `gravity`, C ABI
+    /// `BtConfig.gravity`, CLI `--gravity`). Default [`GRAVITY`]: standard gravity, 9.80665
+    /// m/s^2 (3rd CGPM, 1901), rounded. It acts on the true masses. Under
+    /// [`GravityLoads::Preloaded`] (the default) constant preloads hold each posture's rest
+    /// pose against it (the rest state is the generated anatomy, not an equilibrium found under
+    /// gravity; docs/dynamics.md, "Lungs follow the chest wall"), so the posture effects come
+    /// from the tables above; under [`GravityLoads::Acting`] it also loads the abdominal
+    /// contents' hydrostatic pressure and each posture's rest is found under it.
+    /// Derived: default [`GRAVITY`].
     pub gravity: f64,
     /// The muscle law ([`super::muscle::MuscleLaw`]): the seed thesis's shortening spring
     /// (the default) or passive and active parts. Configurations written before it existed
     /// read the thesis's.
     #[serde(default)]
     pub muscle_law: super::muscle::MuscleLaw,
+    /// How gravity loads the model ([`GravityLoads`]): preloads cancelling it at each
+    /// posture's generated rest (the default), or acting, with the abdominal contents'
+    /// hydrostatic pressure and the rest found under the loads. Configurations written
+    /// before it existed read the preloaded model.
+    #[serde(default)]
+    pub gravity_loads: GravityLoads,
 }
 
 /// The factor on the passive chest wall's hand-set stiffnesses (and divisor of the abdominal
@@ -498,8 +584,9 @@ impl Params {
             tendon_stiffness: 2000.0,
             abdominal_wall_compliance: 2.0e-6 * compliance_factor,
             abdominal_wall_resistance: ABDOMINAL_WALL_RESISTANCE,
-            gravity: 9.81,
+            gravity: GRAVITY,
             muscle_law: super::muscle::MuscleLaw::Thesis,
+            gravity_loads: GravityLoads::Preloaded,
         }
     }
 
@@ -571,11 +658,11 @@ impl Params {
                 return Err(crate::Error::invalid(name, v, "(0, 1)"));
             }
         }
-        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+        if !(self.gravity.is_finite() && (0.0..=GRAVITY_MAX).contains(&self.gravity)) {
             return Err(crate::Error::invalid(
                 "params.gravity",
                 self.gravity,
-                ">= 0",
+                format!("finite and in [0, {GRAVITY_MAX}] m/s^2"),
             ));
         }
         Ok(())

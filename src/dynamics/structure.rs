@@ -6,7 +6,7 @@
 //! from it before [`super::Model`] is assembled.
 
 use super::muscle::MuscleLaw;
-use super::params::Params;
+use super::params::{ABDOMINAL_CONTENTS_DENSITY, GravityLoads, Params};
 use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -338,6 +338,18 @@ pub struct Structure {
     pub capacity: (f64, f64),
     /// Gravity vector [m/s^2].
     pub gravity: Vector3<f64>,
+    /// Gravity acting on the free vertices' lumped masses [m/s^2]: [`Structure::gravity`]
+    /// when the abdominal contents are lumped on them ([`GravityLoads::Preloaded`]), zero when
+    /// the contents' weight acts through their hydrostatic pressure instead.
+    pub vertex_gravity: Vector3<f64>,
+    /// Density of the abdominal contents whose hydrostatic pressure rho g . (x - x_c) acts on
+    /// the abdominal surface [kg/m^3] ([`super::params::ABDOMINAL_CONTENTS_DENSITY`] under
+    /// [`GravityLoads::Acting`], 0 otherwise).
+    pub contents_density: f64,
+    /// The reference point x_c of the hydrostatic pressure: the abdominal cavity's centroid
+    /// at rest, so that the pressure's mean over the contents is zero at rest and the
+    /// cavity's mean pressure stays the bulk modulus's.
+    pub contents_centre: Point3<f64>,
     /// Anchor at the middle of the sternum (for its displacement).
     pub sternum_probe: u32,
     /// Airway resistance [Pa s/m^3] between the alveoli and the mouth: the pleural pressure
@@ -347,6 +359,23 @@ pub struct Structure {
     /// Viscosity of the abdomen's volume [Pa s/m^3]: the abdominal pressure carries
     /// -mu dV/dt (stiffness-proportional damping of its bulk modulus).
     pub abdomen_viscosity: f64,
+}
+
+/// Centroid of the volume enclosed by triangles over points (the tetrahedra from the origin
+/// to each triangle, weighted by their signed volumes).
+pub fn centroid(points: &[Point3<f64>], tris: &[[u32; 3]]) -> Point3<f64> {
+    let (mut v, mut m) = (0.0, Vector3::zeros());
+    for t in tris {
+        let (a, b, c) = (
+            points[t[0] as usize].coords,
+            points[t[1] as usize].coords,
+            points[t[2] as usize].coords,
+        );
+        let vol = a.dot(&b.cross(&c)) / 6.0;
+        v += vol;
+        m += (a + b + c) * (vol / 4.0);
+    }
+    Point3::from(m / v)
 }
 
 /// Signed volume enclosed by triangles over points (divergence theorem).
@@ -548,6 +577,14 @@ impl Structure {
         let abdomen_triangles: Vec<[u32; 3]> = ab.anchor_triangles().collect();
         let thorax_triangles = anatomy.thorax_triangles();
         let abdomen_rest_volume = volume(&rest, &abdomen_triangles);
+        let contents_centre = centroid(&rest, &abdomen_triangles);
+        let acting = params.gravity_loads == GravityLoads::Acting;
+        let contents_density = if acting {
+            ABDOMINAL_CONTENTS_DENSITY
+        } else {
+            0.0
+        };
+        let vertex_gravity = if acting { Vector3::zeros() } else { gravity };
         let thorax_rest_volume = volume(&rest, &thorax_triangles);
         let d = ab.dome_faceting_volume;
         let capacity = capacity_ratios(&anatomy.subject);
@@ -634,11 +671,24 @@ impl Structure {
             non_lung_volume,
             capacity,
             gravity,
+            vertex_gravity,
+            contents_density,
+            contents_centre,
             sternum_probe,
             airway_resistance: 1.0
                 / (params.specific_airway_conductance * anatomy.subject.frc_ecsc() * 1e-3),
             abdomen_viscosity,
             params,
+        }
+    }
+
+    /// Turns gravity to `posture`'s direction (its magnitude stays `params.gravity`): under
+    /// [`GravityLoads::Acting`] every posture is the standing anatomy with gravity turned.
+    pub fn turn_gravity(&mut self, posture: crate::anatomy::Posture) {
+        let g = Params::gravity_direction(posture);
+        self.gravity = Vector3::new(g[0], g[1], g[2]) * self.params.gravity;
+        if self.params.gravity_loads == GravityLoads::Preloaded {
+            self.vertex_gravity = self.gravity;
         }
     }
 
@@ -698,6 +748,14 @@ impl Structure {
         eat(self.params.pleural_barrier_margin);
         eat(self.gravity.x);
         eat(self.gravity.y);
+        // Gravity acting (the contents' hydrostatic pressure, the reference preloads) changes
+        // the loads but not the fields above; a preloaded model's fingerprint is the one it
+        // had before the choice existed.
+        if self.params.gravity_loads == GravityLoads::Acting {
+            eat(self.gravity.z);
+            eat(self.contents_density);
+            eat(1.0);
+        }
         // The muscle law changes the forces but not the fields above; a thesis-law model's
         // fingerprint is the one it had before the law became a parameter.
         if self.params.muscle_law == MuscleLaw::Hill {

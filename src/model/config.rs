@@ -109,6 +109,20 @@ pub struct Config {
     /// thesis's law.
     #[serde(default)]
     pub muscle_law: crate::dynamics::muscle::MuscleLaw,
+    /// Gravitational acceleration [m/s^2] (FMI `gravity`, [`crate::dynamics::Params::gravity`])
+    /// of the posture's defaults when `params` is `None`; `params` carries its own.
+    /// Configurations written before it existed read [`crate::dynamics::GRAVITY`].
+    #[serde(default = "default_gravity")]
+    pub gravity: f64,
+    /// How gravity loads the model (FMI `gravity_loads`, [`crate::dynamics::GravityLoads`])
+    /// when `params` is `None`; `params` carries its own. Configurations written before it
+    /// existed read the preloaded model.
+    #[serde(default)]
+    pub gravity_loads: crate::dynamics::GravityLoads,
+}
+
+fn default_gravity() -> f64 {
+    crate::dynamics::GRAVITY
 }
 
 impl Default for Config {
@@ -125,6 +139,8 @@ impl Default for Config {
             subject_mesh_dir: None,
             params: None,
             muscle_law: crate::dynamics::muscle::MuscleLaw::Thesis,
+            gravity: crate::dynamics::GRAVITY,
+            gravity_loads: crate::dynamics::GravityLoads::Preloaded,
         }
     }
 }
@@ -153,6 +169,7 @@ impl Config {
         check("solver.atol", self.solver.atol, (1e-14, 1e-2))?;
         check("solver.max_step", self.solver.max_step, (1e-5, 1.0))?;
         check("lung.ratio", self.lung_ratio, (0.3, 1.0))?;
+        check("gravity", self.gravity, (0.0, crate::dynamics::GRAVITY_MAX))?;
         check("gain.left", self.gain_left, (0.0, 2.0))?;
         check("gain.right", self.gain_right, (0.0, 2.0))?;
         for g in crate::anatomy::MuscleGroup::ALL {

@@ -1,10 +1,10 @@
 //! [`Torso`]: the model facade.
 
 use super::{Checkpoint, Config, Drive, Quantity, Snapshot};
-use crate::anatomy::{Anatomy, MuscleGroup};
+use crate::anatomy::{Anatomy, MuscleGroup, Posture};
 use crate::dynamics::equilibrium::Equilibrium;
 use crate::dynamics::jacobian::TorsoJacobian;
-use crate::dynamics::{self, Activations, Data, Model, Params};
+use crate::dynamics::{self, Activations, Data, GravityLoads, Model, Params};
 use crate::observe::markers::{MarkerCache, MarkerOutputs};
 use crate::observe::{self, Compartments, Observation};
 use crate::solver::{
@@ -89,15 +89,34 @@ impl Compiled {
     /// detail).
     pub fn build(config: &Config) -> Result<Compiled> {
         config.validate()?;
+        let acting = config
+            .params
+            .as_ref()
+            .map_or(config.gravity_loads, |p| p.gravity_loads)
+            == GravityLoads::Acting;
+        // Under gravity acting every posture is the standing anatomy with its tables, gravity
+        // turned (`dynamics::GravityLoads::Acting`).
+        let posture = config.subject.posture;
+        let mut built = config.subject.clone();
+        if acting {
+            built.posture = Posture::Standing;
+        }
         let anatomy = Anatomy::build_on(
-            &config.subject,
+            &built,
             config.scene.level_of_detail,
             config.subject_mesh_dir.as_deref(),
         )?;
         let params = config.params.clone().unwrap_or_else(|| {
-            Params::for_posture_and_law(config.subject.posture, config.muscle_law)
+            let mut p = Params::for_posture_and_law(built.posture, config.muscle_law);
+            p.gravity = config.gravity;
+            p.gravity_loads = config.gravity_loads;
+            p
         });
-        let mut model = Model::compile(&anatomy, params);
+        let mut model = if acting {
+            Model::compile_in(&anatomy, params, posture)
+        } else {
+            Model::compile(&anatomy, params)
+        };
         model.set_lung_fraction(config.lung_ratio);
         Ok(Compiled::from_model(anatomy, model))
     }

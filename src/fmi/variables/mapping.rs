@@ -97,6 +97,10 @@ pub enum Parameter {
     SolverMethod,
     /// `muscle_law` (Integer: 0 thesis, 1 hill).
     MuscleLaw,
+    /// `gravity` [m/s^2].
+    Gravity,
+    /// `gravity_loads` (Integer: 0 preloaded, 1 acting).
+    GravityLoads,
     /// `solver.rtol`.
     SolverRtol,
     /// `solver.atol`.
@@ -174,6 +178,8 @@ impl Parameter {
             ),
             SolverMethod => Value::Integer(config.solver.method.code()),
             MuscleLaw => Value::Integer(config.muscle_law.code()),
+            Gravity => Value::Real(config.gravity),
+            GravityLoads => Value::Integer(config.gravity_loads.code()),
             SolverRtol => Value::Real(config.solver.rtol),
             SolverAtol => Value::Real(config.solver.atol),
             SolverMaxStep => Value::Real(config.solver.max_step),
@@ -235,6 +241,10 @@ impl Parameter {
             }
             (MuscleLaw, Value::Integer(v)) => {
                 config.muscle_law = crate::dynamics::muscle::MuscleLaw::from_code(v.into())?
+            }
+            (Gravity, Value::Real(v)) => config.gravity = v,
+            (GravityLoads, Value::Integer(v)) => {
+                config.gravity_loads = crate::dynamics::GravityLoads::from_code(v.into())?
             }
             (SolverRtol, Value::Real(v)) => config.solver.rtol = v,
             (SolverAtol, Value::Real(v)) => config.solver.atol = v,

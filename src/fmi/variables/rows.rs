@@ -371,6 +371,23 @@ pub(super) fn build(markers: &MarkerOutputs) -> Vec<Variable> {
             "Muscle law: 0 the seed thesis's shortening linear spring (default), 1 passive and active parts (Thelen 2003 force-length curves) with the passive wall fitted to the adult chest wall's compliance",
         )
         .range(0.0, 1.0),
+        par(
+            "gravity",
+            207,
+            Real,
+            P::Gravity,
+            "Gravitational acceleration acting on the torso's masses, in the posture's direction (0: weightless)",
+        )
+        .unit("m/s2")
+        .range(0.0, crate::dynamics::GRAVITY_MAX),
+        par(
+            "gravity_loads",
+            208,
+            Integer,
+            P::GravityLoads,
+            "How gravity loads the model: 0 preloads cancel it at each posture's generated rest (default; posture effects from tables), 1 it acts (the abdominal contents' hydrostatic pressure, tissue tensions from the standing anatomy, each posture's rest the equilibrium under the loads)",
+        )
+        .range(0.0, 1.0),
         par("solver.rtol", 130, Real, P::SolverRtol, "Relative tolerance of the integrator").range(1e-12, 1e-2),
         par("solver.atol", 131, Real, P::SolverAtol, "Absolute tolerance of the integrator on the state").range(1e-14, 1e-2),
         par("solver.max_step", 132, Real, P::SolverMaxStep, "Largest internal integration step").unit("s").range(1e-5, 1.0),

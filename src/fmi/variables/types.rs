@@ -211,6 +211,12 @@ pub const UNITS: &[Unit] = &[
         display: &[],
     },
     Unit {
+        name: "m/s2",
+        base: &[("m", 1), ("s", -2)],
+        factor: 1.0,
+        display: &[],
+    },
+    Unit {
         name: "y",
         base: &[("s", 1)],
         factor: SECONDS_PER_YEAR,
