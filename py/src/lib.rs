@@ -134,6 +134,15 @@ const DRIVE_KEYS: [&str; 8] = [
     "abdominals_phase",
 ];
 
+/// The model's laws as the keywords name them: the muscle law, the gravitational
+/// acceleration [m/s^2] and how gravity loads the model (`--muscle-law`, `--gravity`,
+/// `--gravity-loads`).
+struct Laws<'a> {
+    muscle_law: &'a str,
+    gravity: f64,
+    gravity_loads: &'a str,
+}
+
 impl Scene {
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -144,7 +153,7 @@ impl Scene {
         rtol: f64,
         scenario: &str,
         drive: Option<&Bound<'_, PyDict>>,
-        muscle_law: &str,
+        laws: &Laws<'_>,
     ) -> PyResult<Scene> {
         let mut s = SubjectArgs {
             sex: "male".into(),
@@ -154,9 +163,9 @@ impl Scene {
             breast_size: 0.0,
             posture: posture.into(),
             lod,
-            muscle_law: muscle_law.into(),
-            gravity: breathing_torso::dynamics::GRAVITY,
-            gravity_loads: "preloaded".into(),
+            muscle_law: laws.muscle_law.into(),
+            gravity: laws.gravity,
+            gravity_loads: laws.gravity_loads.into(),
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {
@@ -257,7 +266,7 @@ struct Torso {
 #[pymethods]
 impl Torso {
     #[new]
-    #[pyo3(signature = (subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, scenario="quiet", drive=None, muscle_law="thesis"))]
+    #[pyo3(signature = (subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, scenario="quiet", drive=None, muscle_law="thesis", gravity=9.81, gravity_loads="preloaded"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -269,11 +278,16 @@ impl Torso {
         scenario: &str,
         drive: Option<&Bound<'_, PyDict>>,
         muscle_law: &str,
+        gravity: f64,
+        gravity_loads: &str,
     ) -> PyResult<Torso> {
-        let config = Scene::new(
-            subject, posture, lod, solver, rtol, scenario, drive, muscle_law,
-        )?
-        .config()?;
+        let laws = Laws {
+            muscle_law,
+            gravity,
+            gravity_loads,
+        };
+        let config =
+            Scene::new(subject, posture, lod, solver, rtol, scenario, drive, &laws)?.config()?;
         let torso = py
             .detach(|| breathing_torso::Torso::new(config))
             .map_err(to_py)?;
@@ -610,7 +624,7 @@ struct Interrupted(PyErr);
 /// Fits the recording at `path` as `torso fit` does, writing the result JSON at `out` (with
 /// its CSV and figure beside it); returns the JSON's path.
 #[pyfunction]
-#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None, muscle_law="thesis"))]
+#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None, muscle_law="thesis", gravity=9.81, gravity_loads="preloaded"))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -639,10 +653,15 @@ fn fit(
     ti_ttot: Option<f64>,
     progress: Option<Py<PyAny>>,
     muscle_law: &str,
+    gravity: f64,
+    gravity_loads: &str,
 ) -> PyResult<String> {
-    let scene = Scene::new(
-        subject, posture, lod, solver, rtol, "quiet", None, muscle_law,
-    )?;
+    let laws = Laws {
+        muscle_law,
+        gravity,
+        gravity_loads,
+    };
+    let scene = Scene::new(subject, posture, lod, solver, rtol, "quiet", None, &laws)?;
     let model = ModelArgs {
         subject: scene.subject,
         solver: scene.solver,

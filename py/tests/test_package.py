@@ -61,8 +61,12 @@ def test_the_package_is_the_installed_one():
             {"lod": 0, "muscle_law": "hill"},
             ["--lod", "0", "--muscle-law", "hill"],
         ),
+        (
+            {"lod": 0, "posture": "supine", "gravity": 4.9, "gravity_loads": "acting"},
+            ["--lod", "0", "--posture", "supine", "--gravity", "4.9", "--gravity-loads", "acting"],
+        ),
     ],
-    ids=["default", "female-supine-rosenbrock-forced", "hill-law"],
+    ids=["default", "female-supine-rosenbrock-forced", "hill-law", "gravity-acting"],
 )
 def test_simulate_is_torso_simulate(torso_cli, tmp_path, options, flags):
     """Torso(...).simulate returns exactly the columns and values `torso simulate` writes."""
@@ -157,6 +161,10 @@ def test_constructor_errors_name_the_parameter_and_range():
         bt.Torso(lod=7)
     with pytest.raises(ValueError, match="hil for `muscle_law`: allowed range is thesis or hill"):
         bt.Torso(muscle_law="hil")
+    with pytest.raises(ValueError, match=r"40 for `gravity`: allowed range is \[0, 29\.43\]"):
+        bt.Torso(gravity=40)
+    with pytest.raises(ValueError, match="gravity_loads.*preloaded or acting"):
+        bt.Torso(gravity_loads="floating")
 
 
 def inspect_missing(torso_cli, path):

@@ -111,6 +111,11 @@ class Torso:
         muscle_law: "thesis" (the seed thesis's shortening spring) or "hill" (passive and
             active parts, its passive wall fitted to the adult chest wall's compliance); the
             scenario's amplitudes are the ones calibrated for that law (``--muscle-law``).
+        gravity: the gravitational acceleration [m/s^2], 0 to 3 x 9.81 (``--gravity``).
+        gravity_loads: "preloaded" (each posture's generated anatomy is its rest, constant
+            preloads cancelling gravity there; the default) or "acting" (the abdominal
+            contents' hydrostatic pressure acts and each posture rests where the loads
+            balance; ``--gravity-loads``, docs/dynamics.md).
 
     The same values give the model ``torso simulate`` builds from the same options, and
     :meth:`simulate` returns what it writes. Raises ValueError naming a bad value and its
@@ -127,6 +132,8 @@ class Torso:
         scenario: str = "quiet",
         drive: Optional[Mapping[str, float]] = None,
         muscle_law: str = "thesis",
+        gravity: float = 9.81,
+        gravity_loads: str = "preloaded",
     ) -> None:
         self._native = _native.Torso(
             dict(subject) if subject is not None else None,
@@ -137,6 +144,8 @@ class Torso:
             scenario,
             dict(drive) if drive is not None else None,
             muscle_law,
+            float(gravity),
+            gravity_loads,
         )
 
     @property
@@ -326,6 +335,8 @@ def fit(
     progress: Optional[Callable[[int, float], Any]] = None,
     as_frame: Optional[bool] = None,
     muscle_law: str = "thesis",
+    gravity: float = 9.81,
+    gravity_loads: str = "preloaded",
 ) -> Dict[str, Any]:
     """Fits the model to a marker recording, as ``torso fit`` does (registration, frequency,
     the drive's amplitudes and phases; docs/fit_report.md).
@@ -335,7 +346,8 @@ def fit(
             :class:`Recording`.
         out: the result JSON to write (its folder is created), with ``<stem>_lung_volume.csv`` and the report
             figure beside it; None writes them to a temporary folder removed afterwards.
-        subject, posture, lod, solver, rtol, muscle_law: the model, as for :class:`Torso`; with no
+        subject, posture, lod, solver, rtol, muscle_law, gravity, gravity_loads: the model, as
+            for :class:`Torso`; with no
             ``stature`` or ``mass`` in ``subject`` the size is estimated from the recording
             (``torso fit``'s rule).
         grid: the model's marker grid "ROWSxCOLS".
@@ -402,6 +414,8 @@ def fit(
             ti_ttot,
             progress,
             muscle_law,
+            float(gravity),
+            gravity_loads,
         )
         with open(written, encoding="utf-8") as f:
             result: Dict[str, Any] = json.load(f)
