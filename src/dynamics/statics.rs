@@ -619,8 +619,8 @@ impl Statics {
                 return Err(StaticsError::Unstable {
                     reason: format!(
                         "the stiffness of the chest wall with the lungs attached has {} \
-                         eigenvalue(s) above {floor:.3e} N/m (the floor of {STIFFNESS_FLOOR:e} \
-                         of its largest, {scale:.3e} N/m)",
+                         mode(s) of negative stiffness, below -{floor:.3e} N/m (the floor of \
+                         {STIFFNESS_FLOOR:e} of its largest, {scale:.3e} N/m)",
                         positive.max(0) as usize + zero
                     ),
                 });
