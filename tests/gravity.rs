@@ -250,10 +250,8 @@ fn supine_fall(law: MuscleLaw, lod: u32) -> f64 {
 /// Issue 35, deliverable 4: lying supine, FRC falls by about 0.5-1.0 L from upright (Nunn's
 /// Applied Respiratory Physiology, as `tests/physiology.rs` cites it), here from gravity
 /// alone: the standing anatomy and its tables in both postures, gravity turned. With the
-/// adult-compliant chest wall (the passive-and-active law, C_cw 0.2 L/cmH2O standing). At
-/// level 1 the standing rest is an equilibrium but not a stable one (the ignored
-/// `relaxed_curves_span_rv_to_tlc_under_gravity_acting_issue_35`), so the level-1 figure is
-/// the distance between the two equilibria, not between two stable rests.
+/// adult-compliant chest wall (the passive-and-active law, C_cw 0.2 L/cmH2O standing). Both
+/// rests are stable at both levels (`upright_rest_is_stable_under_gravity_acting`).
 #[test]
 fn supine_frc_falls_by_gravity_alone() {
     for lod in [0, 1] {
@@ -263,11 +261,11 @@ fn supine_frc_falls_by_gravity_alone() {
 }
 
 /// The same under the thesis's law, whose relaxed chest wall is 2-5x stiffer than an adult's
-/// (docs/dynamics.md, "What sets the passive chest wall"). Issue 35: measured 0.370 L at level
-/// 0 and 0.442 L at level 1 (`cargo test --release --test gravity -- --ignored --nocapture`),
-/// short of 0.5-1.0 L.
+/// (docs/dynamics.md, "What sets the passive chest wall"). Issue 35: measured 0.332 L at level
+/// 0 and 0.401 L at level 1 (`cargo test --release --test gravity -- --ignored --nocapture`;
+/// 0.370 / 0.442 L with constant preloads alone), short of 0.5-1.0 L.
 #[test]
-#[ignore = "issue 35: the thesis law's stiff chest wall: supine FRC falls 0.370 / 0.442 L (levels 0 / 1), 0.5-1.0 L cited"]
+#[ignore = "issue 35: the thesis law's stiff chest wall: supine FRC falls 0.332 / 0.401 L (levels 0 / 1), 0.5-1.0 L cited"]
 fn supine_frc_falls_by_gravity_alone_thesis_law_issue_35() {
     for lod in [0, 1] {
         let fall = supine_fall(MuscleLaw::Thesis, lod);
@@ -383,7 +381,7 @@ fn breathes_quasi_statically(law: MuscleLaw, posture: Posture) {
 }
 
 /// With gravity acting the upright rest is stable and breathes, under both laws; supine
-/// under the thesis law too (the hill law supine: the ignored test below).
+/// under the thesis law too (the hill law supine: the test below).
 #[test]
 fn the_rests_are_stable_under_gravity_acting() {
     breathes_quasi_statically(MuscleLaw::Thesis, Posture::Standing);
@@ -391,30 +389,28 @@ fn the_rests_are_stable_under_gravity_acting() {
     breathes_quasi_statically(MuscleLaw::Hill, Posture::Standing);
 }
 
-/// Supine under the hill law with gravity acting, the rest is stable (its relaxed FRC is
-/// solved), but the quiet drive calibrated for the law (`Drive::quiet_for`) buckles the chest
-/// wall in its first step: "the chest wall buckled" at t = 0.05 s, one mode of negative
-/// stiffness, activations diaphragm 0.036, rib-cage muscles 0.013 (`cargo test --release
-/// --test gravity -- --ignored --nocapture`; with the thesis law's amplitudes, 1.5 L breaths,
-/// it buckled at 2.09 s). The inertial formulation runs the same scene through (`torso
-/// simulate --lod 0 --posture supine --gravity-loads acting --muscle-law hill --duration 12`:
-/// tidal volume 0.412 L, end-expiratory 2.651 L).
+/// Supine under the hill law with gravity acting, the quiet drive calibrated for the law
+/// (`Drive::quiet_for`) breathes through the quasi-static formulation. Issue 35: with the
+/// reference loads held by constant preloads alone the chest wall buckled (in the drive's
+/// first step; at t = 2.09 s with the thesis law's amplitudes); with the tissues carrying what
+/// they can (`dynamics::pretension`) it runs (measured: last breath 2.697-3.110 L, tidal
+/// 0.413 L, relaxed rest 2.809 L; `cargo test --release --test gravity -- --nocapture`).
 #[test]
-#[ignore = "issue 35: hill law supine with gravity acting: the quiet drive buckles the quasi-static chest wall in its first step (t = 0.05 s)"]
-fn hill_supine_breathes_under_gravity_acting_issue_35() {
+fn hill_supine_breathes_under_gravity_acting() {
     breathes_quasi_statically(MuscleLaw::Hill, Posture::Supine);
 }
 
 /// Relaxation curves are measured from RV to TLC (Rahn et al. 1946, Am J Physiol 146:161),
 /// so the relaxed model must have an equilibrium over that range, and at least near its rest.
-/// With gravity acting and the hill law the curves stop where the equilibrium path folds or
-/// the chest wall buckles (`torso bench relaxation --lod L --muscle-law hill --gravity-loads
-/// acting`; docs/dynamics.md, "Gravity that acts"): level 0 standing 2.275-4.099 L (FRC
-/// 3.459 L, RV 1.819, TLC 7.291), supine 2.737-3.103 L (FRC 2.772 L); level 1 standing, the
-/// reference itself, buckles 0.044 L below and 0.186 L above its FRC (3.500 L: two modes of
-/// negative stiffness), supine 2.143-5.006 L; the preloaded model's curves span RV to TLC.
+/// With gravity acting and the hill law (`torso bench relaxation --lod L --muscle-law hill
+/// --gravity-loads acting`; docs/dynamics.md, "Gravity that acts"), the tissues carrying the
+/// reference loads: level 0 spans RV to TLC standing (1.819-7.291 L) and supine
+/// (1.477-5.920 L); level 1 standing stops 0.23 L short of TLC (1.841-6.916 L, no
+/// equilibrium at 7.147 L: its pressures are not finite), supine at RV (1.635-5.823 L, the
+/// path folds at 1.453 L). With constant preloads alone level 1 standing had buckled 0.044 L
+/// below its FRC.
 #[test]
-#[ignore = "issue 35: gravity acting, hill law: relaxed curves stop (level 0: 2.275-4.099 L standing, 2.737-3.103 L supine; level 1: standing buckles 0.044 L below FRC)"]
+#[ignore = "issue 35: gravity acting, hill law, level 1: relaxed curves stop at 6.916 L standing (TLC 7.377) and 1.635 L supine (RV 1.453)"]
 fn relaxed_curves_span_rv_to_tlc_under_gravity_acting_issue_35() {
     for lod in [0, 1] {
         for posture in [Posture::Standing, Posture::Supine] {
@@ -440,12 +436,13 @@ fn relaxed_curves_span_rv_to_tlc_under_gravity_acting_issue_35() {
     }
 }
 
-/// The preloads are dead loads, not tissue tension: at the reference (standing, 1 g) every
-/// thesis-law muscle is at its rest length (within 10 um), the kink of its tension-only
-/// spring; moved off the reference by the loads, a large share goes slack (printed: supine,
-/// half and zero gravity; docs/dynamics.md, "Gravity that acts").
+/// The reference loads are tissue tension where the tissues can carry them
+/// (`dynamics::pretension`): at the reference (standing, 1 g) no thesis-law muscle is slack,
+/// and exactly those given a tension are stretched past their rest length (by its tension
+/// over their stiffness); the others sit at it. Off the reference the muscles going slack are
+/// printed (supine, half and zero gravity; docs/dynamics.md, "Gravity that acts").
 #[test]
-fn the_reference_muscles_sit_at_their_rest_length() {
+fn the_reference_muscles_carry_their_tension() {
     use breathing_torso::dynamics::{Data, kinematics, path_length};
     for (posture, g) in [
         (Posture::Standing, GRAVITY),
@@ -463,10 +460,11 @@ fn the_reference_muscles_sit_at_their_rest_length() {
         c.drive.enabled = false;
         let t = Torso::new(c).unwrap();
         let m = &t.compiled().model;
+        let carried = m.carried.as_ref().expect("gravity acting");
         let mut d = Data::new(m);
         kinematics::positions_and_velocities(m, &mut d, &m.layout, t.state());
         let el = &m.elements;
-        let (mut slack, mut taut) = (0, 0);
+        let (mut slack, mut taut, mut tensioned) = (0, 0, 0);
         for e in 0..m.muscle_count {
             let l = path_length(&d.pos, el.path_of(e));
             if l < el.rest_length[e] - 1e-5 {
@@ -474,31 +472,33 @@ fn the_reference_muscles_sit_at_their_rest_length() {
             } else if l > el.rest_length[e] + 1e-5 {
                 taut += 1
             }
+            if carried.tension[e] / el.stiffness[e] > 1e-5 {
+                tensioned += 1;
+            }
         }
         println!(
-            "{posture:?}, gravity {g}: of {} muscle elements {slack} slack, {taut} stretched",
+            "{posture:?}, gravity {g}: of {} muscle elements {slack} slack, {taut} stretched \
+             ({tensioned} carry a tension at the reference)",
             m.muscle_count
         );
         if posture == Posture::Standing && g == GRAVITY {
-            assert_eq!((slack, taut), (0, 0));
+            assert_eq!((slack, taut), (0, tensioned));
+            assert!(tensioned > 0);
         }
     }
 }
 
 /// Issue 35, deliverable 4: the upright rest stays stable with gravity acting. Each rest is
 /// solved afresh (an activation set, so that the quasi-static solve factorises and checks the
-/// stiffness's definiteness) at its relaxed FRC and 0.1 L either side. Measured (`cargo test
-/// --release --test gravity -- --ignored --nocapture`): stable under the hill law at level 0
-/// standing and supine, under the thesis law at level 1 standing and supine, and under the hill
-/// law at level 1 supine; the hill law's standing rest at level 1 has two modes of negative
-/// stiffness ("the chest wall buckled: ... 2 mode(s) of negative stiffness, below -5.044e-1 N/m") 0.05-0.5 L
-/// either side of its FRC (and at it, once an activation changes there). Printed too: the
-/// four abdominal groups activated together at 0.02, 0.05 or 0.1 leave that rest buckled 0.1 L
-/// below FRC, buckle the hill law's supine rests there at both levels (and the thesis law's
-/// supine rest at level 1 at 0.1), and leave the other standing rests stable.
+/// stiffness's definiteness) at its relaxed FRC and 0.1 L either side, relaxed and under the
+/// four abdominal groups' tone together at 0.02, 0.05 and 0.1, 0.1 L below FRC (printed).
+/// With the reference loads held by constant preloads alone, the hill law's standing rest at
+/// level 1 had two modes of negative stiffness 0.05-0.5 L either side of its FRC, and the tone
+/// buckled the hill law's supine rests; with the tissues carrying what they can
+/// (`dynamics::pretension`) every one of them is stable (measured, `cargo test --release
+/// --test gravity -- --nocapture`).
 #[test]
-#[ignore = "issue 35: gravity acting, hill law, level 1: the standing rest has 2 modes of negative stiffness"]
-fn upright_rest_is_stable_under_gravity_acting_issue_35() {
+fn upright_rest_is_stable_under_gravity_acting() {
     use breathing_torso::anatomy::MuscleGroup;
     use breathing_torso::solver::Method;
     for (law, lod) in [

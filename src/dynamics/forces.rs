@@ -824,9 +824,11 @@ mod tests {
             params.gravity_loads = GravityLoads::Acting;
             let mut structure = Structure::compile(&anatomy, params);
             structure.turn_gravity(posture);
-            let mut without = structure.clone();
+            let model = Model::new(structure);
+            // the same compiled structure (its tissues' rest lengths included) without the
+            // contents' weight
+            let mut without: Structure = (*model).clone();
             without.contents_density = 0.0;
-            let (model, without) = (Model::new(structure), Model::new(without));
             let y = deformed(&model);
             let (mut data, mut bare) = (Data::new(&model), Data::new(&without));
             let l = model.layout;

@@ -31,6 +31,7 @@ mod model;
 pub mod muscle;
 mod params;
 pub mod pleural;
+pub mod pretension;
 pub mod state;
 pub mod statics;
 mod structure;

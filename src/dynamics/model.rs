@@ -8,7 +8,9 @@
 //! 2. from the structure alone, the mass matrix the dynamics integrates with
 //!    ([`MassMatrix::new`], `inertia.rs`) and the preloads that hold the rest pose
 //!    ([`Preload::at_rest`], the force pass of `kinematics.rs`, `forces.rs` and
-//!    `accelerations.rs` run on the structure at rest);
+//!    `accelerations.rs` run on the structure at rest); under [`GravityLoads::Acting`] the
+//!    tissues' rest lengths are first shortened to carry what they can of the reference's
+//!    loads ([`pretension::carry`]), and the preloads hold the rest;
 //! 3. the [`Model`], assembled once from the three and the state's [`Layout`].
 //!
 //! A [`Model`] dereferences to its [`Structure`], so `model.elements` or `model.rest` read the
@@ -19,6 +21,7 @@
 use super::accelerations::Preload;
 use super::inertia::MassMatrix;
 use super::params::{GRAVITY, GravityLoads, Params};
+use super::pretension;
 use super::state::Layout;
 use super::structure::Structure;
 use crate::anatomy::Anatomy;
@@ -26,9 +29,11 @@ use std::ops::Deref;
 
 /// The reference whose rest tensions the tissues keep under [`GravityLoads::Acting`]: the
 /// structure's own anatomy (the generated standing one) standing under standard gravity
-/// ([`GRAVITY`]), its abdominal contents' hydrostatic pressure included. The preloads that
-/// make it an equilibrium there are the tissues' rest tensions; every other posture and
-/// gravity only changes the loads, and its rest is the equilibrium under them.
+/// ([`GRAVITY`]), its abdominal contents' hydrostatic pressure included. Its loads are
+/// carried there by tension in the tissues as far as they can be ([`pretension::carry`]
+/// shortens their rest lengths) and the rest by preloads that make it an equilibrium; every
+/// other posture and gravity only changes the loads, and its rest is the equilibrium under
+/// them.
 fn reference_loads(structure: &Structure) -> Structure {
     let mut reference = structure.clone();
     let g = Params::gravity_direction(crate::anatomy::Posture::Standing);
@@ -50,6 +55,9 @@ pub struct Model {
     pub mass: MassMatrix,
     /// The constant generalised loads that make the rest pose an equilibrium.
     pub preload: Preload,
+    /// Under [`GravityLoads::Acting`], the tensions the tissues took over from the
+    /// preloads at the reference ([`pretension::carry`]); `None` otherwise.
+    pub carried: Option<pretension::Carried>,
 }
 
 impl Deref for Model {
@@ -67,7 +75,18 @@ impl Model {
 
     /// The model of `structure`: its mass matrix (scaled unless `params.true_masses`) and its
     /// preloads, derived from it, and its state's layout.
-    pub fn new(structure: Structure) -> Model {
+    pub fn new(mut structure: Structure) -> Model {
+        let (preload, carried) = match structure.params.gravity_loads {
+            GravityLoads::Preloaded => (Preload::at_rest(&structure), None),
+            GravityLoads::Acting => {
+                let loads = Preload::at_rest(&reference_loads(&structure));
+                let carried = pretension::carry(&mut structure, &loads);
+                (
+                    Preload::at_rest(&reference_loads(&structure)),
+                    Some(carried),
+                )
+            }
+        };
         let params = &structure.params;
         let scaling = if params.true_masses {
             f64::INFINITY // nothing added: the true masses
@@ -83,15 +102,12 @@ impl Model {
             ],
             structure.airway_resistance,
         );
-        let preload = match structure.params.gravity_loads {
-            GravityLoads::Preloaded => Preload::at_rest(&structure),
-            GravityLoads::Acting => Preload::at_rest(&reference_loads(&structure)),
-        };
         Model {
             layout: Layout::new(&structure),
             structure,
             mass,
             preload,
+            carried,
         }
     }
 
