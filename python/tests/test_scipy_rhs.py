@@ -88,3 +88,26 @@ def test_rhs_and_set_state_reject_bad_arguments(lib):
         assert np.array_equal(torso.state(), torso.y0)
     finally:
         torso.close()
+
+
+def _header_fields(struct):
+    """The member names of `typedef struct <struct> { ... }` in include/breathing_torso.h, in
+    order (comments dropped; arrays by their name)."""
+    import re
+
+    text = (ROOT / "include" / "breathing_torso.h").read_text()
+    body = re.search(r"typedef struct %s \{(.*?)\} %s;" % (struct, struct), text, re.S).group(1)
+    body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
+    return [re.search(r"(\w+)\s*(\[\d+\])?\s*;", line).group(1)
+            for line in body.splitlines() if line.strip().endswith(";")]
+
+
+@pytest.mark.parametrize("cls,struct", [(bench_scipy.Config, "BtConfig"),
+                                        (bench_scipy.Drive, "BtDrive"),
+                                        (bench_scipy.Subject, "BtSubject"),
+                                        (bench_scipy.Wave, "BtWave")])
+def test_the_ctypes_structures_follow_the_header(cls, struct):
+    """bench_scipy's ctypes mirrors of the C ABI's structures name the header's members in the
+    header's order: `bt_config_default` writes the whole `BtConfig`, so a mirror short of a
+    member is written past its end."""
+    assert [name for name, _ in cls._fields_] == _header_fields(struct)
