@@ -23,6 +23,7 @@
 
 use super::relaxation::CMH2O;
 use crate::anatomy::{MuscleGroup, Posture, Sex, Subject};
+use crate::dynamics::GravityLoads;
 use crate::dynamics::muscle::MuscleLaw;
 use crate::dynamics::pleural::capacity_ratios;
 use crate::dynamics::{Data, Layout, kinematics};
@@ -217,14 +218,45 @@ impl Fmu {
     }
 }
 
-/// The FMU's parameters for `posture` at level of detail `lod`, the drive off.
-fn relaxed(posture: Posture, lod: u32, law: MuscleLaw) -> Vec<(&'static str, f64)> {
-    vec![
+/// The laws an experiment runs under: the muscle law (the FMU's `muscle_law`) and how
+/// gravity loads the model (`gravity_loads`). A muscle law alone means gravity preloaded, the
+/// default.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Laws {
+    /// The muscle law.
+    pub muscle: MuscleLaw,
+    /// How gravity loads the model.
+    pub gravity_loads: GravityLoads,
+}
+
+impl From<MuscleLaw> for Laws {
+    fn from(muscle: MuscleLaw) -> Self {
+        Laws {
+            muscle,
+            gravity_loads: GravityLoads::default(),
+        }
+    }
+}
+
+impl Laws {
+    /// The FMU's parameters that select these laws.
+    fn parameters(self) -> [(&'static str, f64); 2] {
+        [
+            ("muscle_law", f64::from(self.muscle.code())),
+            ("gravity_loads", f64::from(self.gravity_loads.code())),
+        ]
+    }
+}
+
+/// The FMU's parameters for `posture` at level of detail `lod` under `laws`, the drive off.
+fn relaxed(posture: Posture, lod: u32, laws: Laws) -> Vec<(&'static str, f64)> {
+    let mut p = vec![
         ("posture", f64::from(posture.code())),
         ("scene.level_of_detail", f64::from(lod)),
-        ("muscle_law", f64::from(law.code())),
         ("drive.enabled", 0.0),
-    ]
+    ];
+    p.extend(laws.parameters());
+    p
 }
 
 /// Steps `fmu` by `h` until `duration` has passed, then until the lung volume changes by less
@@ -271,8 +303,8 @@ pub struct PressureStep {
 /// The respiratory-system compliance of the relaxed default subject in `posture`: the drive
 /// off, the airway-opening pressure stepped from 0 to [`PRESSURE_STEP`] and the lung volume
 /// left to settle, through the FMU.
-pub fn pressure_step(posture: Posture, lod: u32, law: MuscleLaw) -> Result<PressureStep> {
-    let mut fmu = Fmu::new(&relaxed(posture, lod, law))?;
+pub fn pressure_step(posture: Posture, lod: u32, law: impl Into<Laws>) -> Result<PressureStep> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod, law.into()))?;
     let rest = fmu.get(&["volume.lung"])?[0];
     fmu.set("pressure.airway_opening", PRESSURE_STEP * CMH2O)?;
     let held = settle(&mut fmu, 3.0, 1e-4, 20.0)?;
@@ -327,19 +359,21 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
 pub fn quiet_breath(
     posture: Posture,
     lod: u32,
-    law: MuscleLaw,
+    law: impl Into<Laws>,
     left_diaphragm_gain: f64,
 ) -> Result<QuietBreath> {
-    let drive = Drive::quiet_for(law);
-    let mut fmu = Fmu::new(&[
+    let laws = law.into();
+    let drive = Drive::quiet_for(laws.muscle);
+    let mut params = vec![
         ("posture", f64::from(posture.code())),
         ("scene.level_of_detail", f64::from(lod)),
-        ("muscle_law", f64::from(law.code())),
         ("gain.diaphragm.left", left_diaphragm_gain),
         ("drive.ribs.amplitude", drive.ribs.amplitude),
         ("drive.diaphragm.amplitude", drive.diaphragm.amplitude),
         ("drive.abdominals.amplitude", drive.abdominals.amplitude),
-    ])?;
+    ];
+    params.extend(laws.parameters());
+    let mut fmu = Fmu::new(&params)?;
     let period = 1.0 / drive.frequency;
     let rate = 28.0;
     let names = [
@@ -426,10 +460,10 @@ pub struct Sniff {
 pub fn sniff(
     posture: Posture,
     lod: u32,
-    law: MuscleLaw,
+    law: impl Into<Laws>,
     left_diaphragm_gain: f64,
 ) -> Result<Sniff> {
-    let mut params = relaxed(posture, lod, law);
+    let mut params = relaxed(posture, lod, law.into());
     params.push(("gain.diaphragm.left", left_diaphragm_gain));
     let mut fmu = Fmu::new(&params)?;
     let names = [
@@ -570,8 +604,13 @@ impl DomePoint {
 /// [`EFFORT_RAMP`] and held until the lung volume settles. The volume added is measured
 /// through the FMU, the posterior dome point's excursion through the facade (the same model
 /// and method, the default explicit integrator), since no FMU output reports that point.
-pub fn full_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Result<FullInspiration> {
-    let mut fmu = Fmu::new(&relaxed(posture, lod, law))?;
+pub fn full_inspiration(
+    posture: Posture,
+    lod: u32,
+    law: impl Into<Laws>,
+) -> Result<FullInspiration> {
+    let laws = law.into();
+    let mut fmu = Fmu::new(&relaxed(posture, lod, laws))?;
     let rest = fmu.get(&["volume.lung"])?[0];
     let h = 0.05;
     while fmu.t < EFFORT_RAMP - 1e-9 {
@@ -585,7 +624,8 @@ pub fn full_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Result<Fu
     let mut config = Config::default();
     config.subject.posture = posture;
     config.scene.level_of_detail = lod;
-    config.muscle_law = law;
+    config.muscle_law = laws.muscle;
+    config.gravity_loads = laws.gravity_loads;
     config.drive.enabled = false;
     let mut torso = Torso::new(config)?;
     let line = m_mode_line(&torso);
@@ -694,8 +734,8 @@ pub struct Occluded {
 /// inspiratory activation of [`full_inspiration`]) and held for [`OCCLUDED_HOLD`], sampled
 /// every 0.05 s. The figure is the largest mean of `pressure.mouth` over
 /// [`SUSTAINED_WINDOW`] (ATS/ERS 2002).
-pub fn occluded_inspiration(posture: Posture, lod: u32, law: MuscleLaw) -> Result<Occluded> {
-    let mut fmu = Fmu::new(&relaxed(posture, lod, law))?;
+pub fn occluded_inspiration(posture: Posture, lod: u32, law: impl Into<Laws>) -> Result<Occluded> {
+    let mut fmu = Fmu::new(&relaxed(posture, lod, law.into()))?;
     let rest = fmu.get(&["volume.lung"])?[0];
     let mut subject = Config::default().subject;
     subject.posture = posture;
@@ -770,6 +810,8 @@ pub struct Physiology {
     pub level_of_detail: u32,
     /// The muscle law (the FMU's `muscle_law`).
     pub muscle_law: MuscleLaw,
+    /// How gravity loads the model (the FMU's `gravity_loads`).
+    pub gravity_loads: GravityLoads,
     /// The figures against their cited ranges.
     pub figures: Vec<Figure>,
     /// Figures that could not be measured, with the reason.
@@ -778,7 +820,8 @@ pub struct Physiology {
 
 /// Measures every figure of the default subject at level of detail `lod` (a failed
 /// measurement is listed in [`Physiology::failed`], not an error).
-pub fn physiology(lod: u32, law: MuscleLaw) -> Result<Physiology> {
+pub fn physiology(lod: u32, law: impl Into<Laws>) -> Result<Physiology> {
+    let law = law.into();
     if lod > 2 {
         return Err(Error::invalid("level of detail", lod, "0, 1 or 2"));
     }
@@ -955,7 +998,8 @@ pub fn physiology(lod: u32, law: MuscleLaw) -> Result<Physiology> {
     }
     Ok(Physiology {
         level_of_detail: lod,
-        muscle_law: law,
+        muscle_law: law.muscle,
+        gravity_loads: law.gravity_loads,
         figures,
         failed,
     })

@@ -18,6 +18,9 @@ pub struct PhysiologyArgs {
     /// Muscle law: thesis or hill (the FMU's `muscle_law`).
     #[arg(long, default_value = "thesis")]
     pub muscle_law: String,
+    /// How gravity loads the model: preloaded or acting (the FMU's `gravity_loads`).
+    #[arg(long, default_value = "preloaded")]
+    pub gravity_loads: String,
 }
 
 /// A range's end for printing (an infinite end as "-").
@@ -33,7 +36,21 @@ fn end(v: f64) -> String {
 pub fn run(args: &PhysiologyArgs) -> Result<()> {
     let law = crate::dynamics::muscle::MuscleLaw::parse(&args.muscle_law)
         .map_err(|_| crate::Error::invalid("--muscle-law", &args.muscle_law, "thesis or hill"))?;
-    let p = physiology(args.lod, law)?;
+    let gravity_loads =
+        crate::dynamics::GravityLoads::parse(&args.gravity_loads).map_err(|_| {
+            crate::Error::invalid(
+                "--gravity-loads",
+                &args.gravity_loads,
+                "preloaded or acting",
+            )
+        })?;
+    let p = physiology(
+        args.lod,
+        crate::bench::physiology::Laws {
+            muscle: law,
+            gravity_loads,
+        },
+    )?;
     if args.json {
         let text = serde_json::to_string_pretty(&p)
             .map_err(|e| crate::Error::State(format!("JSON: {e}")))?;
@@ -41,8 +58,8 @@ pub fn run(args: &PhysiologyArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}, {:?} muscle law",
-        p.level_of_detail, p.muscle_law
+        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}, {:?} muscle law, gravity {:?}",
+        p.level_of_detail, p.muscle_law, p.gravity_loads
     );
     for f in &p.figures {
         println!(
