@@ -50,12 +50,16 @@ pub const SPINE_CENTRES_MM: [(f64, f64); 24] = [
 
 /// Radial room [m] kept between the skin and a bone centreline: rib half-thickness (about
 /// 6 mm) plus the thinnest soft tissue over the ribs and sternum (about 12 mm).
-/// Unsourced: no source: chosen by hand (commit 85fbc4f). Literature, over the sternum only:
-/// CT of 53 adults of normal body mass index (Wayne State University School of Medicine
-/// research abstract, digitalcommons.wayne.edu/som_srs/70) found 17.9 +- 8.9 mm of soft tissue
-/// in men and 13.0 +- 6.0 mm in women over a sternum 17.2 / 13.8 mm deep, so 26.5 / 19.9 mm from
-/// the skin to the bone's mid-plane; ours, a minimum room, is below both means (a lower bound,
-/// not a typical value).
+/// Source: CT of 53 adults of normal body mass index (Wayne State University School of
+/// Medicine research abstract, digitalcommons.wayne.edu/som_srs/70): 17.9 +- 8.9 mm of soft
+/// tissue over the sternum in men and 13.0 +- 6.0 mm in women, over a sternum 17.2 / 13.8 mm
+/// deep, so 26.5 +- 8.9 / 19.9 +- 6.0 mm from the skin to the bone's mid-plane; ours 18 mm lies
+/// within both spreads (17.6-35.4 and 13.9-25.9 mm), near the lower end, as a minimum room
+/// should. Multislice CT of 111 adults with a sternal foramen (Ma, Wang, Wang & Cui 2023, Clin
+/// Anat, doi:10.1002/ca.24105, PMID 37596889) agrees: over the sternal body 11.3 +- 5.1 mm of
+/// subcutaneous fat and 18.6 +- 5.7 mm from the skin to the lung (the bone's back), between
+/// which the mid-plane lies. Over the ribs, away from the sternum, the soft tissue is thicker
+/// (pectoral muscles), so 18 mm is a lower bound there.
 pub const BONE_CLEARANCE: f64 = 0.018;
 
 /// Radial room [m] kept between the skin and the abdominal cavity's wall: the thinnest
