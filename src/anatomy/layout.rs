@@ -66,17 +66,21 @@ pub const INTERCOSTAL_TENSION: f64 = 1200.0;
 pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
 /// Maximal total force of the diaphragm's fibres [N]: a transdiaphragmatic pressure of about
 /// 150 cmH2O (maximal combined efforts) over about 0.04 m^2 of dome.
-/// Unsourced: the pressure is cited (maximal combined efforts 150-180 cmH2O, physiology
-/// reference), the 0.04 m^2 is not. Cross-section x specific tension (docs/respiratory_muscles.md,
-/// section F): the in-vivo thickness at FRC, 1.7 +- 0.2 mm (Ueki et al. 1995, Thorax 50:1157),
-/// over the default man's 92.6 cm insertion line (`cargo run --release --example
-/// muscle_forces`) at 26.8 N/cm^2 (Persad et al. 2024, J Appl Physiol) gives 422 (372-472) N;
-/// the necropsy thickness, 3.20 +- 0.55 mm (Arora & Rochester 1987, PMID 3568775), an upper
-/// bound of 794 N. Ours lies between, inside neither's spread. 422 N with today's drives moves
-/// quiet tidal volume by -5.5 % and full inspiratory activation by -6 % (section F), and under
-/// the hill law, whose passive wall (`HILL_PASSIVE_WALL_SCALE`) was fitted with 600 N, the
-/// relaxed motion of `tests/muscle_law.rs` then gains 2.2e-6 J between samples (allowed:
-/// 1e-6 of 0.95 J), so it waits for the passive wall's re-fit and the drives' re-calibration.
+/// Unsourced: the pressure is cited, the 0.04 m^2 is not: maximal transdiaphragmatic pressure at
+/// FRC in 10 normal subjects 154 +- 25 cmH2O (Mueller and two-step efforts) and 180 +- 14 cmH2O
+/// with visual feedback (Laporta & Grassino 1985, J Appl Physiol 58:1469,
+/// doi:10.1152/jappl.1985.58.5.1469), so 600 N is that pressure over 0.040 (0.034-0.047) m^2, or
+/// 0.034 m^2 at 180 cmH2O; no measured area on which the pressure acts (the dome's horizontal
+/// projection inside the insertions) was found. Cross-section x specific tension
+/// (docs/respiratory_muscles.md, section F): the in-vivo thickness at FRC, 1.7 +- 0.2 mm (Ueki et
+/// al. 1995, Thorax 50:1157), over the default man's 92.6 cm insertion line (`cargo run --release
+/// --example muscle_forces`) at 26.8 N/cm^2 (Persad et al. 2024, J Appl Physiol) gives 422
+/// (372-472) N; the necropsy thickness, 3.20 +- 0.55 mm (Arora & Rochester 1987, PMID 3568775), an
+/// upper bound of 794 N. Ours lies between, inside neither's spread. 422 N with today's drives
+/// moves quiet tidal volume by -5.5 % and full inspiratory activation by -6 % (section F), and
+/// under the hill law, whose passive wall (`HILL_PASSIVE_WALL_SCALE`) was fitted with 600 N, the
+/// relaxed motion of `tests/muscle_law.rs` then gains 2.2e-6 J between samples (allowed: 1e-6 of
+/// 0.95 J), so it waits for the passive wall's re-fit and the drives' re-calibration.
 pub const DIAPHRAGM_FORCE: f64 = 600.0;
 /// Maximal forces of the abdominal wall muscles, both sides together [N] (about 25 N/cm^2 over
 /// the physiological cross-sections): rectus, transversus, external and internal obliques.

@@ -50,7 +50,12 @@ pub struct Scale {
 /// Reference body the rib-cage data were measured on: a 1.75 m, 75 kg, 30-year-old man.
 /// Unsourced: the rib and spine tables' source subject is about 1.68-1.75 m tall
 /// (data/anatomy/*.csv headers); its mass and age are not stated there, and 75 kg and 30 y are
-/// chosen as the default subject.
+/// chosen as the default subject. Literature, for a reference person rather than the tables'
+/// subject: the ICRP Reference Male is 1.76 m and 73 kg (ICRP Publication 89, 2002, as built into
+/// the ICRP Publication 110 phantoms, 2009; its Reference Female, 1.63 m and 60 kg, is the default
+/// woman here), and ICRP Publication 23 (1975) set Reference Man's age at 20-30 years; ours
+/// 1.75 m, 75 kg, 30 y: within 1 % and 3 % and at the upper end of the age range, but ICRP gives
+/// reference values without a spread, and they do not describe the tables' subject.
 pub const REFERENCE_BODY: (f64, f64, f64) = (1.75, 75.0, 30.0);
 
 impl Scale {
