@@ -1,6 +1,7 @@
 //! Mechanical energy of a state, for tests of dissipation: kinetic energy of ribs, sternum and
-//! vertices; elastic energy of elements (muscles and membrane edges count only when
-//! stretched, as they only pull; evaluated at zero activation), vector springs and rib joints; the pressure potentials of the
+//! vertices; elastic energy of elements (muscles and the dome's membrane edges count only
+//! when stretched, as they only pull; the abdominal membrane's edges, linear springs, in
+//! compression too; evaluated at zero activation), vector springs and rib joints; the pressure potentials of the
 //! abdomen, K (V - V0 - V0 ln(V/V0)), and of the lungs, the integral of their recoil
 //! ([`super::pleural::PleuralLaw::energy`], E_L (V - V0)^2 / 2 near rest); gravity; and the
 //! potential of the constant preloads.
@@ -32,6 +33,12 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
         }
         let stretch = len - el.rest_length[i];
         let k = el.stiffness[i];
+        if el.slot[i] == super::structure::PASSIVE {
+            // an abdominal membrane edge: a linear spring in compression as in tension
+            // (`forces`: only muscles and the dome's edges are tension-only)
+            e += 0.5 * k * stretch * stretch;
+            continue;
+        }
         e += softplus_integral(k * stretch, toe) / k;
     }
     let s = &model.springs;
