@@ -410,7 +410,7 @@ fn hill_supine_breathes_under_gravity_acting() {
 /// path folds at 1.453 L). With constant preloads alone level 1 standing had buckled 0.044 L
 /// below its FRC.
 #[test]
-#[ignore = "issue 35: gravity acting, hill law, level 1: relaxed curves stop at 6.916 L standing (TLC 7.377) and 1.635 L supine (RV 1.453)"]
+#[ignore = "issue 35: gravity acting, hill law, level 1: the standing relaxed curve stops at 5.763 L (no equilibrium at 5.993 L; TLC 7.377); supine it spans RV to TLC"]
 fn relaxed_curves_span_rv_to_tlc_under_gravity_acting_issue_35() {
     for lod in [0, 1] {
         for posture in [Posture::Standing, Posture::Supine] {

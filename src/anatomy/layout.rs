@@ -56,7 +56,8 @@ pub const OBLIQUITY: f64 = 0.2;
 /// over a 3 mm layer (De Troyer 1998) gives 870 N/m; the 1200 N/m in use (1.4x that) is the
 /// value of the model's first calibration, with which the drive amplitudes of
 /// [`crate::model::Drive::quiet`] and every documented figure were calibrated, so changing it
-/// is a recalibration, not a correction.
+/// is a recalibration, not a correction. The passive-and-active law uses the cited 870 N/m
+/// (`dynamics::muscle::HILL_INTERCOSTAL_TENSION`).
 /// Calibrated: the first calibration's value, no command reproduces it. Literature: 29 N/cm^2
 /// (De Troyer 1998) over a 3 mm layer, 870 N/m; ours 1200 N/m: disagrees (x1.38).
 pub const INTERCOSTAL_TENSION: f64 = 1200.0;
@@ -76,11 +77,9 @@ pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
 /// al. 1995, Thorax 50:1157), over the default man's 92.6 cm insertion line (`cargo run --release
 /// --example muscle_forces`) at 26.8 N/cm^2 (Persad et al. 2024, J Appl Physiol) gives 422
 /// (372-472) N; the necropsy thickness, 3.20 +- 0.55 mm (Arora & Rochester 1987, PMID 3568775), an
-/// upper bound of 794 N. Ours lies between, inside neither's spread. 422 N with today's drives
-/// moves quiet tidal volume by -5.5 % and full inspiratory activation by -6 % (section F), and
-/// under the hill law, whose passive wall (`HILL_PASSIVE_WALL_SCALE`) was fitted with 600 N, the
-/// relaxed motion of `tests/muscle_law.rs` then gains 2.2e-6 J between samples (allowed: 1e-6 of
-/// 0.95 J), so it waits for the passive wall's re-fit and the drives' re-calibration.
+/// upper bound of 794 N. Ours lies between, inside neither's spread. It is the scale the thesis's
+/// law (its shortening spring F_max / (beta l0)) and its drives were calibrated with; the
+/// passive-and-active law uses the cited 422 N (`dynamics::muscle::HILL_DIAPHRAGM_FORCE`).
 pub const DIAPHRAGM_FORCE: f64 = 600.0;
 /// Maximal forces of the abdominal wall muscles, both sides together [N] (about 25 N/cm^2 over
 /// the physiological cross-sections): rectus, transversus, external and internal obliques.

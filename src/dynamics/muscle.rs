@@ -103,6 +103,33 @@ pub const DIAPHRAGM_REST_OVER_OPTIMAL: f64 = 1.05;
 /// 3.9 % for the crural (ours 0.79, the costal part, agrees).
 pub const DIAPHRAGM_SLACK_OVER_REST: f64 = 0.79;
 
+/// The diaphragm's maximal force under the passive-and-active law [N]: the in-vivo thickness
+/// at FRC, 1.7 +- 0.2 mm (Ueki, De Bruin & Pride 1995, Thorax 50:1157), over the default man's
+/// 92.6 cm insertion line at 26.8 N/cm^2 (Persad et al. 2024, J Appl Physiol): 422 (372-472)
+/// N (`cargo run --release --example muscle_forces -- --all`). The thesis's law keeps
+/// [`crate::anatomy::DIAPHRAGM_FORCE`].
+/// Source: Ueki et al. 1995 and Persad et al. 2024 over the model's insertion line: 422
+/// (372-472) N; ours 422 N.
+pub const HILL_DIAPHRAGM_FORCE: f64 = 422.0;
+
+/// The largest active tension of an intercostal layer per metre of interspace under the
+/// passive-and-active law [N/m]. The thesis's law keeps [`crate::anatomy::INTERCOSTAL_TENSION`].
+/// Source: De Troyer 1998, 29 N/cm^2 over a 3 mm layer, 870 N/m; ours 870 N/m.
+pub const HILL_INTERCOSTAL_TENSION: f64 = 870.0;
+
+/// The factor on a muscle element's maximal force (the anatomy's) giving its cited maximal
+/// force under the passive-and-active law; 1 for the scalenes and abdominal muscles.
+pub fn hill_force_factor(group: crate::anatomy::MuscleGroup) -> f64 {
+    use crate::anatomy::{DIAPHRAGM_FORCE, INTERCOSTAL_TENSION, MuscleGroup};
+    match group {
+        MuscleGroup::Diaphragm => HILL_DIAPHRAGM_FORCE / DIAPHRAGM_FORCE,
+        MuscleGroup::ExternalIntercostals | MuscleGroup::InternalIntercostals => {
+            HILL_INTERCOSTAL_TENSION / INTERCOSTAL_TENSION
+        }
+        _ => 1.0,
+    }
+}
+
 /// The activation-proportional stiffness k_A = sqrt(2 / gamma) exp(-1/2), the steepest
 /// descent of f_L (at x = 1 + sqrt(gamma / 2)), so that f_L(x) + k_A (x - 1) never falls with
 /// length: 1.279 for gamma = [`ACTIVE_WIDTH`].

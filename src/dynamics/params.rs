@@ -503,9 +503,12 @@ pub struct Params {
 /// ([`super::muscle::MuscleLaw::Hill`]): with it the relaxed chest wall of the default subject
 /// standing at level of detail 1 has the adult's compliance, 0.2 L/cmH2O over the tidal range
 /// above FRC (Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13).
-/// Fitted: `torso bench relaxation --muscle-law hill --fit` (secant on the compliance of the
-/// relaxation curve, `bench::relaxation::fit_passive_wall`), which prints this value.
-pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.349;
+/// Fitted with the law's cited maximal forces (`super::muscle::HILL_DIAPHRAGM_FORCE`,
+/// `super::muscle::HILL_INTERCOSTAL_TENSION`; 0.349 with the thesis law's 600 N and 1200 N/m).
+/// Fitted: `torso bench relaxation --muscle-law hill --fit --posture standing` (secant on the
+/// compliance of the relaxation curve, `bench::relaxation::fit_passive_wall`), which prints
+/// "fitted factor on the passive wall (Hill law): 0.421".
+pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.421;
 
 /// The adult relaxed chest wall's compliance over the tidal range above FRC [L/cmH2O], the
 /// target of [`HILL_PASSIVE_WALL_SCALE`]'s fit.

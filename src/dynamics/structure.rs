@@ -153,7 +153,7 @@ fn hill_element(
     } else {
         RestLengths::at_rest(l0)
     };
-    let f = m.max_force;
+    let f = m.max_force * super::muscle::hill_force_factor(m.group);
     let k = stiffness(
         l0,
         lengths.optimal,

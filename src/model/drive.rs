@@ -106,17 +106,29 @@ impl Default for Drive {
     }
 }
 
-/// The factor on [`Drive::quiet`]'s and [`Drive::forced`]'s amplitudes under the
-/// passive-and-active muscle law ([`MuscleLaw::Hill`], with its fitted passive wall): an
-/// activation there is a fraction of the maximal force, where under the thesis's law it is a
-/// fraction of the largest shortening, so the same amplitudes breathe far deeper (a quiet
-/// tidal volume of 1.606 L for the default subject standing at level of detail 1). Scaled by
-/// this factor, the quiet drive gives that subject 0.525 L, the 7 mL/kg of quiet breathing
-/// the thesis-law drive is calibrated to; the forced drive, scaled by the same factor, then
-/// gives 1.895 L, within deep breathing's 1.5-3 L (a check, not fitted).
-/// Fitted: `cargo run --release --example drive_calibration -- --law hill --fit` (secant on
-/// log VT against log factor; prints "fitted factor 0.2695").
-pub const HILL_DRIVE_SCALE: f64 = 0.2695;
+/// Peak activation of the diaphragm in quiet breathing under the passive-and-active muscle law
+/// ([`MuscleLaw::Hill`], where an activation is a fraction of the maximal force): the crural
+/// diaphragm's EMG in quiet breathing as a fraction of its maximum in maximal inspiratory
+/// manoeuvres, 7.5 (2) % in 15 healthy adults (Reilly et al. 2011, Thorax 66:240, the controls
+/// of a cystic-fibrosis study; 9.0 +- 3.4 % in 100 healthy subjects, Jolley et al. 2009, Eur
+/// Respir J 33:289). EMG is taken as proportional to force (the diaphragm's Pdi-EMG relation
+/// is near linear); not fitted: with it the quiet tidal volume is an outcome.
+pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
+
+/// Peak activation of the rib-cage inspiratory muscles in quiet breathing under the
+/// passive-and-active law: the parasternal intercostals' surface EMG, 5.8 (3) % of its
+/// maximum, in the same 15 subjects as [`HILL_QUIET_DIAPHRAGM`] (Reilly et al. 2011; 5.88
+/// (3.63) % in 43 healthy adults, MacBean et al. 2014, Thorax 69 Suppl 2:A170). The drive's
+/// rib family also drives the scalenes, for which no quiet-breathing fraction of maximum was
+/// found, at the same fraction.
+pub const HILL_QUIET_RIBS: f64 = 0.058;
+
+/// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:
+/// the quiet diaphragm's cited activation over the thesis-law quiet amplitude,
+/// [`HILL_QUIET_DIAPHRAGM`] / 0.24. [`Drive::forced`]'s amplitudes times this factor are the
+/// forced drive under that law (no EMG fraction of maximum was found for deep breathing short
+/// of a maximal one); its tidal volume is then a check against deep breathing's 1.5-3 L.
+pub const HILL_DRIVE_SCALE: f64 = HILL_QUIET_DIAPHRAGM / 0.24;
 
 /// Allowed range of the drive frequency [Hz].
 pub const FREQUENCY_RANGE: (f64, f64) = (0.05, 2.0);
@@ -192,28 +204,33 @@ impl Drive {
         }
     }
 
-    /// The named scenario calibrated for `law`: the thesis's amplitudes under its law, and
-    /// the same scaled by [`HILL_DRIVE_SCALE`] under the passive-and-active law (frequency,
-    /// phases and inspiratory fraction unchanged).
+    /// The named scenario for `law`: the thesis's amplitudes under its law; under the
+    /// passive-and-active law the quiet drive of [`Drive::quiet_for`] and the others' amplitudes
+    /// times [`HILL_DRIVE_SCALE`] (frequency, phases and inspiratory fraction unchanged).
     pub fn scenario_for(name: &str, law: MuscleLaw) -> Result<Self> {
-        Ok(Self::scenario(name)?.for_law(law))
-    }
-
-    /// [`Drive::quiet`] calibrated for `law` ([`Drive::scenario_for`]).
-    pub fn quiet_for(law: MuscleLaw) -> Self {
-        Self::quiet().for_law(law)
-    }
-
-    /// This drive's amplitudes, calibrated under the thesis's law, carried over to `law`.
-    fn for_law(mut self, law: MuscleLaw) -> Self {
-        let scale = match law {
-            MuscleLaw::Thesis => return self,
-            MuscleLaw::Hill => HILL_DRIVE_SCALE,
-        };
-        for w in [&mut self.ribs, &mut self.diaphragm, &mut self.abdominals] {
-            w.amplitude *= scale;
+        match (name, law) {
+            ("quiet", _) => Ok(Self::quiet_for(law)),
+            (_, MuscleLaw::Thesis) => Self::scenario(name),
+            (_, MuscleLaw::Hill) => {
+                let mut d = Self::scenario(name)?;
+                for w in [&mut d.ribs, &mut d.diaphragm, &mut d.abdominals] {
+                    w.amplitude *= HILL_DRIVE_SCALE;
+                }
+                Ok(d)
+            }
         }
-        self
+    }
+
+    /// Quiet breathing for `law`: [`Drive::quiet`] under the thesis's law; under the
+    /// passive-and-active law the same timing with the diaphragm and rib-cage families at
+    /// their cited fractions of maximum ([`HILL_QUIET_DIAPHRAGM`], [`HILL_QUIET_RIBS`]).
+    pub fn quiet_for(law: MuscleLaw) -> Self {
+        let mut d = Self::quiet();
+        if law == MuscleLaw::Hill {
+            d.diaphragm.amplitude = HILL_QUIET_DIAPHRAGM;
+            d.ribs.amplitude = HILL_QUIET_RIBS;
+        }
+        d
     }
 
     /// Checks every field; the error names the FMI parameter.
@@ -341,8 +358,9 @@ pub(crate) fn check(name: &str, v: f64, (lo, hi): (f64, f64)) -> Result<()> {
 mod tests {
     use super::*;
 
-    /// Each law's scenario: the thesis's amplitudes under its law, scaled by the fitted factor
-    /// under the passive-and-active law, the timing untouched; `rest` stays off.
+    /// Each law's scenario: the thesis's amplitudes under its law; under the passive-and-active
+    /// law the quiet drive at its cited fractions of maximum and the others scaled, the timing
+    /// untouched; `rest` stays off.
     #[test]
     fn scenarios_follow_the_muscle_law() {
         for name in ["quiet", "forced", "rest"] {
@@ -359,9 +377,22 @@ mod tests {
                 (hill.abdominals, base.abdominals),
             ] {
                 assert_eq!(h.phase, b.phase);
-                assert_eq!(h.amplitude, b.amplitude * HILL_DRIVE_SCALE);
+                if name != "quiet" {
+                    assert_eq!(h.amplitude, b.amplitude * HILL_DRIVE_SCALE);
+                }
             }
         }
+        // the quiet drive at the cited fractions of maximum, the abdominals silent
+        let quiet = Drive::quiet_for(MuscleLaw::Hill);
+        assert_eq!(
+            [
+                quiet.diaphragm.amplitude,
+                quiet.ribs.amplitude,
+                quiet.abdominals.amplitude
+            ],
+            [HILL_QUIET_DIAPHRAGM, HILL_QUIET_RIBS, 0.0]
+        );
+        assert_eq!(Drive::quiet_for(MuscleLaw::Thesis), Drive::quiet());
         assert_eq!(
             Drive::quiet_for(MuscleLaw::Hill),
             Drive::scenario_for("quiet", MuscleLaw::Hill).unwrap()
