@@ -158,7 +158,18 @@ pub const TRANSVERSE_FRACTION: f64 = 0.1;
 /// viscoelastic (D'Angelo et al. 1991, J Appl Physiol 70:2602); the respiratory system's
 /// viscoelastic resistance there is 3.7 +- 0.7 cmH2O s/L (Jonson et al., "Mechanics of
 /// respiratory system in healthy anesthetized humans with emphasis on viscoelastic
-/// properties"): neither separates the abdominal wall.
+/// properties"): neither separates the abdominal wall. Literature, for the whole relaxed
+/// chest wall at breathing frequencies: in five healthy subjects during voluntary apnea the
+/// respiratory system's resistance fell from 0.47 +- 0.06 kPa s/L (4.8 cmH2O s/L) at 0.25 Hz
+/// to 0.17 +- 0.01 at 1 Hz, the fall due almost only to the chest wall's resistance (Hantos et
+/// al. 1986, J Appl Physiol 60:123, PMID 2935519), so the relaxed chest wall's resistance at
+/// quiet breathing's 0.25 Hz exceeds its 1 Hz value by about 3 cmH2O s/L; six relaxed seated
+/// subjects forced at 0.2-0.6 Hz had a respiratory system resistance of 3.07-4.43 cmH2O s/L
+/// ("Dependencies of respiratory system resistance and elastance on amplitude and frequency in
+/// the normal range of breathing", Am Rev Respir Dis 1991, 143:240,
+/// doi:10.1164/ajrccm/143.2.240), which leaves 1.6-2.9 cmH2O s/L to the tissues beside the
+/// default man's 1.5 of airway. Ours, 1.0 cmH2O s/L for the abdominal wall alone and
+/// independent of frequency, is not the same quantity as either: no comparison.
 pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
 
 /// Default [`Params::gravity`] [m/s^2]: standard gravity, 9.80665 m/s^2 (3rd CGPM, 1901),
