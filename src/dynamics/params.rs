@@ -68,7 +68,10 @@ pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.
 /// seated); sitting is the reference posture of [`SEATED_SUPINE_COMPLIANCES`]. Set by hand;
 /// no source: the value of the first dynamics (commit cfbd824), unchanged since.
 /// Unsourced: no source: chosen for a small sitting/standing difference. No measured
-/// sitting-to-standing ratio of the abdominal wall's compliance was found.
+/// sitting-to-standing ratio of the abdominal wall's compliance was found: the relaxation
+/// characteristics of six subjects (Konno & Mead 1968, J Appl Physiol 24:544) put the abdomen
+/// nearly as compliant as the rib cage over the tidal range standing and somewhat more supine,
+/// with no figure for sitting against standing.
 pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 
 /// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
@@ -81,7 +84,10 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// a69b5a9 found the measured x2.8 unusable; it is not fitted to a measurement.
 /// Unsourced: no source: chosen for a stable forced supine breath. Literature: the
 /// diaphragm-abdomen compliance rises x2.8 from seated to supine (Estenne et al. 1985:
-/// 0.025 -> 0.070 L/cmH2O); ours rises x1.64 from sitting (1.8 / 1.1): disagrees.
+/// 0.025 -> 0.070 L/cmH2O); ours rises x1.64 from sitting (1.8 / 1.1): disagrees. Konno &
+/// Mead 1968 (J Appl Physiol 24:544) found the abdomen over the tidal range nearly as
+/// compliant as the rib cage standing and somewhat more compliant supine (same direction as
+/// ours; no ratio given).
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
 /// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
