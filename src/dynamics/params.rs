@@ -68,21 +68,35 @@ pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.
 /// seated); sitting is the reference posture of [`SEATED_SUPINE_COMPLIANCES`]. Set by hand;
 /// no source: the value of the first dynamics (commit cfbd824), unchanged since.
 /// Unsourced: no source: chosen for a small sitting/standing difference. No measured
-/// sitting-to-standing ratio of the abdominal wall's compliance was found.
+/// sitting-to-standing ratio of the abdominal wall's compliance was found: the relaxation
+/// characteristics of six subjects (Konno & Mead 1968, J Appl Physiol 24:544) put the abdomen
+/// nearly as compliant as the rib cage over the tidal range standing and somewhat more supine,
+/// with no figure for sitting against standing.
 pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 
-/// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
-/// seated-to-supine ratio of the diaphragm-abdomen compliance is x2.8
-/// ([`SEATED_SUPINE_COMPLIANCES`]), but that soft a generated wall is folded in by forced
-/// expiratory abdominal contraction and the integration stalls (forced supine breathing at
-/// x3.08 stops advancing near t = 3 s: `cargo run --release --example posture_breathing --
-/// --probe 1 1.711`), so the model keeps the smaller increase. The 1.8 itself is set by hand
-/// (no source): it is the factor of the first dynamics (commit cfbd824), kept when commit
-/// a69b5a9 found the measured x2.8 unusable; it is not fitted to a measurement.
-/// Unsourced: no source: chosen for a stable forced supine breath. Literature: the
-/// diaphragm-abdomen compliance rises x2.8 from seated to supine (Estenne et al. 1985:
-/// 0.025 -> 0.070 L/cmH2O); ours rises x1.64 from sitting (1.8 / 1.1): disagrees.
-pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
+/// Abdominal wall compliance supine relative to standing: the sitting factor
+/// [`SITTING_WALL_COMPLIANCE`] times the measured seated-to-supine rise of the
+/// diaphragm-abdomen compliance, x2.8 (Estenne, Yernault & De Troyer 1985, J Appl Physiol
+/// 59:1842: 0.025 +- 0.012 seated, 0.070 +- 0.025 L/cmH2O supine in 52 relaxed adults;
+/// [`SEATED_SUPINE_COMPLIANCES`]), 3.08. It was 1.8, set by hand (commit cfbd824) and kept when
+/// commit a69b5a9 found forced supine breathing stalled near t = 3 s with the measured ratio;
+/// forced supine breathing at x3.08 now runs (`cargo run --release --example
+/// posture_breathing -- --probe 1 1.711` with the former 1.8: 15 s, 953 steps). With x3.08
+/// (measured, level of detail 1, default subject supine): quiet tidal volume 0.610 -> 0.617 L,
+/// abdominal share 61.3 -> 62.2 % (Aliverti et al. 2001: 63 +- 11 %), 1000 frames 4220 -> 4274
+/// RHS evaluations under the thesis law and 4208 -> 4226 under the hill law (`torso simulate
+/// --posture supine --duration 17.857 --muscle-law thesis|hill`); respiratory-system
+/// compliance 0.0694 -> 0.0753 L/cmH2O (still below 0.08-0.12; `cargo test --release --test
+/// physiology_figures -- --include-ignored`); the hill law's relaxed supine chest wall 0.1549
+/// -> 0.1587 L/cmH2O and followed up to TLC (`cargo test --release --test muscle_law --
+/// --include-ignored`). Konno & Mead 1968 (J Appl Physiol 24:544) found the abdomen over the
+/// tidal range nearly as compliant as the rib cage standing and somewhat more compliant supine
+/// (the same direction).
+/// Derived: [`SITTING_WALL_COMPLIANCE`] (unsourced) times the measured seated-to-supine ratio
+/// of the diaphragm-abdomen compliance in [`SEATED_SUPINE_COMPLIANCES`] (Estenne et al. 1985,
+/// x2.8).
+pub const SUPINE_WALL_COMPLIANCE: f64 =
+    SITTING_WALL_COMPLIANCE * SEATED_SUPINE_COMPLIANCES[1][1] / SEATED_SUPINE_COMPLIANCES[1][0];
 
 /// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
 /// lungs stay within 5 % of linear over a forced breath (1 L below rest, the barrier adds
@@ -158,7 +172,18 @@ pub const TRANSVERSE_FRACTION: f64 = 0.1;
 /// viscoelastic (D'Angelo et al. 1991, J Appl Physiol 70:2602); the respiratory system's
 /// viscoelastic resistance there is 3.7 +- 0.7 cmH2O s/L (Jonson et al., "Mechanics of
 /// respiratory system in healthy anesthetized humans with emphasis on viscoelastic
-/// properties"): neither separates the abdominal wall.
+/// properties"): neither separates the abdominal wall. Literature, for the whole relaxed
+/// chest wall at breathing frequencies: in five healthy subjects during voluntary apnea the
+/// respiratory system's resistance fell from 0.47 +- 0.06 kPa s/L (4.8 cmH2O s/L) at 0.25 Hz
+/// to 0.17 +- 0.01 at 1 Hz, the fall due almost only to the chest wall's resistance (Hantos et
+/// al. 1986, J Appl Physiol 60:123, PMID 2935519), so the relaxed chest wall's resistance at
+/// quiet breathing's 0.25 Hz exceeds its 1 Hz value by about 3 cmH2O s/L; six relaxed seated
+/// subjects forced at 0.2-0.6 Hz had a respiratory system resistance of 3.07-4.43 cmH2O s/L
+/// ("Dependencies of respiratory system resistance and elastance on amplitude and frequency in
+/// the normal range of breathing", Am Rev Respir Dis 1991, 143:240,
+/// doi:10.1164/ajrccm/143.2.240), which leaves 1.6-2.9 cmH2O s/L to the tissues beside the
+/// default man's 1.5 of airway. Ours, 1.0 cmH2O s/L for the abdominal wall alone and
+/// independent of frequency, is not the same quantity as either: no comparison.
 pub const ABDOMINAL_WALL_RESISTANCE: f64 = 1.0 * 98.0665e3;
 
 /// Default [`Params::gravity`] [m/s^2]: standard gravity, 9.80665 m/s^2 (3rd CGPM, 1901),
@@ -356,8 +381,16 @@ pub struct Params {
     /// Calibrated: set by hand in commit aeb7bbe against `tests/physiology.rs`; no command
     /// reproduces a fit. Literature: contents holding 100-300 mL of gas (thesis 2.3) in the 13.0 L
     /// cavity, compressed isothermally at 1 atm, have K = 101.3 kPa x 13.0 / (0.1-0.3) =
-    /// 4.4e6-1.3e7 Pa; CT of 37 healthy adults found 95 (IQR 71-141) mL of gut gas (Neurogastroenterol
-    /// Motil, September 2015), 1.4e7 Pa. Ours, 3e5 Pa, is 15-46x softer: disagrees.
+    /// 4.4e6-1.3e7 Pa; abdominal CT of 37 healthy adults found a median 95 mL of gut gas, IQR
+    /// 71-141 mL (Bendezú et al. 2015, "Intestinal gas content and distribution in health and in
+    /// patients with functional gut symptoms", Neurogastroenterol Motil 27(9)), K = 1.39e7 Pa
+    /// (IQR 9.3e6-1.86e7 Pa). Ours, 3e5 Pa, is 15-46x softer: disagrees. It cannot be adopted
+    /// yet: with 1.4e7, 9.3e6 or 4.4e6 Pa the hill law's upright rest under gravity acting at
+    /// level 1 cannot be followed to 0.1 L above its FRC (the static equilibrium stops 81-87 %
+    /// of the way; `cargo test --release --test gravity upright_rest_is_stable_under_gravity_acting
+    /// -- --nocapture`, which passes at 3e5), and the hill law's frame loop costs 2-3x the
+    /// right-hand sides (1000 frames of quiet breathing at level 1: 9410 -> 19280; level 0: 5534
+    /// -> 17498; `torso bench core --muscle-law hill`); the thesis law's is unchanged (4082).
     pub bulk_modulus: f64,
     /// Lung elastance [Pa/m^3]: pleural pressure change per volume change of the lungs (the
     /// thorax's, one to one), 1 / (0.2 L/cmH2O) (lung compliance, physiology reference). The
