@@ -14,7 +14,11 @@
 //! pressure swing and the diaphragm's excursion per litre. `--law thesis|hill` picks the muscle
 //! law (`Params::for_posture_and_law`; default: `Params::for_posture`'s); `--lod N` the level
 //! of detail (default 1); `--scale S` multiplies both drives' amplitudes by S (the factor
-//! `--fit` prints), for the figures a law gives with its calibrated drives.
+//! `--fit` prints), for the figures a law gives with its calibrated drives. The drives here
+//! are the thesis law's, `Drive::quiet` and `Drive::forced`: under the hill law the built-in
+//! quiet drive is not fitted but set at cited fractions of maximum (`Drive::quiet_for`,
+//! `HILL_QUIET_DIAPHRAGM`, `HILL_QUIET_RIBS`), so `--law hill --fit` is a what-if, not the
+//! source of a constant.
 
 use breathing_torso::anatomy::Posture;
 use breathing_torso::dynamics::Params;
