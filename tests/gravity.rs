@@ -183,7 +183,8 @@ fn frc(law: MuscleLaw, lod: u32, posture: Posture, loads: GravityLoads, g: f64) 
     (v, p / 98.0665)
 }
 
-/// With gravity acting, the standing rest is the reference the tissues' tensions come from:
+/// With gravity acting, the standing rest (relaxed: no tone) is the reference the tissues'
+/// tensions come from:
 /// its FRC and end-expiratory pleural pressure are the preloaded model's (the generated
 /// anatomy at a pleural pressure of minus the lungs' recoil at FRC, -5 cmH2O), and the
 /// inertial model started at its static equilibrium (`Torso::start_at_equilibrium`, a
@@ -205,6 +206,10 @@ fn the_standing_rest_is_the_reference() {
             };
             c.scene.level_of_detail = 0;
             c.subject.posture = posture;
+            // relaxed, as the reference is: no tone
+            let mut params = c.model_params();
+            params.abdominal_tone = 0.0;
+            c.params = Some(params);
             let mut torso = Torso::new(c).unwrap();
             let start = torso.read(Quantity::LungVolume).unwrap();
             println!("{law:?} {posture:?}: relaxed FRC {v:.4} L, inertial start {start:.4} L");

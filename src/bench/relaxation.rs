@@ -193,9 +193,13 @@ pub fn tidal_chest_wall_compliance(config: &Config) -> Result<f64> {
 }
 
 /// `config` with the solver, drive and airway the curves are measured with: quasi-static,
-/// every muscle relaxed.
+/// every muscle relaxed (no drive and no tone: the relaxation curve is measured with the
+/// subject's muscles relaxed, Rahn et al. 1946).
 fn relaxed(config: &Config) -> Config {
     let mut c = config.clone();
+    let mut params = config.model_params();
+    params.abdominal_tone = 0.0;
+    c.params = Some(params);
     c.solver.method = Method::QuasiStatic;
     c.drive = Drive {
         enabled: false,

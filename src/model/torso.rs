@@ -84,6 +84,31 @@ pub struct Compiled {
 /// one per drive; a simulation or an FMU instance needs one).
 pub const EQUILIBRIUM_CACHE: usize = 16;
 
+impl Config {
+    /// The constants of the dynamics this configuration compiles with: its `params` when set,
+    /// else the defaults of its posture and muscle law ([`Params::for_posture_and_law`]; under
+    /// gravity acting the standing ones, every posture being the standing anatomy) with its
+    /// gravity, its gravity loads and the true posture's abdominal tone, scaled with gravity
+    /// ([`crate::dynamics::abdominal_tone`]).
+    pub fn model_params(&self) -> Params {
+        self.params.clone().unwrap_or_else(|| {
+            let posture = self.subject.posture;
+            let built = if self.gravity_loads == GravityLoads::Acting {
+                Posture::Standing
+            } else {
+                posture
+            };
+            let mut p = Params::for_posture_and_law(built, self.muscle_law);
+            p.gravity = self.gravity;
+            p.gravity_loads = self.gravity_loads;
+            p.abdominal_tone = crate::dynamics::abdominal_tone(posture, self.muscle_law)
+                * self.gravity
+                / crate::dynamics::GRAVITY;
+            p
+        })
+    }
+}
+
 impl Compiled {
     /// Builds the anatomy and compiles the dynamics for `config` (subject, posture, level of
     /// detail).
@@ -106,12 +131,7 @@ impl Compiled {
             config.scene.level_of_detail,
             config.subject_mesh_dir.as_deref(),
         )?;
-        let params = config.params.clone().unwrap_or_else(|| {
-            let mut p = Params::for_posture_and_law(built.posture, config.muscle_law);
-            p.gravity = config.gravity;
-            p.gravity_loads = config.gravity_loads;
-            p
-        });
+        let params = config.model_params();
         let mut model = if acting {
             Model::compile_in(&anatomy, params, posture)
         } else {
@@ -202,6 +222,23 @@ struct Applied<'a> {
     drive: &'a Drive,
     /// Gain of each group on the right and left sides (overall side gain times group gain).
     gains: ([f64; 8], [f64; 8]),
+    /// Each group's tone ([`tones`]).
+    tone: [f64; 8],
+}
+
+/// Each group's tonic activation under `params`: the abdominal wall's tone
+/// ([`crate::dynamics::Params::abdominal_tone`]) on its four muscles, none on the others.
+fn tones(params: &crate::dynamics::Params) -> [f64; 8] {
+    let mut tone = [0.0; 8];
+    for g in [
+        MuscleGroup::TransversusAbdominis,
+        MuscleGroup::RectusAbdominis,
+        MuscleGroup::ExternalObliques,
+        MuscleGroup::InternalObliques,
+    ] {
+        tone[g.index()] = params.abdominal_tone;
+    }
+    tone
 }
 
 impl Applied<'_> {
@@ -209,7 +246,8 @@ impl Applied<'_> {
         let mut groups = [0.0; 8];
         for g in MuscleGroup::ALL {
             groups[g.index()] =
-                (self.inputs[g.index()] + self.drive.activation(g, t)).clamp(0.0, 1.0);
+                (self.inputs[g.index()] + self.drive.activation(g, t) + self.tone[g.index()])
+                    .clamp(0.0, 1.0);
         }
         Activations::per_group(&groups, &self.gains.0, &self.gains.1)
             .with_airway_opening(self.airway_opening)
@@ -395,10 +433,12 @@ impl Torso {
     /// pressure.
     pub(crate) fn applied(&self, t: f64) -> Activations {
         let (right, left) = side_gains(&self.config);
+        let tone = self.tone();
         let mut groups = [0.0; 8];
         for g in MuscleGroup::ALL {
             groups[g.index()] =
-                (self.inputs[g.index()] + self.config.drive.activation(g, t)).clamp(0.0, 1.0);
+                (self.inputs[g.index()] + self.config.drive.activation(g, t) + tone[g.index()])
+                    .clamp(0.0, 1.0);
         }
         Activations::per_group(&groups, &right, &left)
             .with_airway_opening(self.airway_opening)
@@ -567,10 +607,19 @@ impl Torso {
         self.inputs[group.index()]
     }
 
-    /// The activation applied to `group` now: clamp(input + drive, 0, 1).
+    /// The activation applied to `group` now: clamp(input + drive + tone, 0, 1), the tone the
+    /// posture's ([`crate::dynamics::Params::abdominal_tone`]).
     pub fn applied_activation(&self, group: MuscleGroup) -> f64 {
-        (self.inputs[group.index()] + self.config.drive.activation(group, self.time))
-            .clamp(0.0, 1.0)
+        (self.inputs[group.index()]
+            + self.config.drive.activation(group, self.time)
+            + self.tone()[group.index()])
+        .clamp(0.0, 1.0)
+    }
+
+    /// Each group's tonic activation in this model (the abdominal wall's tone,
+    /// [`crate::dynamics::Params::abdominal_tone`]).
+    fn tone(&self) -> [f64; 8] {
+        tones(&self.compiled.model.params)
     }
 
     /// Replaces the drive (validated first).
@@ -612,6 +661,7 @@ impl Torso {
                 occlusion: *occlusion,
                 drive: &config.drive,
                 gains: side_gains(config),
+                tone: tones(&compiled.model.params),
             },
             jacobian: jacobian.as_deref_mut(),
         };
@@ -720,6 +770,7 @@ impl Torso {
                 occlusion: *occlusion,
                 drive: &config.drive,
                 gains: side_gains(config),
+                tone: tones(&compiled.model.params),
             },
             tolerance,
             failure,
@@ -737,6 +788,7 @@ impl Torso {
             occlusion: self.occlusion,
             drive: &self.config.drive,
             gains: side_gains(&self.config),
+            tone: tones(&self.compiled.model.params),
         }
         .activations(self.time);
         let failure = q.failure.take();
@@ -771,8 +823,10 @@ impl Torso {
         let act: Vec<String> = MuscleGroup::ALL
             .iter()
             .map(|g| {
-                let a =
-                    (self.inputs[g.index()] + self.config.drive.activation(*g, t)).clamp(0.0, 1.0);
+                let a = (self.inputs[g.index()]
+                    + self.config.drive.activation(*g, t)
+                    + self.tone()[g.index()])
+                .clamp(0.0, 1.0);
                 format!("{} {a:.3}", g.name())
             })
             .collect();
@@ -1020,6 +1074,7 @@ impl Torso {
                 occlusion: *occlusion,
                 drive: &config.drive,
                 gains: side_gains(config),
+                tone: tones(&compiled.model.params),
             },
             jacobian: None,
         };

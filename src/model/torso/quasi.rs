@@ -283,6 +283,7 @@ impl Torso {
                     occlusion: None,
                     drive: &config.drive,
                     gains: super::side_gains(config),
+                    tone: super::tones(&compiled.model.params),
                 },
                 tolerance,
                 failure: &mut failure,
