@@ -251,7 +251,7 @@ pub fn lung_loop(config: &Config, duration: f64) -> Result<(f64, u64)> {
 /// The torso seen as a second-order system for [`SemiImplicitEuler`]: the configuration is
 /// rib angles, sternum position and quaternion, free vertex positions (the first
 /// `Layout::theta_dot` entries of the state), the rest are velocities; the right-hand side is
-/// [`Torso::rhs`] (current inputs plus the drive at t).
+/// [`Torso::rhs`] (current inputs plus the drive and tone at t).
 pub struct TorsoSecondOrder<'a> {
     /// The torso whose right-hand side is integrated (its own state is not touched).
     pub torso: &'a mut Torso,

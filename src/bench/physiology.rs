@@ -352,8 +352,8 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
     sab / (saa * sbb).sqrt()
 }
 
-/// Quiet breathing (the quiet drive calibrated for `law`, [`Drive::quiet_for`]: the FMU's
-/// start drive under the thesis's law) of the default subject in `posture` with the left
+/// Quiet breathing (the quiet drive for `law`, [`Drive::quiet_for`]: calibrated under the
+/// thesis's law, the FMU's start drive; at cited fractions of maximum under the hill law) of the default subject in `posture` with the left
 /// hemidiaphragm's gain `left_diaphragm_gain` (1 healthy, 0 paralysed; the FMU's
 /// `gain.diaphragm.left`), through the FMU, sampled at 28 Hz.
 pub fn quiet_breath(

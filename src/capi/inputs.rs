@@ -93,7 +93,7 @@ pub unsafe extern "C" fn bt_set_airway_occluded(h: *mut BtTorso, occluded: c_int
 }
 
 /// Puts the model at the static equilibrium of the activations applied now (the activation
-/// inputs plus the drive's value at the current time) and the airway-opening pressure, every
+/// inputs plus the drive's value at the current time, plus the tone) and the airway-opening pressure, every
 /// velocity zero (docs/dynamics.md, "The start state"): call it after setting the inputs a
 /// run starts with. `bt_create` and `bt_reset` start at the equilibrium of the drive's start
 /// with zero inputs, and `bt_set_drive` before the first step moves the start with it; the

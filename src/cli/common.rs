@@ -295,7 +295,7 @@ pub struct DriveArgs {
 }
 
 impl DriveArgs {
-    /// The drive described by the options: the scenario calibrated for the muscle `law`
+    /// The drive described by the options: the scenario for the muscle `law`
     /// ([`Drive::scenario_for`]), then each amplitude, phase or rate given, as given.
     pub fn drive(&self, law: crate::dynamics::muscle::MuscleLaw) -> Result<Drive> {
         let mut d = Drive::scenario_for(&self.scenario, law).map_err(flag_error)?;

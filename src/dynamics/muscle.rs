@@ -107,7 +107,8 @@ pub const DIAPHRAGM_SLACK_OVER_REST: f64 = 0.79;
 /// at FRC, 1.7 +- 0.2 mm (Ueki, De Bruin & Pride 1995, Thorax 50:1157), over the default man's
 /// 92.6 cm insertion line at 26.8 N/cm^2 (Persad et al. 2024, J Appl Physiol): 422 (372-472)
 /// N (`cargo run --release --example muscle_forces -- --all`). The thesis's law keeps
-/// [`crate::anatomy::DIAPHRAGM_FORCE`].
+/// [`crate::anatomy::DIAPHRAGM_FORCE`]. Every subject gets this total (the anatomy spreads a
+/// fixed total over the insertions), not one scaled with the subject's insertion line.
 /// Source: Ueki et al. 1995 and Persad et al. 2024 over the model's insertion line: 422
 /// (372-472) N; ours 422 N.
 pub const HILL_DIAPHRAGM_FORCE: f64 = 422.0;

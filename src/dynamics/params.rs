@@ -85,7 +85,8 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// respiratory-system compliance 0.0694 -> 0.0753 L/cmH2O). But under the passive-and-active
 /// law with its cited maximal forces the relaxed supine chest wall then has no equilibrium
 /// 0.15 L above FRC (the path folds at 3.027 L; `cargo test --release --test muscle_law
-/// the_relaxed_recoil_rises_with_volume`), so the model keeps the 1.8 of its first dynamics
+/// the_relaxed_recoil_rises_with_volume` with this constant set to 3.08), so the model keeps
+/// the 1.8 of its first dynamics
 /// (commit cfbd824), set by hand, not fitted. Konno & Mead 1968 (J Appl Physiol 24:544) found
 /// the abdomen over the tidal range nearly as compliant as the rib cage standing and somewhat
 /// more compliant supine (the same direction, no ratio).
@@ -534,11 +535,12 @@ pub struct Params {
     pub abdominal_tone: f64,
 }
 
-/// The abdominal wall's tonic activity in quiet standing, a fraction of maximal voluntary
-/// contraction: the trunk flexors' and extensors' co-activation around a neutral spine with
-/// no load, 1.7 +- 0.8 % MVC (Cholewicki, Panjabi & Khachatryan 1997, Spine 22:2207, surface
-/// EMG of the rectus, external and internal obliques and back extensors in 10 healthy adults;
-/// a pooled figure, no per-muscle value found). The abdominal muscles are tonically active
+/// The abdominal wall's tonic activity upright, a fraction of maximal voluntary contraction:
+/// the trunk flexors' and extensors' co-activation around a neutral upright spine with no
+/// load, 1.7 +- 0.8 % MVC (Cholewicki, Panjabi & Khachatryan 1997, Spine 22:2207, surface EMG
+/// of the rectus, external and internal obliques and back extensors in 10 healthy adults, read
+/// from the abstract, which does not say whether the subjects stood; a pooled figure, no
+/// per-muscle value found). The abdominal muscles are tonically active
 /// standing in most subjects, more in the lower abdomen, and silent supine (De Troyer 1983,
 /// Respir Physiol 53:341: 8 of 10 subjects; Strohl et al. 1981, J Appl Physiol 51:1471).
 /// Source: Cholewicki et al. 1997, 1.7 +- 0.8 % MVC; ours 0.017 of the maximal force (EMG

@@ -716,8 +716,9 @@ impl Structure {
 
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
     /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
-    /// pleural law's asymptotes, barrier pressure and margin, gravity, and under the
-    /// passive-and-active muscle law its muscles' forces and lengths), so that a snapshot is only restored into the model it was taken from.
+    /// pleural law's asymptotes, barrier pressure and margin, gravity, under the
+    /// passive-and-active muscle law its muscles' forces and lengths, and the abdominal tone),
+    /// so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: f64| {
@@ -765,6 +766,11 @@ impl Structure {
                 eat(self.elements.slack_length[e]);
                 eat(self.elements.drive[e]);
             }
+        }
+        // The abdominal wall's tone changes the applied activations; a model without it keeps
+        // the fingerprint it had before the tone existed.
+        if self.params.abdominal_tone != 0.0 {
+            eat(self.params.abdominal_tone);
         }
         h
     }

@@ -6,7 +6,8 @@
 //! activation a(t) = A/2 (sin(2 pi f t + phi) + 1) in [0, A], with A the fraction of the
 //! maximal reachable activation (the thesis's A_ribs, A_diaphragm, Table 4.3); the element
 //! then contracts as r = 1 - beta_max g a (see `dynamics`). The applied activation of a
-//! group is clamp(input + drive, 0, 1).
+//! group is clamp(input + drive + tone, 0, 1), the tone the abdominal wall's standing tone
+//! under the hill law (`Params::abdominal_tone`).
 //!
 //! Real breathing is not a sine: quiet inspiration takes about 0.4 of the breath (Tobin et
 //! al. 1983, "Breathing patterns. 1. Normal subjects", Chest 84:202; see docs/drive.md). The
@@ -112,7 +113,12 @@ impl Default for Drive {
 /// manoeuvres, 7.5 (2) % in 15 healthy adults (Reilly et al. 2011, Thorax 66:240, the controls
 /// of a cystic-fibrosis study; 9.0 +- 3.4 % in 100 healthy subjects, Jolley et al. 2009, Eur
 /// Respir J 33:289). EMG is taken as proportional to force (the diaphragm's Pdi-EMG relation
-/// is near linear); not fitted: with it the quiet tidal volume is an outcome.
+/// is near linear); not fitted: with it the quiet tidal volume is an outcome. The choice of
+/// source matters: at Jolley et al.'s 9.0 % the default man standing breathes 0.680 L (9.1
+/// mL/kg, above 7 mL/kg + 25 %) with a 54.4 % rib-cage share, against 0.627 L and 62.1 % at
+/// Reilly et al.'s 7.5 % (`torso simulate --muscle-law hill --diaphragm-amplitude 0.09
+/// --ribs-amplitude 0.058`); Reilly et al. is taken because it measured both families in the
+/// same subjects.
 pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 
 /// Peak activation of the rib-cage inspiratory muscles in quiet breathing under the
@@ -120,7 +126,9 @@ pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 /// maximum, in the same 15 subjects as [`HILL_QUIET_DIAPHRAGM`] (Reilly et al. 2011; 5.88
 /// (3.63) % in 43 healthy adults, MacBean et al. 2014, Thorax 69 Suppl 2:A170). The drive's
 /// rib family also drives the scalenes, for which no quiet-breathing fraction of maximum was
-/// found, at the same fraction.
+/// found, at the same fraction, and the internal intercostals at it in antiphase (the drive's
+/// structure, thesis 2.4.1), though quiet expiration is mostly passive: an uncited 5.8 % of
+/// their maximal force in expiration.
 pub const HILL_QUIET_RIBS: f64 = 0.058;
 
 /// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:
@@ -393,6 +401,11 @@ mod tests {
             [HILL_QUIET_DIAPHRAGM, HILL_QUIET_RIBS, 0.0]
         );
         assert_eq!(Drive::quiet_for(MuscleLaw::Thesis), Drive::quiet());
+        // the scale carries the thesis quiet diaphragm to its cited fraction
+        assert!(
+            (HILL_DRIVE_SCALE * Drive::quiet().diaphragm.amplitude - HILL_QUIET_DIAPHRAGM).abs()
+                < 1e-15
+        );
         assert_eq!(
             Drive::quiet_for(MuscleLaw::Hill),
             Drive::scenario_for("quiet", MuscleLaw::Hill).unwrap()

@@ -62,7 +62,7 @@ pub enum Quantity {
         /// 0 = x, 1 = y, 2 = z.
         axis: u8,
     },
-    /// Applied activation (input + drive, clamped) of a muscle group, by index in
+    /// Applied activation (input + drive + tone, clamped) of a muscle group, by index in
     /// [`crate::anatomy::MuscleGroup::ALL`].
     Activation(u8),
     /// Accepted integration steps since the start.

@@ -212,7 +212,7 @@ impl Compiled {
 }
 
 /// What acts on the model over an integration: inputs, airway-opening pressure, drive and
-/// gains, giving the activations clamp(input + drive, 0, 1) at any time.
+/// gains, giving the activations clamp(input + drive + tone, 0, 1) at any time.
 struct Applied<'a> {
     inputs: [f64; 8],
     /// Pressure at the airway opening [Pa].
@@ -255,7 +255,7 @@ impl Applied<'_> {
     }
 }
 
-/// The ODE seen by the solver: the model with activations = clamp(input + drive, 0, 1).
+/// The ODE seen by the solver: the model with activations = clamp(input + drive + tone, 0, 1).
 struct System<'a> {
     model: &'a Model,
     /// Error weighting of the state ([`Compiled::error_weights`]).

@@ -247,7 +247,7 @@ impl Torso {
 impl Torso {
     /// In quasi-static mode, the reduced right-hand side for external integrators: the
     /// airflow into the lungs dV_L/dt [L/s] at time `t` and lung volume `lung_volume` [L],
-    /// with the current inputs plus the drive at `t`, the same function the model's own
+    /// with the current inputs plus the drive (and tone) at `t`, the same function the model's own
     /// integrator steps ([`QuasiSystem`]: the static equilibrium holding that volume solved
     /// to the tolerance of the configured `solver.rtol`). The time, the lung volume and the
     /// inputs do not change; the static solver keeps the equilibrium as a warm start (what
