@@ -545,3 +545,31 @@ fn the_tone_is_postural() {
     let e = p.validate().unwrap_err().to_string();
     assert!(e.contains("params.abdominal_tone"), "{e}");
 }
+
+/// The hill law's maximal forces are the cited ones: each diaphragm element carries
+/// `HILL_DIAPHRAGM_FORCE` over the thesis law's `DIAPHRAGM_FORCE` times its anatomy's force
+/// (the fibres' chains share the total by arc), each intercostal `HILL_INTERCOSTAL_TENSION`
+/// over `INTERCOSTAL_TENSION` times it; the scalenes and abdominal muscles are unchanged.
+#[test]
+fn the_hill_law_uses_the_cited_maximal_forces() {
+    use breathing_torso::anatomy::{DIAPHRAGM_FORCE, INTERCOSTAL_TENSION};
+    use breathing_torso::dynamics::muscle::{HILL_DIAPHRAGM_FORCE, HILL_INTERCOSTAL_TENSION};
+    let thesis = Torso::new(Config::default()).unwrap();
+    let hill = Torso::new(hill(Posture::Standing)).unwrap();
+    let (a, m) = (&thesis.compiled().anatomy, &hill.compiled().model);
+    for (e, muscle) in a.muscles.iter().enumerate() {
+        let f = m.elements.max_force[e];
+        let expected = match muscle.group {
+            MuscleGroup::Diaphragm => muscle.max_force * HILL_DIAPHRAGM_FORCE / DIAPHRAGM_FORCE,
+            MuscleGroup::ExternalIntercostals | MuscleGroup::InternalIntercostals => {
+                muscle.max_force * HILL_INTERCOSTAL_TENSION / INTERCOSTAL_TENSION
+            }
+            _ => muscle.max_force,
+        };
+        assert!(
+            (f - expected).abs() <= 1e-9 * expected,
+            "{:?}: {f} against {expected}",
+            muscle.group
+        );
+    }
+}
