@@ -367,7 +367,7 @@ int bt_set_airway_occluded(struct BtTorso *h, int occluded);
 
 /**
  * Puts the model at the static equilibrium of the activations applied now (the activation
- * inputs plus the drive's value at the current time) and the airway-opening pressure, every
+ * inputs plus the drive's value at the current time, plus the tone) and the airway-opening pressure, every
  * velocity zero (docs/dynamics.md, "The start state"): call it after setting the inputs a
  * run starts with. `bt_create` and `bt_reset` start at the equilibrium of the drive's start
  * with zero inputs, and `bt_set_drive` before the first step moves the start with it; the
@@ -382,7 +382,8 @@ int bt_set_airway_occluded(struct BtTorso *h, int occluded);
  * # Safety
  * `h` must be NULL or a live handle; `relative_imbalance` NULL or writable.
  */
-int bt_start_at_equilibrium(struct BtTorso *h, double *relative_imbalance);
+int bt_start_at_equilibrium(struct BtTorso *h,
+                            double *relative_imbalance);
 
 /**
  * Replaces the drive (validated; on error nothing changes).
