@@ -242,14 +242,19 @@ fn tones(params: &crate::dynamics::Params) -> [f64; 8] {
 }
 
 impl Applied<'_> {
-    fn activations(&self, t: f64) -> Activations {
+    /// Each group's applied activation at time `t`: clamp(input + drive + tone, 0, 1).
+    fn groups(&self, t: f64) -> [f64; 8] {
         let mut groups = [0.0; 8];
         for g in MuscleGroup::ALL {
             groups[g.index()] =
                 (self.inputs[g.index()] + self.drive.activation(g, t) + self.tone[g.index()])
                     .clamp(0.0, 1.0);
         }
-        Activations::per_group(&groups, &self.gains.0, &self.gains.1)
+        groups
+    }
+
+    fn activations(&self, t: f64) -> Activations {
+        Activations::per_group(&self.groups(t), &self.gains.0, &self.gains.1)
             .with_airway_opening(self.airway_opening)
             .with_occlusion(self.occlusion)
     }
@@ -432,17 +437,19 @@ impl Torso {
     /// The activations applied at time `t` with the current inputs, drive and airway-opening
     /// pressure.
     pub(crate) fn applied(&self, t: f64) -> Activations {
-        let (right, left) = side_gains(&self.config);
-        let tone = self.tone();
-        let mut groups = [0.0; 8];
-        for g in MuscleGroup::ALL {
-            groups[g.index()] =
-                (self.inputs[g.index()] + self.config.drive.activation(g, t) + tone[g.index()])
-                    .clamp(0.0, 1.0);
+        self.applying().activations(t)
+    }
+
+    /// What is applied now: the current inputs, drive, gains, tone and airway.
+    fn applying(&self) -> Applied<'_> {
+        Applied {
+            inputs: self.inputs,
+            airway_opening: self.airway_opening,
+            occlusion: self.occlusion,
+            drive: &self.config.drive,
+            gains: side_gains(&self.config),
+            tone: self.tone(),
         }
-        Activations::per_group(&groups, &right, &left)
-            .with_airway_opening(self.airway_opening)
-            .with_occlusion(self.occlusion)
     }
 
     /// Puts the model at the static equilibrium of the activations applied now (inputs plus
@@ -610,10 +617,7 @@ impl Torso {
     /// The activation applied to `group` now: clamp(input + drive + tone, 0, 1), the tone the
     /// posture's ([`crate::dynamics::Params::abdominal_tone`]).
     pub fn applied_activation(&self, group: MuscleGroup) -> f64 {
-        (self.inputs[group.index()]
-            + self.config.drive.activation(group, self.time)
-            + self.tone()[group.index()])
-        .clamp(0.0, 1.0)
+        self.applying().groups(self.time)[group.index()]
     }
 
     /// Each group's tonic activation in this model (the abdominal wall's tone,
@@ -820,15 +824,10 @@ impl Torso {
     /// [`Torso::describe_scene`] with the activations applied at time `t`.
     fn describe_scene_at(&self, t: f64) -> String {
         let s = &self.config.subject;
+        let groups = self.applying().groups(t);
         let act: Vec<String> = MuscleGroup::ALL
             .iter()
-            .map(|g| {
-                let a = (self.inputs[g.index()]
-                    + self.config.drive.activation(*g, t)
-                    + self.tone()[g.index()])
-                .clamp(0.0, 1.0);
-                format!("{} {a:.3}", g.name())
-            })
+            .map(|g| format!("{} {:.3}", g.name(), groups[g.index()]))
             .collect();
         format!(
             "{:?} subject {} m, {} kg, {:?}; activations {}; airway opening {} Pa{}",
