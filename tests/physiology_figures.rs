@@ -254,7 +254,7 @@ fn bench_command_prints_json() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let figures = v["figures"].as_array().unwrap();
-    assert_eq!(figures.len(), 14, "{v}");
+    assert_eq!(figures.len(), 16, "{v}");
     for f in figures {
         let value = f["value"].as_f64().unwrap();
         // an open end of a range is written null
