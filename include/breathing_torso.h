@@ -240,6 +240,12 @@ typedef struct BtConfig {
    * tissues' tensions from the standing reference, the rest found under the loads).
    */
   int gravity_loads;
+  /**
+   * The posture's tonic muscle activity (FMI `postural_tone`): 1 on (default; standing
+   * under muscle law 1 the abdominal wall's tone, 0.017 of the maximal force, Cholewicki et
+   * al. 1997), 0 off (a relaxed subject, as in a relaxation manoeuvre).
+   */
+  int postural_tone;
 } BtConfig;
 
 /**
@@ -597,7 +603,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{6e8a3429-b8bb-ac83-f5b6-c008c2ebbfa7}"
+#define BT_FMI_GUID "{9cce5259-d3dd-286f-824a-ce6471019d5f}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -637,6 +643,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_MUSCLE_LAW 206u
 #define BT_VR_GRAVITY 207u
 #define BT_VR_GRAVITY_LOADS 208u
+#define BT_VR_POSTURAL_TONE 209u
 #define BT_VR_SOLVER_RTOL 130u
 #define BT_VR_SOLVER_ATOL 131u
 #define BT_VR_SOLVER_MAX_STEP 132u

@@ -409,6 +409,7 @@ fn hill_acting_compliance(posture: Posture) -> f64 {
     let laws = Laws {
         muscle: MuscleLaw::Hill,
         gravity_loads: GravityLoads::Acting,
+        postural_tone: true,
     };
     let s = pressure_step(posture, 1, laws).unwrap();
     println!(
@@ -572,4 +573,258 @@ fn the_hill_law_uses_the_cited_maximal_forces() {
             muscle.group
         );
     }
+}
+
+/// The hill law standing through the FMU with `postural_tone` = `on` (the default) or off.
+fn hill_standing(postural_tone: bool) -> Laws {
+    Laws {
+        muscle: MuscleLaw::Hill,
+        gravity_loads: GravityLoads::Preloaded,
+        postural_tone,
+    }
+}
+
+/// With `postural_tone` = 0 the FMU's 10 cmH2O airway-opening step measures the relaxed
+/// respiratory system, the one the relaxation bench measures with every muscle relaxed
+/// (`bench::relaxation`, which zeroes the tone): two routes to the same equilibria, one
+/// settling dynamically through the FMU, the other solving quasi-static equilibria. The step
+/// starts at the bench's FRC and ends where the relaxed system's recoil (alveolar pressure,
+/// airway shut) is 10 cmH2O, so its compliance is the secant of the bench's curve from FRC to
+/// 10 cmH2O, read off the curve by linear interpolation between its points. Tolerance
+/// 0.001 L/cmH2O (10 mL on the step's held volume) from the two methods' errors: the curve's
+/// points lie 0.23 L apart there, where the recoil's slope falls from 9.4 to 9.1 cmH2O/L
+/// from one interval to the next (measured), so the interpolation errs by about 1 mL (h^2
+/// |p''| / 8 = 0.01 cmH2O); the step is called settled when the volume moved less than 0.1 mL over a second,
+/// under 0.5 mL from the end for time constants up to 5 s. The rest is the same equilibrium
+/// solved twice, within 0.1 mL. The bench's tidal-range compliance (FRC to FRC + 0.5 L, the
+/// 0.0991 of `torso bench relaxation --muscle-law hill`) is printed beside it: the step spans
+/// about 1 L, where the curve is softer.
+#[test]
+fn with_the_tone_off_the_fmu_step_measures_the_relaxed_system() {
+    use breathing_torso::bench::physiology::PRESSURE_STEP;
+    use breathing_torso::bench::relaxation::CMH2O;
+    let relaxed = pressure_step(Posture::Standing, 1, hill_standing(false)).unwrap();
+    let toned = pressure_step(Posture::Standing, 1, hill_standing(true)).unwrap();
+    let r = relaxation(&hill(Posture::Standing), 25).unwrap();
+    let target = PRESSURE_STEP * CMH2O;
+    let held = r
+        .points
+        .windows(2)
+        .find_map(|w| {
+            let (a, b) = (w[0].system - target, w[1].system - target);
+            (a <= 0.0 && b > 0.0).then(|| w[0].lung + (w[1].lung - w[0].lung) * (-a) / (b - a))
+        })
+        .expect("the relaxed curve reaches 10 cmH2O");
+    let secant = (held - r.frc) / PRESSURE_STEP;
+    println!(
+        "hill, standing, through the FMU: postural_tone 0: rest {:.4} L, held {:.4} L, C_rs \
+         {:.4} L/cmH2O; postural_tone 1: rest {:.4} L, C_rs {:.4} L/cmH2O; relaxation bench: \
+         FRC {:.4} L, {held:.4} L at 10 cmH2O, secant {secant:.4} L/cmH2O, tidal-range C_rs \
+         {:.4} L/cmH2O",
+        relaxed.rest,
+        relaxed.held,
+        relaxed.compliance,
+        toned.rest,
+        toned.compliance,
+        r.frc,
+        r.system_compliance
+    );
+    assert!(
+        (relaxed.rest - r.frc).abs() < 1e-4,
+        "FMU rest {} L against the bench's FRC {} L",
+        relaxed.rest,
+        r.frc
+    );
+    assert!(
+        (relaxed.compliance - secant).abs() < 1e-3,
+        "FMU C_rs {} against the bench's {secant} L/cmH2O",
+        relaxed.compliance
+    );
+    assert!(
+        within(relaxed.compliance, SYSTEM_COMPLIANCE),
+        "C_rs {} against {SYSTEM_COMPLIANCE:?}",
+        relaxed.compliance
+    );
+}
+
+/// The FMU's lung volume at the start (the rest, drive off) of the default subject standing
+/// at level of detail 0 under muscle law `law` with `postural_tone` = `tone`, when given.
+fn fmu_rest(law: i32, tone: Option<i32>) -> f64 {
+    use breathing_torso::fmi::instance::Instance;
+    use breathing_torso::fmi::variables::table;
+    use breathing_torso::fmi::{FMI2, Status};
+    let t = table();
+    let vr = |n: &str| t.by_name(n).unwrap().vr;
+    let mut inst = Instance::new(&FMI2, "t", None, None, false);
+    let mut set = |name: &str, v: i32| {
+        assert_eq!(
+            inst.set_integer("fmi2SetInteger", &[vr(name)], &[v]),
+            Status::Ok,
+            "{name} = {v}"
+        )
+    };
+    set("scene.level_of_detail", 0);
+    set("muscle_law", law);
+    if let Some(tone) = tone {
+        set("postural_tone", tone);
+    }
+    assert_eq!(
+        inst.set_boolean("fmi2SetBoolean", &[vr("drive.enabled")], &[0]),
+        Status::Ok
+    );
+    inst.setup_experiment("fmi2SetupExperiment", None, 0.0, None);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(
+        inst.exit_initialization_mode("fmi2ExitInitializationMode"),
+        Status::Ok
+    );
+    let mut v = [0.0];
+    assert_eq!(
+        inst.get_real("fmi2GetReal", &[vr("volume.lung")], &mut v),
+        Status::Ok
+    );
+    v[0]
+}
+
+/// The library's model of the default subject standing at level of detail 0 under `law`,
+/// the drive off, with `postural_tone` = `tone`, or, with `zero_tone`, with its own
+/// constants carrying no abdominal tone.
+fn library_torso(law: MuscleLaw, tone: bool, zero_tone: bool) -> Torso {
+    let mut c = Config {
+        muscle_law: law,
+        postural_tone: tone,
+        ..Config::default()
+    };
+    c.scene.level_of_detail = 0;
+    c.drive.enabled = false;
+    if zero_tone {
+        let mut p = c.model_params();
+        p.abdominal_tone = 0.0;
+        c.params = Some(p);
+    }
+    Torso::new(c).unwrap()
+}
+
+/// The standing tone lowers the end-expiratory volume (De Troyer 1983; the direction only),
+/// and `postural_tone` = 0 is the model without it: the FMU's rest is the library's with its
+/// constants' tone set to 0, bit for bit, as is the compiled model (its fingerprint); with
+/// the tone on it is the library's default. Under the thesis's law, which has no tone, the
+/// switch changes nothing.
+#[test]
+fn the_postural_tone_switch_removes_the_tone() {
+    let on = fmu_rest(1, None);
+    let off = fmu_rest(1, Some(0));
+    println!("hill, standing, lod 0: rest {on:.4} L with the tone, {off:.4} L without");
+    assert!(on < off, "with the tone {on} L, without {off} L");
+    assert_eq!(on, fmu_rest(1, Some(1)));
+    let volume = |t: &mut Torso| t.read(Quantity::LungVolume).unwrap();
+    let mut toned = library_torso(MuscleLaw::Hill, true, false);
+    let mut switched = library_torso(MuscleLaw::Hill, false, false);
+    let mut zeroed = library_torso(MuscleLaw::Hill, true, true);
+    assert_eq!(on, volume(&mut toned));
+    assert_eq!(off, volume(&mut switched));
+    assert_eq!(off, volume(&mut zeroed));
+    assert_eq!(
+        switched.snapshot().fingerprint,
+        zeroed.snapshot().fingerprint
+    );
+    assert_ne!(
+        switched.snapshot().fingerprint,
+        toned.snapshot().fingerprint
+    );
+    assert_eq!(
+        switched.applied_activation(MuscleGroup::RectusAbdominis),
+        0.0
+    );
+    assert_eq!(fmu_rest(0, Some(0)), fmu_rest(0, None));
+    let thesis = |tone: bool| {
+        let mut c = Config {
+            postural_tone: tone,
+            ..Config::default()
+        };
+        c.subject.posture = Posture::Standing;
+        c.model_params()
+    };
+    assert_eq!(thesis(false), thesis(true));
+}
+
+/// `postural_tone` outside 0-1 is refused with an error naming it, through the FMU (the
+/// start value is 1), the C ABI (`bt_config_set` and `bt_create`) and the command line; a
+/// configuration written before the switch existed reads it on.
+#[test]
+fn postural_tone_out_of_range_is_refused_by_name() {
+    use breathing_torso::capi::*;
+    use breathing_torso::fmi::instance::{Instance, LogSink};
+    use breathing_torso::fmi::variables::table;
+    use breathing_torso::fmi::{FMI2, Status};
+    use std::sync::{Arc, Mutex};
+    let t = table();
+    let vr = t.by_name("postural_tone").expect("an FMU variable").vr;
+    let log = Arc::new(Mutex::new(Vec::<String>::new()));
+    let sink_log = log.clone();
+    let sink: LogSink =
+        Box::new(move |_s, _c: &str, m: &str| sink_log.lock().unwrap().push(m.to_string()));
+    let mut inst = Instance::new(&FMI2, "t", None, Some(sink), false);
+    let mut start = [-1];
+    assert_eq!(
+        inst.get_integer("fmi2GetInteger", &[vr], &mut start),
+        Status::Ok
+    );
+    assert_eq!(start[0], 1);
+    for bad in [2, -1] {
+        assert_ne!(
+            inst.set_integer("fmi2SetInteger", &[vr], &[bad]),
+            Status::Ok
+        );
+    }
+    let messages = log.lock().unwrap().join("\n");
+    assert!(messages.contains("postural_tone"), "{messages}");
+    unsafe {
+        let mut config = std::mem::zeroed::<BtConfig>();
+        assert_eq!(bt_config_default(&mut config), BT_OK);
+        assert_eq!(config.postural_tone, 1);
+        assert_eq!(
+            bt_config_set(&mut config, c"postural_tone".as_ptr(), 0.0),
+            BT_OK
+        );
+        assert_eq!(config.postural_tone, 0);
+        assert_ne!(
+            bt_config_set(&mut config, c"postural_tone".as_ptr(), 2.0),
+            BT_OK
+        );
+        assert_eq!(config.postural_tone, 0);
+        config.level_of_detail = 0;
+        config.postural_tone = 2;
+        let h = bt_create(&config);
+        assert!(h.is_null());
+        let message = std::ffi::CStr::from_ptr(bt_creation_error()).to_string_lossy();
+        assert!(
+            message.contains("postural_tone") && message.contains("0 off or 1 on"),
+            "{message}"
+        );
+    }
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_torso"))
+        .args([
+            "simulate",
+            "--lod",
+            "0",
+            "--duration",
+            "0.1",
+            "--postural-tone",
+            "maybe",
+        ])
+        .current_dir(std::env::temp_dir())
+        .output()
+        .expect("run torso");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("--postural-tone") && err.contains("on or off"),
+        "{err}"
+    );
+    // a configuration written before the switch existed
+    let mut json = serde_json::to_value(Config::default()).unwrap();
+    json.as_object_mut().unwrap().remove("postural_tone");
+    let old: Config = serde_json::from_value(json).unwrap();
+    assert!(old.postural_tone);
 }

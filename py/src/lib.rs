@@ -135,12 +135,13 @@ const DRIVE_KEYS: [&str; 8] = [
 ];
 
 /// The model's laws as the keywords name them: the muscle law, the gravitational
-/// acceleration [m/s^2] and how gravity loads the model (`--muscle-law`, `--gravity`,
-/// `--gravity-loads`).
+/// acceleration [m/s^2], how gravity loads the model and whether the posture's tone is
+/// applied (`--muscle-law`, `--gravity`, `--gravity-loads`, `--postural-tone`).
 struct Laws<'a> {
     muscle_law: &'a str,
     gravity: f64,
     gravity_loads: &'a str,
+    postural_tone: bool,
 }
 
 impl Scene {
@@ -166,6 +167,7 @@ impl Scene {
             muscle_law: laws.muscle_law.into(),
             gravity: laws.gravity,
             gravity_loads: laws.gravity_loads.into(),
+            postural_tone: if laws.postural_tone { "on" } else { "off" }.into(),
         };
         dict_items(subject, "subject", &SUBJECT_KEYS, |k, v| {
             match k {
@@ -266,7 +268,7 @@ struct Torso {
 #[pymethods]
 impl Torso {
     #[new]
-    #[pyo3(signature = (subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, scenario="quiet", drive=None, muscle_law="thesis", gravity=9.81, gravity_loads="preloaded"))]
+    #[pyo3(signature = (subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, scenario="quiet", drive=None, muscle_law="thesis", gravity=9.81, gravity_loads="preloaded", postural_tone=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -280,11 +282,13 @@ impl Torso {
         muscle_law: &str,
         gravity: f64,
         gravity_loads: &str,
+        postural_tone: bool,
     ) -> PyResult<Torso> {
         let laws = Laws {
             muscle_law,
             gravity,
             gravity_loads,
+            postural_tone,
         };
         let config =
             Scene::new(subject, posture, lod, solver, rtol, scenario, drive, &laws)?.config()?;
@@ -624,7 +628,7 @@ struct Interrupted(PyErr);
 /// Fits the recording at `path` as `torso fit` does, writing the result JSON at `out` (with
 /// its CSV and figure beside it); returns the JSON's path.
 #[pyfunction]
-#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None, muscle_law="thesis", gravity=9.81, gravity_loads="preloaded"))]
+#[pyo3(signature = (path, out, subject=None, posture="standing", lod=None, solver="dopri5", rtol=1e-6, grid="10x6", units=None, rate=None, method="nelder-mead", max_evals=120, seed=1, threads=None, skin_fit=false, marker_offsets=false, fit_size=None, drift=true, sway=true, reference=Vec::new(), marker_radius=0.0, anterior=Vec::new(), ti_ttot=Some(0.5), progress=None, muscle_law="thesis", gravity=9.81, gravity_loads="preloaded", postural_tone=true))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -655,11 +659,13 @@ fn fit(
     muscle_law: &str,
     gravity: f64,
     gravity_loads: &str,
+    postural_tone: bool,
 ) -> PyResult<String> {
     let laws = Laws {
         muscle_law,
         gravity,
         gravity_loads,
+        postural_tone,
     };
     let scene = Scene::new(subject, posture, lod, solver, rtol, "quiet", None, &laws)?;
     let model = ModelArgs {

@@ -65,8 +65,12 @@ def test_the_package_is_the_installed_one():
             {"lod": 0, "posture": "supine", "gravity": 4.9, "gravity_loads": "acting"},
             ["--lod", "0", "--posture", "supine", "--gravity", "4.9", "--gravity-loads", "acting"],
         ),
+        (
+            {"lod": 0, "muscle_law": "hill", "postural_tone": False},
+            ["--lod", "0", "--muscle-law", "hill", "--postural-tone", "off"],
+        ),
     ],
-    ids=["default", "female-supine-rosenbrock-forced", "hill-law", "gravity-acting"],
+    ids=["default", "female-supine-rosenbrock-forced", "hill-law", "gravity-acting", "hill-no-tone"],
 )
 def test_simulate_is_torso_simulate(torso_cli, tmp_path, options, flags):
     """Torso(...).simulate returns exactly the columns and values `torso simulate` writes."""

@@ -226,15 +226,18 @@ impl Fmu {
     }
 }
 
-/// The laws an experiment runs under: the muscle law (the FMU's `muscle_law`) and how
-/// gravity loads the model (`gravity_loads`). A muscle law alone means gravity preloaded, the
-/// default.
+/// The laws an experiment runs under: the muscle law (the FMU's `muscle_law`), how gravity
+/// loads the model (`gravity_loads`) and whether the posture's tone is applied
+/// (`postural_tone`). A muscle law alone means gravity preloaded and the tone on, the
+/// defaults.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct Laws {
     /// The muscle law.
     pub muscle: MuscleLaw,
     /// How gravity loads the model.
     pub gravity_loads: GravityLoads,
+    /// Whether the posture's tonic activity is applied ([`Config::postural_tone`]).
+    pub postural_tone: bool,
 }
 
 impl From<MuscleLaw> for Laws {
@@ -242,16 +245,21 @@ impl From<MuscleLaw> for Laws {
         Laws {
             muscle,
             gravity_loads: GravityLoads::default(),
+            postural_tone: true,
         }
     }
 }
 
 impl Laws {
     /// The FMU's parameters that select these laws.
-    fn parameters(self) -> [(&'static str, f64); 2] {
+    fn parameters(self) -> [(&'static str, f64); 3] {
         [
             ("muscle_law", f64::from(self.muscle.code())),
             ("gravity_loads", f64::from(self.gravity_loads.code())),
+            (
+                "postural_tone",
+                f64::from(crate::model::postural_tone_code(self.postural_tone)),
+            ),
         ]
     }
 }
@@ -667,6 +675,7 @@ pub fn full_inspiration(
     config.scene.level_of_detail = lod;
     config.muscle_law = laws.muscle;
     config.gravity_loads = laws.gravity_loads;
+    config.postural_tone = laws.postural_tone;
     config.drive.enabled = false;
     let mut torso = Torso::new(config)?;
     let line = m_mode_line(&torso);
@@ -859,6 +868,8 @@ pub struct Physiology {
     pub muscle_law: MuscleLaw,
     /// How gravity loads the model (the FMU's `gravity_loads`).
     pub gravity_loads: GravityLoads,
+    /// Whether the posture's tone is applied (the FMU's `postural_tone`).
+    pub postural_tone: bool,
     /// The figures against their cited ranges.
     pub figures: Vec<Figure>,
     /// Figures that could not be measured, with the reason.
@@ -1066,6 +1077,7 @@ pub fn physiology(lod: u32, law: impl Into<Laws>) -> Result<Physiology> {
         level_of_detail: lod,
         muscle_law: law.muscle,
         gravity_loads: law.gravity_loads,
+        postural_tone: law.postural_tone,
         figures,
         failed,
     })

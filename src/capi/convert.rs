@@ -110,6 +110,7 @@ pub(super) unsafe fn config_from_c(c: &BtConfig) -> Result<Config> {
         muscle_law: crate::dynamics::muscle::MuscleLaw::from_code(c.muscle_law.into())?,
         gravity: c.gravity,
         gravity_loads: crate::dynamics::GravityLoads::from_code(c.gravity_loads.into())?,
+        postural_tone: crate::model::postural_tone_from_code(c.postural_tone.into())?,
     };
     Ok(config)
 }
@@ -147,5 +148,6 @@ pub(super) fn config_to_c(
         muscle_law: c.muscle_law.code(),
         gravity: c.gravity,
         gravity_loads: c.gravity_loads.code(),
+        postural_tone: crate::model::postural_tone_code(c.postural_tone),
     }
 }

@@ -194,6 +194,10 @@ pub struct BtConfig {
     /// posture's rest (default), 1 it acts (the abdominal contents' hydrostatic pressure, the
     /// tissues' tensions from the standing reference, the rest found under the loads).
     pub gravity_loads: c_int,
+    /// The posture's tonic muscle activity (FMI `postural_tone`): 1 on (default; standing
+    /// under muscle law 1 the abdominal wall's tone, 0.017 of the maximal force, Cholewicki et
+    /// al. 1997), 0 off (a relaxed subject, as in a relaxation manoeuvre).
+    pub postural_tone: c_int,
 }
 
 /// Statistics of one `bt_advance_to` call.

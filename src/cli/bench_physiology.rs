@@ -21,6 +21,10 @@ pub struct PhysiologyArgs {
     /// How gravity loads the model: preloaded or acting (the FMU's `gravity_loads`).
     #[arg(long, default_value = "preloaded")]
     pub gravity_loads: String,
+    /// The posture's tonic muscle activity: on or off (the FMU's `postural_tone`; off, the
+    /// relaxed subject whose respiratory-system compliance is the passive one).
+    #[arg(long, default_value = "on")]
+    pub postural_tone: String,
 }
 
 /// A range's end for printing (an infinite end as "-").
@@ -49,6 +53,9 @@ pub fn run(args: &PhysiologyArgs) -> Result<()> {
         crate::bench::physiology::Laws {
             muscle: law,
             gravity_loads,
+            postural_tone: crate::model::parse_postural_tone(&args.postural_tone).map_err(
+                |_| crate::Error::invalid("--postural-tone", &args.postural_tone, "on or off"),
+            )?,
         },
     )?;
     if args.json {
@@ -58,8 +65,11 @@ pub fn run(args: &PhysiologyArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}, {:?} muscle law, gravity {:?}",
-        p.level_of_detail, p.muscle_law, p.gravity_loads
+        "physiological figures of the default subject (male, 30 y, 1.75 m, 75 kg), level of detail {}, {:?} muscle law, gravity {:?}, postural tone {}",
+        p.level_of_detail,
+        p.muscle_law,
+        p.gravity_loads,
+        if p.postural_tone { "on" } else { "off" }
     );
     for f in &p.figures {
         println!(

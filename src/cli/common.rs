@@ -50,6 +50,11 @@ pub struct SubjectArgs {
     /// the rest found under the loads).
     #[arg(long, default_value = "preloaded")]
     pub gravity_loads: String,
+    /// The posture's tonic muscle activity: on (standing under the hill law the abdominal
+    /// wall's tone, 0.017 of the maximal force, Cholewicki et al. 1997) or off (a relaxed
+    /// subject, as in a relaxation manoeuvre).
+    #[arg(long, default_value = "on")]
+    pub postural_tone: String,
 }
 
 impl SubjectArgs {
@@ -104,6 +109,8 @@ impl SubjectArgs {
                     "preloaded or acting",
                 )
             })?;
+        c.postural_tone = crate::model::parse_postural_tone(&self.postural_tone)
+            .map_err(|_| Error::invalid("--postural-tone", &self.postural_tone, "on or off"))?;
         c.validate().map_err(flag_error)?;
         Ok(c)
     }
@@ -164,6 +171,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "muscle_law" => "--muscle-law",
         "gravity" => "--gravity",
         "gravity_loads" => "--gravity-loads",
+        "postural_tone" => "--postural-tone",
         "solver.rtol" => "--rtol",
         "scenario" => "--scenario",
         "drive.frequency" => "--frequency",

@@ -866,6 +866,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
             muscle_law: "thesis".into(),
             gravity: crate::dynamics::GRAVITY,
             gravity_loads: "preloaded".into(),
+            postural_tone: "on".into(),
         },
         solver: SolverArgs {
             solver: "dopri5".into(),

@@ -119,10 +119,47 @@ pub struct Config {
     /// existed read the preloaded model.
     #[serde(default)]
     pub gravity_loads: crate::dynamics::GravityLoads,
+    /// Whether the posture's tonic muscle activity is applied (FMI `postural_tone`): `true`
+    /// (the default), the abdominal wall's tone of the posture and muscle law
+    /// ([`crate::dynamics::abdominal_tone`], [`crate::dynamics::STANDING_ABDOMINAL_TONE`]
+    /// standing under the passive-and-active law); `false`, none, a relaxed subject as in a
+    /// relaxation manoeuvre (Rahn et al. 1946), whose respiratory-system compliance is the
+    /// passive one. Used when `params` is `None`; `params` carries its own tone.
+    /// Configurations written before it existed read `true`.
+    #[serde(default = "default_postural_tone")]
+    pub postural_tone: bool,
 }
 
 fn default_gravity() -> f64 {
     crate::dynamics::GRAVITY
+}
+
+fn default_postural_tone() -> bool {
+    true
+}
+
+/// The code of a `postural_tone` setting (FMI `postural_tone`, `BtConfig.postural_tone`): 1
+/// on, 0 off.
+pub fn postural_tone_code(on: bool) -> i32 {
+    i32::from(on)
+}
+
+/// The `postural_tone` setting of code `code`; the error names `postural_tone` and the codes.
+pub fn postural_tone_from_code(code: i64) -> Result<bool> {
+    match code {
+        0 => Ok(false),
+        1 => Ok(true),
+        other => Err(Error::invalid("postural_tone", other, "0 off or 1 on")),
+    }
+}
+
+/// The `postural_tone` setting named `name` (`on` or `off`).
+pub fn parse_postural_tone(name: &str) -> Result<bool> {
+    match name {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => Err(Error::invalid("postural_tone", other, "on or off")),
+    }
 }
 
 impl Default for Config {
@@ -141,6 +178,7 @@ impl Default for Config {
             muscle_law: crate::dynamics::muscle::MuscleLaw::Thesis,
             gravity: crate::dynamics::GRAVITY,
             gravity_loads: crate::dynamics::GravityLoads::Preloaded,
+            postural_tone: true,
         }
     }
 }

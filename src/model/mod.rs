@@ -22,7 +22,10 @@ pub mod run;
 mod snapshot;
 mod torso;
 
-pub use config::{Config, GroupGains, Scene, SolverConfig};
+pub use config::{
+    Config, GroupGains, Scene, SolverConfig, parse_postural_tone, postural_tone_code,
+    postural_tone_from_code,
+};
 pub(crate) use drive::check;
 pub use drive::{Breath, Breaths, Drive, Wave};
 pub use quantity::Quantity;

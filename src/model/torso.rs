@@ -89,7 +89,7 @@ impl Config {
     /// else the defaults of its posture and muscle law ([`Params::for_posture_and_law`]; under
     /// gravity acting the standing ones, every posture being the standing anatomy) with its
     /// gravity, its gravity loads and the true posture's abdominal tone, scaled with gravity
-    /// ([`crate::dynamics::abdominal_tone`]).
+    /// ([`crate::dynamics::abdominal_tone`]), or none when its `postural_tone` is off.
     pub fn model_params(&self) -> Params {
         self.params.clone().unwrap_or_else(|| {
             let posture = self.subject.posture;
@@ -101,9 +101,12 @@ impl Config {
             let mut p = Params::for_posture_and_law(built, self.muscle_law);
             p.gravity = self.gravity;
             p.gravity_loads = self.gravity_loads;
-            p.abdominal_tone = crate::dynamics::abdominal_tone(posture, self.muscle_law)
-                * self.gravity
-                / crate::dynamics::GRAVITY;
+            p.abdominal_tone = if self.postural_tone {
+                crate::dynamics::abdominal_tone(posture, self.muscle_law) * self.gravity
+                    / crate::dynamics::GRAVITY
+            } else {
+                0.0
+            };
             p
         })
     }

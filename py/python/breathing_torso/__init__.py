@@ -116,6 +116,10 @@ class Torso:
             preloads cancelling gravity there; the default) or "acting" (the abdominal
             contents' hydrostatic pressure acts and each posture rests where the loads
             balance; ``--gravity-loads``, docs/dynamics.md).
+        postural_tone: True (the default) applies the posture's tonic muscle activity:
+            standing under the "hill" law the abdominal wall's tone, 0.017 of the maximal
+            force (Cholewicki et al. 1997); False, none: a relaxed subject, as in a
+            relaxation manoeuvre (``--postural-tone``).
 
     The same values give the model ``torso simulate`` builds from the same options, and
     :meth:`simulate` returns what it writes. Raises ValueError naming a bad value and its
@@ -134,6 +138,7 @@ class Torso:
         muscle_law: str = "thesis",
         gravity: float = 9.81,
         gravity_loads: str = "preloaded",
+        postural_tone: bool = True,
     ) -> None:
         self._native = _native.Torso(
             dict(subject) if subject is not None else None,
@@ -146,6 +151,7 @@ class Torso:
             muscle_law,
             float(gravity),
             gravity_loads,
+            bool(postural_tone),
         )
 
     @property
@@ -337,6 +343,7 @@ def fit(
     muscle_law: str = "thesis",
     gravity: float = 9.81,
     gravity_loads: str = "preloaded",
+    postural_tone: bool = True,
 ) -> Dict[str, Any]:
     """Fits the model to a marker recording, as ``torso fit`` does (registration, frequency,
     the drive's amplitudes and phases; docs/fit_report.md).
@@ -346,8 +353,8 @@ def fit(
             :class:`Recording`.
         out: the result JSON to write (its folder is created), with ``<stem>_lung_volume.csv`` and the report
             figure beside it; None writes them to a temporary folder removed afterwards.
-        subject, posture, lod, solver, rtol, muscle_law, gravity, gravity_loads: the model, as
-            for :class:`Torso`; with no
+        subject, posture, lod, solver, rtol, muscle_law, gravity, gravity_loads,
+            postural_tone: the model, as for :class:`Torso`; with no
             ``stature`` or ``mass`` in ``subject`` the size is estimated from the recording
             (``torso fit``'s rule).
         grid: the model's marker grid "ROWSxCOLS".
@@ -416,6 +423,7 @@ def fit(
             muscle_law,
             float(gravity),
             gravity_loads,
+            bool(postural_tone),
         )
         with open(written, encoding="utf-8") as f:
             result: Dict[str, Any] = json.load(f)

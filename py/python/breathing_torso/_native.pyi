@@ -14,6 +14,10 @@ class Torso:
         rtol: float = ...,
         scenario: str = ...,
         drive: Optional[Dict[str, float]] = ...,
+        muscle_law: str = ...,
+        gravity: float = ...,
+        gravity_loads: str = ...,
+        postural_tone: bool = ...,
     ) -> None: ...
     @property
     def time(self) -> float: ...
@@ -65,6 +69,10 @@ def fit(
     anterior: List[str] = ...,
     ti_ttot: Optional[float] = ...,
     progress: Optional[Callable[[int, float], Any]] = ...,
+    muscle_law: str = ...,
+    gravity: float = ...,
+    gravity_loads: str = ...,
+    postural_tone: bool = ...,
 ) -> str: ...
 def validate(
     sim_path: Optional[str],

@@ -101,6 +101,8 @@ pub enum Parameter {
     Gravity,
     /// `gravity_loads` (Integer: 0 preloaded, 1 acting).
     GravityLoads,
+    /// `postural_tone` (Integer: 0 off, 1 on).
+    PosturalTone,
     /// `solver.rtol`.
     SolverRtol,
     /// `solver.atol`.
@@ -180,6 +182,7 @@ impl Parameter {
             MuscleLaw => Value::Integer(config.muscle_law.code()),
             Gravity => Value::Real(config.gravity),
             GravityLoads => Value::Integer(config.gravity_loads.code()),
+            PosturalTone => Value::Integer(crate::model::postural_tone_code(config.postural_tone)),
             SolverRtol => Value::Real(config.solver.rtol),
             SolverAtol => Value::Real(config.solver.atol),
             SolverMaxStep => Value::Real(config.solver.max_step),
@@ -245,6 +248,9 @@ impl Parameter {
             (Gravity, Value::Real(v)) => config.gravity = v,
             (GravityLoads, Value::Integer(v)) => {
                 config.gravity_loads = crate::dynamics::GravityLoads::from_code(v.into())?
+            }
+            (PosturalTone, Value::Integer(v)) => {
+                config.postural_tone = crate::model::postural_tone_from_code(v.into())?
             }
             (SolverRtol, Value::Real(v)) => config.solver.rtol = v,
             (SolverAtol, Value::Real(v)) => config.solver.atol = v,

@@ -388,6 +388,14 @@ pub(super) fn build(markers: &MarkerOutputs) -> Vec<Variable> {
             "How gravity loads the model: 0 preloads cancel it at each posture's generated rest (default; posture effects from tables), 1 it acts (the abdominal contents' hydrostatic pressure, tissue tensions from the standing anatomy, each posture's rest the equilibrium under the loads)",
         )
         .range(0.0, 1.0),
+        par(
+            "postural_tone",
+            209,
+            Integer,
+            P::PosturalTone,
+            "The posture's tonic muscle activity: 1 on (default; standing under muscle_law 1 the abdominal wall's tone, 0.017 of the maximal force added to its activation, Cholewicki et al. 1997, scaled with gravity), 0 off (a relaxed subject, as in a relaxation manoeuvre: the passive respiratory system)",
+        )
+        .range(0.0, 1.0),
         par("solver.rtol", 130, Real, P::SolverRtol, "Relative tolerance of the integrator").range(1e-12, 1e-2),
         par("solver.atol", 131, Real, P::SolverAtol, "Absolute tolerance of the integrator on the state").range(1e-14, 1e-2),
         par("solver.max_step", 132, Real, P::SolverMaxStep, "Largest internal integration step").unit("s").range(1e-5, 1.0),
