@@ -49,7 +49,9 @@ pub struct Joint {
 /// caudally and dorsally).
 /// Unsourced: no source: chosen by hand in commit 16087cb. No measured angle of the human
 /// intercostal fibres to the ribs was found (anatomy texts give directions only: external
-/// fibres caudal and ventral, internal ones at right angles to them).
+/// fibres caudal and ventral, internal ones at right angles to them; the review of De Troyer,
+/// Kirkwood & Wilson 2005, Physiol Rev, doi:10.1152/physrev.00007.2004, says the mechanical
+/// advantage depends partly on the fibres' orientation, with no angle in its abstract).
 pub const OBLIQUITY: f64 = 0.2;
 
 /// Maximal active tension of an intercostal layer per metre of interspace [N/m]. 29 N/cm^2
