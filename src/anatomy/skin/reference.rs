@@ -81,9 +81,9 @@ pub const WALL_CLEARANCE: f64 = 0.010;
 /// Unsourced: no source: chosen by hand (commit 85fbc4f). Panjabi et al. 1991 (Spine 16:888,
 /// PMID 1948374) tabulate the thoracic vertebrae's body, canal and spinous-process dimensions,
 /// from which this offset could be summed; their tables were not read, nor were the absolute
-/// spinous-process lengths of 4,080 dry vertebrae ("Shape variation of the neural arch in the
-/// thoracic and lumbar spine", Clin Anat 2011, 24:858: changes along the spine only in the
-/// abstract). CT of 600 thoracic vertebrae (Kaur, Singh,
+/// spinous-process lengths of 4,080 dry vertebrae (Masharawi et al. 2011, "Shape variation of
+/// the neural arch in the thoracic and lumbar spine", Clin Anat 24:858, doi:10.1002/ca.21175:
+/// changes along the spine only in the abstract). CT of 600 thoracic vertebrae (Kaur, Singh,
 /// Prasath, Magu & Tanwar 2016, J Clin Orthop Trauma 7:101) gives the spinous process angle,
 /// 30.1 +- 6.7 deg at T1, 57.9 +- 9.3 deg at T6, 16.2 +- 7.4 deg at T12, the slope of the
 /// process itself; ours is the line from the joint centre to the tip, 9.7 deg below the
