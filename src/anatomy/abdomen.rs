@@ -62,11 +62,14 @@ fn apex_rise(posture: super::Posture) -> f64 {
 
 /// Inset of the diaphragm's insertions from the costal-margin centrelines toward the cavity
 /// axis [m] (half a rib's thickness).
-/// Unsourced: no source: chosen as half a rib's thickness, itself not sourced.
+/// Unsourced: no source: chosen as half a rib's thickness, itself not sourced. The margin is
+/// costal cartilage (ribs 7-10); no cartilage or rib depth was read (the rib cross-section
+/// studies, see `RIB_BONE_DENSITY` and `WALL_THICKNESS`, give areas in their full texts).
 const MARGIN_INSET: f64 = 0.008;
 
 /// Exponent below 1 that fills out the dome's shoulders (a rounder, fuller dome).
-/// Unsourced: no source: chosen by eye for the dome's shape.
+/// Unsourced: no source: chosen by eye for the dome's shape; no measured profile of the dome
+/// (height against distance from the rim) was found to fit it to.
 const DOME_FULLNESS: f64 = 0.7;
 
 /// Height of the dome/wall boundary on the unit sphere (u_y above it: dome).

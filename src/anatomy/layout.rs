@@ -49,7 +49,9 @@ pub struct Joint {
 /// caudally and dorsally).
 /// Unsourced: no source: chosen by hand in commit 16087cb. No measured angle of the human
 /// intercostal fibres to the ribs was found (anatomy texts give directions only: external
-/// fibres caudal and ventral, internal ones at right angles to them).
+/// fibres caudal and ventral, internal ones at right angles to them; the review of De Troyer,
+/// Kirkwood & Wilson 2005, Physiol Rev, doi:10.1152/physrev.00007.2004, says the mechanical
+/// advantage depends partly on the fibres' orientation, with no angle in its abstract).
 pub const OBLIQUITY: f64 = 0.2;
 
 /// Maximal active tension of an intercostal layer per metre of interspace [N/m]. 29 N/cm^2
@@ -85,7 +87,15 @@ pub const DIAPHRAGM_FORCE: f64 = 600.0;
 /// the physiological cross-sections): rectus, transversus, external and internal obliques.
 /// Unsourced: 25 N/cm^2 is inside the 20-35 N/cm^2 commonly taken for skeletal muscle's
 /// specific tension (physiology reference), but the cross-sections it implies (both sides:
-/// rectus 20, transversus 16, obliques 20 and 16 cm^2) are not sourced.
+/// rectus 20, transversus 16, obliques 20 and 16 cm^2) are not sourced. Literature, at the
+/// 26.8 N/cm^2 of Persad et al. 2024 (J Appl Physiol), both sides: the rectus's physiological
+/// cross-section in five cadavers, 2.6 (SD 0.9) cm^2 (Delp, Suryanarayanan, Murray, Uhlir &
+/// Triolo 2001, J Biomech 34:371, PMID 11182129), gives 139 (91-188) N; the cross-sections
+/// a trunk model took from the literature, rectus 6.80, external oblique 6.85, internal oblique
+/// 5.68 cm^2 per muscle (Lambrecht, Audu, Triolo & Kirsch 2009, J Rehabil Res Dev 46:515,
+/// Table 1), give 364, 367 and 304 N; no transversus cross-section was read. Ours, 500 / 500 /
+/// 400 N for rectus / external / internal oblique, is 1.3-1.4x the compiled values and 3.6x
+/// the cadaver rectus: disagrees (docs/respiratory_muscles.md, A15-A16).
 pub const ABDOMINAL_FORCES: [(MuscleGroup, f64); 4] = [
     (MuscleGroup::RectusAbdominis, 500.0),
     (MuscleGroup::TransversusAbdominis, 400.0),

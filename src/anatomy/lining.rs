@@ -15,7 +15,14 @@ pub const RINGS: usize = 7;
 /// Inward offset of the lining from the rib centrelines [m]: half a rib's thickness plus the
 /// intercostal layer and parietal pleura.
 /// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a); only the
-/// intercostal layer's 3 mm (De Troyer 1998) is cited elsewhere.
+/// intercostal layer's 3 mm (De Troyer 1998) is cited elsewhere. No rib depth (cutaneous to
+/// pleural surface) was read: the CT studies of rib cross-sections (Holcombe et al. 2019, J Anat
+/// 235:883; Front Bioeng Biotechnol 2023, doi:10.3389/fbioe.2023.1158242) give areas in their
+/// full texts. The whole chest wall, skin to pleura, is 42.4 mm (95 % CI 39.7-45.2) at the
+/// second intercostal space, midclavicular line, on CT of 111 patients (Givens, Ayotte &
+/// Manifold 2004, Acad Emerg Med 11:211): not comparable (fat and pectoral muscle lie outside
+/// the ribs); ours with the skin's 18 mm room outside the centreline (`BONE_CLEARANCE`) is at
+/// least 33 mm.
 pub const WALL_THICKNESS: f64 = 0.015;
 
 /// One ring: anchors going dorsal midline -> right side -> sternum -> left side.

@@ -292,12 +292,21 @@ pub fn build_spine(scale: &Scale) -> Spine {
 /// mass was found; rib cross-sectional areas of 240 adults, ribs 2-11 ("Cross-sectional
 /// properties of rib geometry from an adult population", Front Bioeng Biotechnol 2023,
 /// doi:10.3389/fbioe.2023.1158242), would give one with a bone density, but their values were
-/// not read.
+/// not read; nor were the sixth-rib cross-sections of 33 adults (Holcombe, Kang, Derstine, Wang
+/// & Agnew 2019, J Anat 235:883, PMID 31225915: areas as corridors, not in the abstract).
+/// Skeleton mass 8.0 kg in men from the dry bones of 486 adults (Chen et al. 1995, Chin J
+/// Radiol Med Prot 15:317); the ribs' share is not in the abstract. At 1.920 g/cm^3, adult
+/// mineral bone as tabulated for voxel phantoms (doi:10.1016/j.rpor.2014.03.004, Table 1),
+/// ours is 57 mm^2 of solid bone per rib.
 pub const RIB_BONE_DENSITY: f64 = 0.11;
 /// Fraction of body mass carried by the ribs as chest-wall soft tissue (intercostal and
 /// pectoral muscle, fat, skin) moving with them: about 3 kg for a 75 kg adult. Table 1.1 of
 /// the thesis gives the bony and cartilage masses only; the wall's own inertia rides on the ribs.
-/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a).
+/// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a). No regional
+/// (chest-wall) share of muscle, fat and skin was found: the ICRP reference male's whole-body
+/// values, 29 kg of skeletal muscle, 18.2 kg of adipose tissue and 3.3 kg of skin in 73 kg
+/// (ICRP Publication 89, 2002, as tabulated in Turner, Atoms, Radiation, and Radiation
+/// Protection, Table 16.1), are not split by region; ours, 3 kg, is 6 % of their sum.
 pub const CHEST_WALL_MASS_FRACTION: f64 = 0.04;
 
 /// Costal cartilage mass [kg] of rib `level` (thesis Table 1.1: ribs 2-5 individually, the
@@ -316,7 +325,9 @@ fn cartilage_mass(level: usize, masses: &HashMap<String, f64>) -> f64 {
 
 /// Mass of the first rib's costal cartilage [kg], which Table 1.1 of the seed thesis does not
 /// list.
-/// Unsourced: no source: chosen below rib 2's 0.03 kg, its cartilage being the shortest.
+/// Unsourced: no source: chosen below rib 2's 0.03 kg, its cartilage being the shortest. No
+/// measured costal cartilage mass was found (CT studies of costal cartilage for grafts measure
+/// the lengths of ribs 6-8's cartilages, not masses: Acta Otolaryngol 2011, 131:67).
 pub const RIB1_CARTILAGE_MASS: f64 = 0.02;
 
 /// Lengths of the manubrium and the sternal body and the stature they are scaled from, men
@@ -333,7 +344,12 @@ pub const STERNAL_ANGLE_DEG: f64 = 162.0;
 
 /// Inclination of the sternal body from the vertical, lower end ventral [deg].
 /// Unsourced: no source: chosen by hand in the first anatomy (commit 270ac4a); no measured
-/// inclination of the sternum in upright adults was found.
+/// inclination of the sternum in upright adults was found. What was found measures other
+/// quantities: the sternal curvature angle on lateral chest radiographs, 22.0 +- 7.7 deg in 196
+/// controls of a pectus study (Lee, Zavala-Garcia, Teekappanavar, Lee, Idowu & Kim 2016,
+/// Pediatr Surg Int, doi:10.1007/s00383-016-3996-9), is the bend of the bone, not its tilt;
+/// CT of 1,035 young adults places the jugular notch at T2-T3 and the sternal angle at T4-T5
+/// (vertebral levels, not an angle).
 pub const STERNUM_BODY_TILT_DEG: f64 = 15.0;
 
 /// Length of a polyline.
