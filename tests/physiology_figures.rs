@@ -110,7 +110,7 @@ fn full_inspiration_volume() {
 }
 
 #[test]
-#[ignore = "issue 35: M-mode excursion of the posterior right dome in a full inspiration measured 2.60 cm against >= 4.7 cm (the hill law 0.92)"]
+#[ignore = "issue 35: M-mode excursion of the posterior right dome in a full inspiration measured 2.60 cm against >= 4.7 cm (1.82 / 2.60 / 3.11 cm at levels 0 / 1 / 2; the hill law -0.61 / 0.92 / 2.13)"]
 fn deep_m_mode_excursion() {
     let f = full();
     assert!(
@@ -120,20 +120,11 @@ fn deep_m_mode_excursion() {
     );
 }
 
-/// The M-mode figure is where the beam meets the surface, not where the tissue first met it
-/// went: both fall in a deep breath, and they differ (the dome's tissue slides across a fixed
-/// line as its fibres shorten).
-#[test]
-fn m_mode_follows_the_beam_not_the_tissue() {
-    let f = full();
-    assert!(f.m_mode_excursion > 0.0 && f.posterior_point_excursion > 0.0);
-    assert!((f.m_mode_excursion - f.posterior_point_excursion).abs() > 1e-3);
-    assert_eq!(f.m_mode_excursion, f.regional_excursion[0]);
-}
-
 #[test]
 fn the_middle_of_the_dome_descends_more_than_its_front() {
-    let [_, middle, anterior] = full().regional_excursion;
+    let [_, middle, anterior] = full()
+        .regional_excursion
+        .expect("every line meets the dome");
     assert!(
         within(middle - anterior, REGIONAL_GRADIENT),
         "middle third {middle} cm, anterior third {anterior} cm (Gierada et al. 1995)"
@@ -141,9 +132,11 @@ fn the_middle_of_the_dome_descends_more_than_its_front() {
 }
 
 #[test]
-#[ignore = "issue 35: in a full inspiration the right dome's posterior third descends 2.60 cm and its middle third 4.17 cm (the hill law 0.92 and 1.92), against the posterior's being the largest (Gierada et al. 1995)"]
+#[ignore = "issue 35: in a full inspiration the right dome's posterior third descends 2.60 cm and its middle third 4.17 cm (the hill law 0.92 and 1.92), against the posterior's being the largest (Gierada et al. 1995); not converged in the level of detail: posterior less middle -3.00 / -1.57 / -0.99 cm at levels 0 / 1 / 2 (hill -2.45 / -1.00 / -0.06)"]
 fn the_back_of_the_dome_descends_most() {
-    let [posterior, middle, _] = full().regional_excursion;
+    let [posterior, middle, _] = full()
+        .regional_excursion
+        .expect("every line meets the dome");
     assert!(
         within(posterior - middle, REGIONAL_GRADIENT),
         "posterior third {posterior} cm, middle third {middle} cm (Gierada et al. 1995)"

@@ -169,6 +169,9 @@ def test_constructor_errors_name_the_parameter_and_range():
         bt.Torso(gravity=40)
     with pytest.raises(ValueError, match="gravity_loads.*preloaded or acting"):
         bt.Torso(gravity_loads="floating")
+    # a string is not read by its truth value ("off" would otherwise switch the tone on)
+    with pytest.raises(ValueError, match="'off' for `postural_tone`: allowed range is True or False"):
+        bt.Torso(postural_tone="off")
 
 
 def inspect_missing(torso_cli, path):
@@ -305,6 +308,8 @@ def test_fit_errors(synth_recording, tmp_path):
         bt.fit(synth_recording, threads=3, lod=0)
     with pytest.raises(ValueError, match="method"):
         bt.fit(synth_recording, method="simplex", lod=0)
+    with pytest.raises(ValueError, match="postural_tone"):
+        bt.fit(synth_recording, postural_tone=0, lod=0)
     with pytest.raises(bt.TorsoError, match="10x6 grid .60 points.*grid is 8x6"):
         bt.fit(synth_recording, grid="8x6", **FIT_KEYWORDS)
 

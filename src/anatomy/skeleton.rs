@@ -294,7 +294,7 @@ pub fn build_spine(scale: &Scale) -> Spine {
 /// doi:10.3389/fbioe.2023.1158242), would give one with a bone density, but their values were
 /// not read; nor were the sixth-rib cross-sections of 33 adults (Holcombe, Kang, Derstine, Wang
 /// & Agnew 2019, J Anat 235:883, PMID 31225915: areas as corridors, not in the abstract).
-/// Skeleton mass 8.0 kg in men from the dry bones of 486 adults (Chen et al. 1995, Chin J
+/// Skeleton mass 8.0 kg in men, a wet mass derived from the dry bones of 486 adults (Chen et al. 1995, Chin J
 /// Radiol Med Prot 15:317); the ribs' share is not in the abstract. At 1.920 g/cm^3, adult
 /// mineral bone as tabulated for voxel phantoms (doi:10.1016/j.rpor.2014.03.004, Table 1),
 /// ours is 57 mm^2 of solid bone per rib.

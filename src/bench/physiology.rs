@@ -79,8 +79,8 @@ pub const DEEP_EXCURSION_MEN: (f64, f64) = (4.7, f64::INFINITY);
 /// dome in a deep breath [cm]: positive. In 10 healthy volunteers breathing near their vital
 /// capacity, the excursion increased from anterior to middle to posterior points of sagittal
 /// planes (P < .05-.001, paired t test; Gierada et al. 1995, Radiology 194:879, fast
-/// gradient-recalled-echo MR imaging); the abstract gives no magnitudes, so only the sign is
-/// the bound.
+/// gradient-recalled-echo MR imaging); the abstract gives no regional magnitudes (only the
+/// domes' absolute excursion, 4.4 cm right and 4.2 cm left), so only the sign is the bound.
 pub const REGIONAL_GRADIENT: (f64, f64) = (0.0, f64::INFINITY);
 
 /// Volume a full inspiratory effort with the airway open adds to FRC, default subject [L]:
@@ -517,11 +517,13 @@ pub struct FullInspiration {
     pub inspired: f64,
     /// The volume added, inspired - rest [L] (through the FMU).
     pub added: f64,
-    /// Caudal excursion of the posterior right dome as M-mode ultrasound records it, rest to
-    /// full inspiration [cm] (through the facade): the fall of the place where the M-mode line
-    /// ([`FullInspiration::m_mode_line`]) crosses the dome's upper surface. An M-mode trace is
-    /// the echo of the diaphragm's surface along a fixed beam, whichever tissue is on the beam
-    /// at each instant.
+    /// Caudal excursion of the posterior right dome along the M-mode line, rest to full
+    /// inspiration [cm] (through the facade): the fall of the place where the fixed line
+    /// ([`FullInspiration::m_mode_line`]) crosses the dome's upper surface, whichever tissue is
+    /// on the line at each instant, as an M-mode trace follows the surface's echo along a
+    /// fixed beam. The line is cranio-caudal (issue 35's definition); Boussuges et al. 2009
+    /// aim the beam perpendicular to the posterior third, which there is about 30 degrees off
+    /// horizontal at level 1, so a beam along its normal would read a different figure.
     pub m_mode_excursion: f64,
     /// Caudal excursion of the material point of the dome that the M-mode line crosses at
     /// rest, along the cranio-caudal axis [cm] (through the facade): the same place followed
@@ -531,8 +533,9 @@ pub struct FullInspiration {
     /// middles of its posterior, middle and anterior thirds, half its right half-width from
     /// the midline, rest to full inspiration [cm] (through the facade; the posterior one is
     /// [`FullInspiration::m_mode_excursion`]): the three points of a sagittal plane at which
-    /// Gierada et al. 1995 measured the regional excursion.
-    pub regional_excursion: [f64; 3],
+    /// Gierada et al. 1995 measured the regional excursion. `None` when a line misses the
+    /// dome at rest or at full inspiration.
+    pub regional_excursion: Option<[f64; 3]>,
     /// Where that line stands, (x, z) [m] (x anterior, z right).
     pub m_mode_line: [f64; 2],
     /// Caudal displacement of the dome as a whole (its swept volume over its area, the FMU's
@@ -682,7 +685,7 @@ pub fn full_inspiration(
     let point = DomePoint::on_line(&torso, line)?;
     let y0 = point.height(&positions(&torso));
     let lines = THIRDS.map(|f| right_dome_line(&torso, f));
-    let rest_heights = crossings(&torso, &lines)?;
+    let rest_heights = crossings(&torso, &lines).ok();
     let dome0 = torso.read(Quantity::DiaphragmDisplacement)?;
     let mut t = 0.0;
     let mut last = f64::NAN;
@@ -709,14 +712,17 @@ pub fn full_inspiration(
             reason: "the facade's full inspiration did not settle".into(),
         });
     }
-    let end = crossings(&torso, &lines)?;
-    let regional_excursion = [0, 1, 2].map(|k| 100.0 * (rest_heights[k] - end[k]));
+    let end = positions(&torso);
+    let m_mode = DomePoint::on_line(&torso, line)?.height(&end);
+    let regional_excursion = rest_heights
+        .zip(crossings(&torso, &lines).ok())
+        .map(|(r, e)| [0, 1, 2].map(|k| 100.0 * (r[k] - e[k])));
     Ok(FullInspiration {
         rest,
         inspired,
         added: inspired - rest,
-        m_mode_excursion: regional_excursion[0],
-        posterior_point_excursion: 100.0 * (y0 - point.height(&positions(&torso))),
+        m_mode_excursion: 100.0 * (y0 - m_mode),
+        posterior_point_excursion: 100.0 * (y0 - point.height(&end)),
         regional_excursion,
         m_mode_line: [line.0, line.1],
         dome_excursion: 100.0 * (dome0 - torso.read(Quantity::DiaphragmDisplacement)?),
@@ -977,25 +983,32 @@ pub fn physiology(lod: u32, law: impl Into<Laws>) -> Result<Physiology> {
                 "Boussuges et al. 2009",
                 "facade (no FMU output reports a dome point)",
             );
-            let [posterior, middle, anterior] = f.regional_excursion;
-            fig(
-                "right dome's excursion, posterior less middle third, full inspiration standing"
-                    .into(),
-                posterior - middle,
-                "cm",
-                REGIONAL_GRADIENT,
-                "Gierada et al. 1995",
-                "facade (no FMU output reports a dome point)",
-            );
-            fig(
-                "right dome's excursion, middle less anterior third, full inspiration standing"
-                    .into(),
-                middle - anterior,
-                "cm",
-                REGIONAL_GRADIENT,
-                "Gierada et al. 1995",
-                "facade (no FMU output reports a dome point)",
-            );
+            if let Some([posterior, middle, anterior]) = f.regional_excursion {
+                fig(
+                    "right dome's excursion, posterior less middle third, full inspiration standing"
+                        .into(),
+                    posterior - middle,
+                    "cm",
+                    REGIONAL_GRADIENT,
+                    "Gierada et al. 1995",
+                    "facade (no FMU output reports a dome point)",
+                );
+                fig(
+                    "right dome's excursion, middle less anterior third, full inspiration standing"
+                        .into(),
+                    middle - anterior,
+                    "cm",
+                    REGIONAL_GRADIENT,
+                    "Gierada et al. 1995",
+                    "facade (no FMU output reports a dome point)",
+                );
+            } else {
+                failed.push((
+                    "right dome's regional excursion, full inspiration standing".into(),
+                    "a cranio-caudal line through one of the right dome's thirds misses the dome"
+                        .into(),
+                ));
+            }
         }
         Err(e) => failed.push(("full inspiration, standing".into(), e.to_string())),
     }

@@ -92,6 +92,14 @@ def _f64_bytes(values: Any, what: str) -> bytes:
         raise ValueError(f"{what}: not an array of numbers ({e})") from None
 
 
+
+def _flag(name: str, value) -> bool:
+    """A switch given as a Python bool (numpy's bool too); anything else, a string such as
+    "off" included, is refused by name rather than read by its truth value."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValueError(f"{value!r} for `{name}`: allowed range is True or False")
+
 class Torso:
     """A breathing torso model, built for one subject, posture and level of detail.
 
@@ -151,7 +159,7 @@ class Torso:
             muscle_law,
             float(gravity),
             gravity_loads,
-            bool(postural_tone),
+            _flag("postural_tone", postural_tone),
         )
 
     @property
@@ -423,7 +431,7 @@ def fit(
             muscle_law,
             float(gravity),
             gravity_loads,
-            bool(postural_tone),
+            _flag("postural_tone", postural_tone),
         )
         with open(written, encoding="utf-8") as f:
             result: Dict[str, Any] = json.load(f)
