@@ -396,6 +396,51 @@ fn the_personalised_fmu_runs_as_the_generic_one_with_the_ssv_applied() {
     );
 }
 
+/// The laws a fit ran under travel into its personalised FMU: a fit result recording the hill
+/// law, gravity acting at 9 m/s^2 and no tone builds an FMU with those start values; the
+/// bundled fit (default laws) records the defaults.
+#[test]
+fn the_fits_laws_are_the_fmus() {
+    let built = built();
+    let fit = fit_json();
+    let model = &fit["model"];
+    assert_eq!(model["muscle_law"], serde_json::json!(0));
+    assert_eq!(model["gravity_loads"], serde_json::json!(0));
+    assert_eq!(model["postural_tone"], serde_json::json!(1));
+    let (_, vars) = variables(&model_description());
+    assert_eq!(vars["muscle_law"].1["start"], "0");
+    let mut v = fit.clone();
+    v["model"]["muscle_law"] = serde_json::json!(1);
+    v["model"]["gravity"] = serde_json::json!(9.0);
+    v["model"]["gravity_loads"] = serde_json::json!(1);
+    v["model"]["postural_tone"] = serde_json::json!(0);
+    // beside the bundled fit, where its skin reference is found
+    let laws = built.fit.with_file_name("laws.json");
+    std::fs::write(&laws, v.to_string()).unwrap();
+    let fmu = dir().join("laws.fmu");
+    let (ok, msg) = torso(&[
+        "fmu",
+        "build",
+        "--subject",
+        laws.to_str().unwrap(),
+        "--out",
+        fmu.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(&fmu).unwrap()).unwrap();
+    let mut xml = String::new();
+    zip.by_name("modelDescription.xml")
+        .unwrap()
+        .read_to_string(&mut xml)
+        .unwrap();
+    let (_, vars) = variables(&xml);
+    let start = |name: &str| vars[name].1["start"].clone();
+    assert_eq!(start("muscle_law"), "1");
+    assert_eq!(start("gravity").parse::<f64>().unwrap(), 9.0);
+    assert_eq!(start("gravity_loads"), "1");
+    assert_eq!(start("postural_tone"), "0");
+}
+
 #[test]
 fn files_that_are_not_fit_results_are_refused_naming_the_key() {
     let built = built();

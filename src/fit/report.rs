@@ -48,8 +48,9 @@ pub fn subject_fmi(subject: &Subject) -> Value {
 /// The model a fit ran, other than its subject and drive, under the FMI parameter names: the
 /// level of detail, the marker grid, the lung ratio, the skin reference (`slp.reference`: the
 /// rest-pose grid of a `--skin-fit`, empty otherwise) and the subject mesh folder
-/// (`subject.mesh_dir`, empty for the generated geometry). With `subject` and the drive this
-/// is what `torso fmu build --subject` bakes into a personalised FMU.
+/// (`subject.mesh_dir`, empty for the generated geometry), and the laws it ran under
+/// (`muscle_law`, `gravity`, `gravity_loads`, `postural_tone`, as FMI codes). With `subject`
+/// and the drive this is what `torso fmu build --subject` bakes into a personalised FMU.
 pub fn model_fmi(config: &crate::Config) -> Value {
     let path = |p: &Option<PathBuf>| {
         p.as_ref()
@@ -63,6 +64,10 @@ pub fn model_fmi(config: &crate::Config) -> Value {
         "lung.ratio": config.lung_ratio,
         "slp.reference": path(&config.scene.slp_reference),
         "subject.mesh_dir": path(&config.subject_mesh_dir),
+        "muscle_law": config.muscle_law.code(),
+        "gravity": config.gravity,
+        "gravity_loads": config.gravity_loads.code(),
+        "postural_tone": crate::model::postural_tone_code(config.postural_tone),
     })
 }
 

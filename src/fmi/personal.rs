@@ -106,9 +106,19 @@ pub const FIT_SUBJECT_KEYS: [&str; 6] = [
     "posture",
 ];
 /// The model parameters of a fit result's `model` object that must be there; `lung.ratio`,
-/// `slp.reference` and `subject.mesh_dir` are taken when present.
+/// `slp.reference`, `subject.mesh_dir` and the laws the fit ran (`muscle_law`, `gravity`,
+/// `gravity_loads`, `postural_tone`) are taken when present (fits written before the laws
+/// were recorded carry none, and the FMU's defaults stand).
 pub const FIT_MODEL_KEYS: [&str; 3] = ["scene.level_of_detail", "grid.rows", "grid.cols"];
-const FIT_MODEL_OPTIONAL: [&str; 3] = ["lung.ratio", "slp.reference", "subject.mesh_dir"];
+const FIT_MODEL_OPTIONAL: [&str; 7] = [
+    "lung.ratio",
+    "slp.reference",
+    "subject.mesh_dir",
+    "muscle_law",
+    "gravity",
+    "gravity_loads",
+    "postural_tone",
+];
 
 /// A fit made into a personalised FMU.
 #[derive(Clone, Debug)]
