@@ -1,9 +1,9 @@
 //! Muscle element layouts for the thesis's eight groups (thesis 2.2-2.3, default counts 250 /
 //! 250 / 12 / 500 / 100 / 50 / 60 / 60 scaled by the level of detail) and the
-//! sternocleidomastoids (one element per head and side at every level), with regional gains (external
-//! intercostals strongest dorsally and fading ventrally, internal intercostals mirrored: thesis
-//! 2.2.1 and 2.4.1), and the cartilage joints (ribs 1-7 to the sternum, 8-10 to the cartilage
-//! above: thesis 1.3.2).
+//! sternocleidomastoids (one element per head and side at every level), with regional gains
+//! (external intercostals strongest dorsally and fading ventrally, internal intercostals
+//! mirrored: thesis 2.2.1 and 2.4.1), and the cartilage joints (ribs 1-7 to the sternum, 8-10
+//! to the cartilage above: thesis 1.3.2).
 
 use super::abdomen::{Abdomen, VertexRole, azimuth};
 use super::skeleton::{Rib, Side, Spine, Sternum, point_at, polyline_length, rib_index};
@@ -276,7 +276,8 @@ fn scalenes(
 /// maximal efforts that recruit the muscle, and as the scalenes' cervical origin is), placed
 /// from C1's joint centre: level with it, 5 cm lateral (half a bimastoid breadth of about 10
 /// cm, a stated round figure, no measurement was read) and 1 cm posterior (the mastoid lies
-/// behind the ear, a little behind the vertebral bodies' line; stated, not measured).
+/// behind the ear, a little behind the vertebral bodies' line; stated, not measured). With the
+/// default man the elements are 18.4 cm (sternal head) and 18.8 cm (clavicular head) long.
 ///
 /// Insertions: the sternal head on the manubrium's anterior surface, 1 cm below the jugular
 /// notch and 1 cm off the midline (`Body::Sternum`); the clavicular head on the medial third
@@ -294,13 +295,14 @@ fn sternocleidomastoids(
 ) {
     let group = MuscleGroup::Sternocleidomastoids;
     let per_side = (count(group, f) / 2).max(2);
-    // Without a C1 joint (a spine table lacking it) the mastoid is placed 12 cm above C6,
-    // about the C1-C6 distance of the default spine (data/anatomy/spine_segments.csv).
+    // Without a C1 joint (a spine table lacking it) the mastoid is placed 10 cm above C6,
+    // about the C6-C1 distance of the default spine (10.3 cm: the offsets of
+    // data/anatomy/spine_segments.csv).
     let c1 = spine.joint("cerv1").unwrap_or_else(|| {
         spine
             .joint("cerv6")
             .unwrap_or(Point3::new(-0.03, 1.50, 0.0))
-            + Vector3::new(0.0, 0.12, 0.0)
+            + Vector3::new(0.0, 0.10, 0.0)
     });
     for side in [Side::Right, Side::Left] {
         let mastoid = c1 + Vector3::new(-0.01, 0.0, side.sign() * 0.05);
