@@ -55,7 +55,7 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
     }
     // the mass matrix and the preloads of the changed structure
     let model = Model::new(structure);
-    let mut groups = [0.0; 8];
+    let mut groups = [0.0; MuscleGroup::COUNT];
     groups[MuscleGroup::Diaphragm.index()] = a;
     let act = Activations::new(&groups, 1.0, 1.0);
     let start = rest_state(&model);

@@ -40,7 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let y = torso.state().to_vec();
     let n = y.len();
     let l = Layout::new(&model);
-    let mut groups = [0.0; 8];
+    let mut groups = [0.0; breathing_torso::anatomy::MuscleGroup::COUNT];
     for (g, v) in groups.iter_mut().enumerate() {
         *v = 0.05 + 0.02 * g as f64;
     }

@@ -64,9 +64,9 @@
 /**
  * Number of muscle groups (indices of `bt_set_activation`, in FMI input order: diaphragm,
  * external intercostals, internal intercostals, scalenes, transversus abdominis, rectus
- * abdominis, external obliques, internal obliques).
+ * abdominis, external obliques, internal obliques, sternocleidomastoids).
  */
-#define BT_MUSCLE_GROUPS 8
+#define BT_MUSCLE_GROUPS 9
 
 /**
  * An opaque model handle.
@@ -220,11 +220,11 @@ typedef struct BtConfig {
    * Activation gain of each muscle group (index as `bt_set_activation`) on the right side,
    * 0-2, times `gain_right` (FMI `gain.<group>.right`; 1 healthy, 0 paralysed).
    */
-  double group_gain_right[8];
+  double group_gain_right[9];
   /**
    * Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
    */
-  double group_gain_left[8];
+  double group_gain_left[9];
   /**
    * Muscle law (FMI `muscle_law`): 0 the seed thesis's shortening linear spring, 1 passive
    * and active parts with the passive wall fitted to the adult chest wall's compliance.
@@ -603,7 +603,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #endif  /* BREATHING_TORSO_H */
 
 /* FMI value references (generated from the variable table), for bt_read(). */
-#define BT_FMI_GUID "{9cce5259-d3dd-286f-824a-ce6471019d5f}"
+#define BT_FMI_GUID "{f08170bc-c624-c8f9-968c-e6426fb8ebc5}"
 #define BT_MARKER_SLOTS 60
 #define BT_VR_TIME 0u
 #define BT_VR_ACTIVATION_DIAPHRAGM 1u
@@ -614,6 +614,7 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_ACTIVATION_RECTUS_ABDOMINIS 6u
 #define BT_VR_ACTIVATION_EXTERNAL_OBLIQUES 7u
 #define BT_VR_ACTIVATION_INTERNAL_OBLIQUES 8u
+#define BT_VR_ACTIVATION_STERNOCLEIDOMASTOIDS 11u
 #define BT_VR_PRESSURE_AIRWAY_OPENING 9u
 #define BT_VR_AIRWAY_OCCLUDED 10u
 #define BT_VR_SUBJECT_SEX 200u
@@ -663,6 +664,8 @@ int bt_quasi_set_volume(struct BtTorso *h, double t, double lung_volume);
 #define BT_VR_GAIN_EXTERNAL_OBLIQUES_LEFT 153u
 #define BT_VR_GAIN_INTERNAL_OBLIQUES_RIGHT 154u
 #define BT_VR_GAIN_INTERNAL_OBLIQUES_LEFT 155u
+#define BT_VR_GAIN_STERNOCLEIDOMASTOIDS_RIGHT 156u
+#define BT_VR_GAIN_STERNOCLEIDOMASTOIDS_LEFT 157u
 #define BT_VR_VOLUME_LUNG 1000u
 #define BT_VR_VOLUME_THORAX 1001u
 #define BT_VR_VOLUME_ABDOMEN 1002u

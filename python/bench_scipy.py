@@ -92,8 +92,8 @@ class Config(ctypes.Structure):
                 ("solver_rtol", ctypes.c_double), ("solver_atol", ctypes.c_double),
                 ("solver_max_step", ctypes.c_double), ("drive", Drive), ("lung_ratio", ctypes.c_double),
                 ("gain_left", ctypes.c_double), ("gain_right", ctypes.c_double),
-                ("subject_mesh_dir", ctypes.c_char_p), ("group_gain_right", ctypes.c_double * 8),
-                ("group_gain_left", ctypes.c_double * 8), ("muscle_law", ctypes.c_int),
+                ("subject_mesh_dir", ctypes.c_char_p), ("group_gain_right", ctypes.c_double * 9),
+                ("group_gain_left", ctypes.c_double * 9), ("muscle_law", ctypes.c_int),
                 ("gravity", ctypes.c_double), ("gravity_loads", ctypes.c_int),
                 ("postural_tone", ctypes.c_int)]
 

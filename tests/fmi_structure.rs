@@ -195,7 +195,7 @@ fn no_undeclared_feedthrough(method: i32, level: f64) {
     let vr = |n: &str| table.by_name(n).unwrap().vr;
     let inputs = inputs();
     let ones = vec![level; inputs.len()];
-    assert_eq!(inputs.len(), 9);
+    assert_eq!(inputs.len(), 10);
     let zeros = vec![0.0; inputs.len()];
     let set_method = |inst: &mut Instance| {
         assert_eq!(

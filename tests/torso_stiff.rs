@@ -36,7 +36,7 @@ fn jacobian_matches_dense_finite_differences() {
     torso.advance_to(1.2).unwrap();
     let y = torso.state().to_vec();
     let n = y.len();
-    let mut groups = [0.0; 8];
+    let mut groups = [0.0; MuscleGroup::COUNT];
     for (g, v) in groups.iter_mut().enumerate() {
         *v = 0.05 + 0.02 * g as f64;
     }
@@ -335,7 +335,7 @@ fn full_jacobian_matches_the_full_right_hand_side() {
     torso.advance_to(1.2).unwrap();
     let y = torso.state().to_vec();
     let n = y.len();
-    let mut groups = [0.0; 8];
+    let mut groups = [0.0; MuscleGroup::COUNT];
     for (g, v) in groups.iter_mut().enumerate() {
         *v = 0.05 + 0.02 * g as f64;
     }

@@ -115,7 +115,8 @@ def test_model_description_contract():
     assert md.coSimulation.modelIdentifier == "BreathingTorso"
     assert md.variableNamingConvention == "structured"
     for group in ["diaphragm", "external_intercostals", "internal_intercostals", "scalenes",
-                  "transversus_abdominis", "rectus_abdominis", "external_obliques", "internal_obliques"]:
+                  "transversus_abdominis", "rectus_abdominis", "external_obliques", "internal_obliques",
+                  "sternocleidomastoids"]:
         v = names[f"activation.{group}"]
         assert (v.causality, v.type, float(v.min), float(v.max), float(v.start)) == ("input", "Real", 0.0, 1.0, 0.0)
     for n in ["volume.lung", "volume.thorax", "volume.abdomen", "volume.trunk", "volume.rib_cage_displaced",

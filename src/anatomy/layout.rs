@@ -1,8 +1,9 @@
-//! Muscle element layouts for the eight groups (thesis 2.2-2.3, default counts 250 / 250 / 12 /
-//! 500 / 100 / 50 / 60 / 60 scaled by the level of detail), with regional gains (external
-//! intercostals strongest dorsally and fading ventrally, internal intercostals mirrored: thesis
-//! 2.2.1 and 2.4.1), and the cartilage joints (ribs 1-7 to the sternum, 8-10 to the cartilage
-//! above: thesis 1.3.2).
+//! Muscle element layouts for the thesis's eight groups (thesis 2.2-2.3, default counts 250 /
+//! 250 / 12 / 500 / 100 / 50 / 60 / 60 scaled by the level of detail) and the
+//! sternocleidomastoids (one element per head and side at every level), with regional gains
+//! (external intercostals strongest dorsally and fading ventrally, internal intercostals
+//! mirrored: thesis 2.2.1 and 2.4.1), and the cartilage joints (ribs 1-7 to the sternum, 8-10
+//! to the cartilage above: thesis 1.3.2).
 
 use super::abdomen::{Abdomen, VertexRole, azimuth};
 use super::skeleton::{Rib, Side, Spine, Sternum, point_at, polyline_length, rib_index};
@@ -67,6 +68,16 @@ pub const INTERCOSTAL_TENSION: f64 = 1200.0;
 /// (Mortensen 2014).
 /// Source: Mortensen 2014's neck model, maximal forces 139 + 101 + 77 N (agrees: their sum).
 pub const SCALENE_FORCE_PER_SIDE: f64 = 317.0;
+/// Maximal force of the sternocleidomastoid on one side [N], both heads together: its
+/// anatomical cross-section, 512 mm^2 averaged over four cervical levels in 6 young men (Stemper,
+/// Baisden, Yoganandan, Pintar, Paskoff & Shender 2010, Aviat Space Environ Med 81:878,
+/// doi:10.3357/ASEM.2758.2010, upright MRI), times the specific tension 26.8 N/cm^2 (Persad et
+/// al. 2024, J Appl Physiol), as the other cited forces are taken. An anatomical cross-section,
+/// not a physiological one (the muscle's fibres are nearly parallel to its line, so the two
+/// differ little, but no physiological cross-section was read).
+/// Source: Stemper et al. 2010 (512 mm^2) x Persad et al. 2024 (26.8 N/cm^2) = 137 N (agrees:
+/// their product, docs/respiratory_muscles.md A9).
+pub const SCM_FORCE_PER_SIDE: f64 = 137.0;
 /// Maximal total force of the diaphragm's fibres [N]: a transdiaphragmatic pressure of about
 /// 150 cmH2O (maximal combined efforts) over about 0.04 m^2 of dome.
 /// Unsourced: the pressure is cited, the 0.04 m^2 is not: maximal transdiaphragmatic pressure at
@@ -156,6 +167,7 @@ pub fn muscles(
     let mut out = Vec::new();
     intercostals(ribs, f, anchors, &mut out);
     scalenes(ribs, spine, f, anchors, &mut out);
+    sternocleidomastoids(ribs, sternum, spine, f, anchors, &mut out);
     diaphragm(abdomen, anchors, f, &mut out);
     abdominals(ribs, sternum, abdomen, f, anchors, &mut out);
     out
@@ -249,6 +261,66 @@ fn scalenes(
                 gain: 1.0,
                 side: Some(side),
                 max_force: SCALENE_FORCE_PER_SIDE / per_side as f64,
+                tissue_length: None,
+            });
+        }
+    }
+}
+
+/// Sternocleidomastoids (not in the thesis): per side a sternal and a clavicular head (one
+/// element each at every level of detail: [`MuscleGroup::default_count`] 4 is also the least
+/// [`count`] gives), each carrying half of [`SCM_FORCE_PER_SIDE`] (no measured split between
+/// the heads was read).
+///
+/// Origin: the mastoid process, fixed (`Body::Ground`: the head is held, as it is in the
+/// maximal efforts that recruit the muscle, and as the scalenes' cervical origin is), placed
+/// from C1's joint centre: level with it, 5 cm lateral (half a bimastoid breadth of about 10
+/// cm, a stated round figure, no measurement was read) and 1 cm posterior (the mastoid lies
+/// behind the ear, a little behind the vertebral bodies' line; stated, not measured). With the
+/// default man the elements are 18.4 cm (sternal head) and 18.8 cm (clavicular head) long.
+///
+/// Insertions: the sternal head on the manubrium's anterior surface, 1 cm below the jugular
+/// notch and 1 cm off the midline (`Body::Sternum`); the clavicular head on the medial third
+/// of the clavicle, which the model does not have: its pull is taken at the sternal end of
+/// rib 1's costal cartilage (`Body::Rib`, 95 % of the rib's length), where the clavicle's
+/// sternal end rests on the first cartilage and passes its load to the first rib and the
+/// manubrium through the sternoclavicular joint and the costoclavicular ligament.
+fn sternocleidomastoids(
+    ribs: &[Rib],
+    sternum: &Sternum,
+    spine: &Spine,
+    f: f64,
+    anchors: &mut Vec<Anchor>,
+    out: &mut Vec<MuscleElement>,
+) {
+    let group = MuscleGroup::Sternocleidomastoids;
+    let per_side = (count(group, f) / 2).max(2);
+    // Without a C1 joint (a spine table lacking it) the mastoid is placed 10 cm above C6,
+    // about the C6-C1 distance of the default spine (10.3 cm: the offsets of
+    // data/anatomy/spine_segments.csv).
+    let c1 = spine.joint("cerv1").unwrap_or_else(|| {
+        spine
+            .joint("cerv6")
+            .unwrap_or(Point3::new(-0.03, 1.50, 0.0))
+            + Vector3::new(0.0, 0.10, 0.0)
+    });
+    for side in [Side::Right, Side::Left] {
+        let mastoid = c1 + Vector3::new(-0.01, 0.0, side.sign() * 0.05);
+        let rib1 = &ribs[rib_index(1, side)];
+        for e in 0..per_side {
+            let a = push_anchor(anchors, Body::Ground, mastoid);
+            let b = if e % 2 == 0 {
+                let p = sternum.jugular + Vector3::new(0.0, -0.01, side.sign() * 0.01);
+                push_anchor(anchors, Body::Sternum, p)
+            } else {
+                on_rib(rib1, 0.95, anchors)
+            };
+            out.push(MuscleElement {
+                group,
+                path: vec![a, b],
+                gain: 1.0,
+                side: Some(side),
+                max_force: SCM_FORCE_PER_SIDE / per_side as f64,
                 tissue_length: None,
             });
         }

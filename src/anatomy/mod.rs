@@ -19,6 +19,7 @@ mod subject;
 pub use abdomen::{Abdomen, VertexRole, azimuth};
 pub use layout::{
     ABDOMINAL_FORCES, CENTRAL_TENDON, DIAPHRAGM_FORCE, INTERCOSTAL_TENSION, Joint, MuscleElement,
+    SCM_FORCE_PER_SIDE,
 };
 pub use muscles::MuscleGroup;
 pub use prepared::{CavityFit, SubjectMesh};

@@ -2,7 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-/// The eight respiratory muscle groups of the model (thesis chapter 2).
+/// The respiratory muscle groups of the model: the thesis's eight (thesis chapter 2) and the
+/// sternocleidomastoids, the accessory inspiratory muscles of maximal efforts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
 pub enum MuscleGroup {
     /// The diaphragm: 500 elements from the dome to insertions on ribs 7-12.
@@ -21,11 +22,20 @@ pub enum MuscleGroup {
     ExternalObliques,
     /// Internal obliques: 60 elements.
     InternalObliques,
+    /// Sternocleidomastoids: 4 elements, a sternal and a clavicular head per side, from the
+    /// mastoid process to the manubrium and the sternal end of rib 1. Accessory inspiratory
+    /// muscles: silent in quiet breathing, recruited in maximal inspiratory efforts (Raper et
+    /// al. 1966); no drive moves them, only their activation input.
+    Sternocleidomastoids,
 }
 
 impl MuscleGroup {
-    /// All groups, in FMI input order.
-    pub const ALL: [MuscleGroup; 8] = [
+    /// Number of groups.
+    pub const COUNT: usize = 9;
+
+    /// All groups, in FMI input order (the sternocleidomastoids, added after the thesis's
+    /// eight, last, so that the others' indices stay as they were).
+    pub const ALL: [MuscleGroup; MuscleGroup::COUNT] = [
         MuscleGroup::Diaphragm,
         MuscleGroup::ExternalIntercostals,
         MuscleGroup::InternalIntercostals,
@@ -34,6 +44,7 @@ impl MuscleGroup {
         MuscleGroup::RectusAbdominis,
         MuscleGroup::ExternalObliques,
         MuscleGroup::InternalObliques,
+        MuscleGroup::Sternocleidomastoids,
     ];
 
     /// Index of the group in [`MuscleGroup::ALL`].
@@ -52,6 +63,7 @@ impl MuscleGroup {
             MuscleGroup::RectusAbdominis => "rectus_abdominis",
             MuscleGroup::ExternalObliques => "external_obliques",
             MuscleGroup::InternalObliques => "internal_obliques",
+            MuscleGroup::Sternocleidomastoids => "sternocleidomastoids",
         }
     }
 
@@ -60,7 +72,8 @@ impl MuscleGroup {
         Self::ALL.into_iter().find(|g| g.name() == name)
     }
 
-    /// The thesis's default element count for this group (thesis 2.2-2.3).
+    /// The default element count for this group at full detail (thesis 2.2-2.3; the
+    /// sternocleidomastoids, which the thesis does not model, have one element per head).
     pub fn default_count(self) -> usize {
         match self {
             MuscleGroup::Diaphragm => 500,
@@ -69,6 +82,7 @@ impl MuscleGroup {
             MuscleGroup::TransversusAbdominis => 100,
             MuscleGroup::RectusAbdominis => 50,
             MuscleGroup::ExternalObliques | MuscleGroup::InternalObliques => 60,
+            MuscleGroup::Sternocleidomastoids => 4,
         }
     }
 }

@@ -38,11 +38,17 @@ use serde::Serialize;
 /// The inspiratory muscle groups a maximal inspiratory effort activates: the diaphragm, the
 /// external intercostals and the scalenes (the model's internal intercostals are its
 /// expiratory group; De Troyer & Estenne 1988, J Appl Physiol 65:2319, on the inspiratory
-/// action of the diaphragm, external intercostals and scalenes).
-pub const INSPIRATORY: [MuscleGroup; 3] = [
+/// action of the diaphragm, external intercostals and scalenes), and the sternocleidomastoids,
+/// the accessory inspiratory muscles that maximal efforts recruit: silent in quiet breathing,
+/// active as the lung volume approaches total lung capacity and in maximal static efforts
+/// (Raper, Thompson, Shapiro & Patterson 1966, J Appl Physiol 21:497); in static inspiratory
+/// ramps their activity rises with the pressure from 20 to 100 % of the maximal inspiratory
+/// pressure (Hudson, Gandevia & Butler 2007, J Physiol 584:261).
+pub const INSPIRATORY: [MuscleGroup; 4] = [
     MuscleGroup::Diaphragm,
     MuscleGroup::ExternalIntercostals,
     MuscleGroup::Scalenes,
+    MuscleGroup::Sternocleidomastoids,
 ];
 
 /// The airway-opening pressure step of the compliance measurement [cmH2O] (issue 35: a 10

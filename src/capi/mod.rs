@@ -90,8 +90,11 @@ pub const BT_ERR_PARSE: c_int = -9;
 
 /// Number of muscle groups (indices of `bt_set_activation`, in FMI input order: diaphragm,
 /// external intercostals, internal intercostals, scalenes, transversus abdominis, rectus
-/// abdominis, external obliques, internal obliques).
-pub const BT_MUSCLE_GROUPS: c_int = 8;
+/// abdominis, external obliques, internal obliques, sternocleidomastoids).
+pub const BT_MUSCLE_GROUPS: c_int = 9;
+// The C arrays sized by the group count are written with the literal (the header generator
+// reads literals); this keeps them equal to the model's count.
+const _: () = assert!(BT_MUSCLE_GROUPS as usize == crate::anatomy::MuscleGroup::COUNT);
 
 /// The subject the model is built for.
 #[repr(C)]
@@ -182,9 +185,9 @@ pub struct BtConfig {
     pub subject_mesh_dir: *const c_char,
     /// Activation gain of each muscle group (index as `bt_set_activation`) on the right side,
     /// 0-2, times `gain_right` (FMI `gain.<group>.right`; 1 healthy, 0 paralysed).
-    pub group_gain_right: [f64; 8],
+    pub group_gain_right: [f64; 9],
     /// Activation gain of each muscle group on the left side, 0-2, times `gain_left`.
-    pub group_gain_left: [f64; 8],
+    pub group_gain_left: [f64; 9],
     /// Muscle law (FMI `muscle_law`): 0 the seed thesis's shortening linear spring, 1 passive
     /// and active parts with the passive wall fitted to the adult chest wall's compliance.
     pub muscle_law: c_int,

@@ -5,6 +5,7 @@
 //! that the right-hand side allocates nothing.
 
 use super::{RIBS, Structure, forces};
+use crate::anatomy::MuscleGroup;
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 
 /// What drives the model in one evaluation: the activations applied to the muscles, per
@@ -14,7 +15,7 @@ use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Activations {
     /// `[group][side]`.
-    pub level: [[f64; 3]; 8],
+    pub level: [[f64; 3]; MuscleGroup::COUNT],
     /// Pressure at the airway opening relative to the body surface [Pa]: it reaches the
     /// alveoli through the airway resistance and pushes the thoracic wall outward.
     pub airway_opening: f64,
@@ -26,14 +27,22 @@ pub struct Activations {
 
 impl Activations {
     /// From per-group activations in [0, 1] and the left/right gains: a = min(1, a_g G_side).
-    pub fn new(groups: &[f64; 8], gain_right: f64, gain_left: f64) -> Activations {
-        Activations::per_group(groups, &[gain_right; 8], &[gain_left; 8])
+    pub fn new(groups: &[f64; MuscleGroup::COUNT], gain_right: f64, gain_left: f64) -> Activations {
+        Activations::per_group(
+            groups,
+            &[gain_right; MuscleGroup::COUNT],
+            &[gain_left; MuscleGroup::COUNT],
+        )
     }
 
     /// From per-group activations in [0, 1] and per-group gains of each side: a = min(1,
     /// a_g G_g,side); midline elements take the mean of the two sides' gains.
-    pub fn per_group(groups: &[f64; 8], right: &[f64; 8], left: &[f64; 8]) -> Activations {
-        let mut level = [[0.0; 3]; 8];
+    pub fn per_group(
+        groups: &[f64; MuscleGroup::COUNT],
+        right: &[f64; MuscleGroup::COUNT],
+        left: &[f64; MuscleGroup::COUNT],
+    ) -> Activations {
+        let mut level = [[0.0; 3]; MuscleGroup::COUNT];
         for (g, a) in groups.iter().enumerate() {
             let a = a.clamp(0.0, 1.0);
             let (r, l) = (right[g], left[g]);

@@ -550,7 +550,7 @@ mod tests {
     /// The quiet drive's activations at its start (`Drive::quiet` at t = 0: the rib-cage
     /// groups at half their 0.096 amplitude, the diaphragm at 0.12 (1 + sin 0.1)), held.
     fn inspiration() -> Activations {
-        let mut groups = [0.0; 8];
+        let mut groups = [0.0; MuscleGroup::COUNT];
         for g in [
             MuscleGroup::ExternalIntercostals,
             MuscleGroup::InternalIntercostals,

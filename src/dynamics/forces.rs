@@ -883,7 +883,7 @@ mod tests {
             let y = deformed(&model);
             let mut dy = vec![0.0; y.len()];
             let mut data = Data::new(&model);
-            let act = Activations::new(&[0.3; 8], 1.0, 0.8);
+            let act = Activations::new(&[0.3; crate::anatomy::MuscleGroup::COUNT], 1.0, 0.8);
             rhs(&model, &mut data, &act, &y, &mut dy);
             let level = act.table();
             let zero = vec![Vector3::zeros(); data.pos.len()];
@@ -937,10 +937,10 @@ mod tests {
             let model = Model::compile(&anatomy, params);
             let pos: Vec<_> = anatomy.anchors.iter().map(|a| a.rest).collect();
             let vel = vec![Vector3::zeros(); pos.len()];
-            let mut groups = [0.0; 8];
+            let mut groups = [0.0; MuscleGroup::COUNT];
             groups[MuscleGroup::Diaphragm.index()] = 1.0;
             let full = Activations::new(&groups, 1.0, 1.0).table();
-            let none = Activations::new(&[0.0; 8], 1.0, 1.0).table();
+            let none = Activations::new(&[0.0; MuscleGroup::COUNT], 1.0, 1.0).table();
             let el = &model.elements;
             let (mut checked, mut via, mut away) = (0, 0, 0);
             for (e, m) in anatomy.muscles.iter().enumerate() {
@@ -1015,7 +1015,7 @@ mod tests {
             let y = deformed(&model);
             let mut dy = vec![0.0; y.len()];
             let mut data = Data::new(&model);
-            let act = Activations::new(&[0.3; 8], 1.0, 0.8);
+            let act = Activations::new(&[0.3; crate::anatomy::MuscleGroup::COUNT], 1.0, 0.8);
             rhs(&model, &mut data, &act, &y, &mut dy);
             let va = volume(&data.pos, &model.abdomen_triangles);
             let vt = volume(&data.pos, &model.thorax_triangles);

@@ -119,7 +119,8 @@ pub const HILL_DIAPHRAGM_FORCE: f64 = 422.0;
 pub const HILL_INTERCOSTAL_TENSION: f64 = 870.0;
 
 /// The factor on a muscle element's maximal force (the anatomy's) giving its cited maximal
-/// force under the passive-and-active law; 1 for the scalenes and abdominal muscles.
+/// force under the passive-and-active law; 1 for the scalenes, the sternocleidomastoids and
+/// the abdominal muscles (the law keeps their anatomical forces).
 pub fn hill_force_factor(group: crate::anatomy::MuscleGroup) -> f64 {
     use crate::anatomy::{DIAPHRAGM_FORCE, INTERCOSTAL_TENSION, MuscleGroup};
     match group {

@@ -610,7 +610,9 @@ impl Params {
         self.abdominal_wall_compliance /= factor;
     }
 
-    /// Largest contraction of an element of `group` (see [`Params::beta_max`]).
+    /// Largest contraction of an element of `group` (see [`Params::beta_max`]): the
+    /// diaphragm's own, [`Params::beta_max`] for every other group (the scalenes and the
+    /// sternocleidomastoids alike).
     pub fn beta_for(&self, group: crate::anatomy::MuscleGroup) -> f64 {
         match group {
             crate::anatomy::MuscleGroup::Diaphragm => self.beta_max_diaphragm,

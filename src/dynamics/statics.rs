@@ -226,6 +226,10 @@ pub struct StaticsMemory {
     pub stats: StaticsStats,
 }
 
+/// Length of an activation vector in the memory: three sides per muscle group, then the
+/// airway-opening pressure.
+const ACT_LEN: usize = 3 * crate::anatomy::MuscleGroup::COUNT + 1;
+
 fn act_to_vec(a: &Activations) -> Vec<f64> {
     let mut v: Vec<f64> = a.level.iter().flatten().copied().collect();
     v.push(a.airway_opening);
@@ -239,7 +243,7 @@ fn act_from_vec(v: &[f64]) -> Activations {
             *x = v.get(3 * g + s).copied().unwrap_or(0.0);
         }
     }
-    a.airway_opening = v.get(24).copied().unwrap_or(0.0);
+    a.airway_opening = v.get(ACT_LEN - 1).copied().unwrap_or(0.0);
     a
 }
 
@@ -440,7 +444,7 @@ impl Statics {
         data: &mut Data,
         memory: &StaticsMemory,
     ) -> Result<(), StaticsError> {
-        if memory.state.len() != self.y.len() || memory.activations.len() != 25 {
+        if memory.state.len() != self.y.len() || memory.activations.len() != ACT_LEN {
             return Err(StaticsError::NonFinite);
         }
         self.reset(
@@ -450,7 +454,7 @@ impl Statics {
             &act_from_vec(&memory.activations),
         );
         if let Some((y, p, a)) = &memory.factored_at {
-            if y.len() != self.y.len() || a.len() != 25 {
+            if y.len() != self.y.len() || a.len() != ACT_LEN {
                 return Err(StaticsError::NonFinite);
             }
             let stats = self.stats;
@@ -471,7 +475,10 @@ impl Statics {
         }
         self.history.clone_from(&memory.history);
         self.history_act = if memory.history_activations.len() == memory.history.len()
-            && memory.history_activations.iter().all(|a| a.len() == 25)
+            && memory
+                .history_activations
+                .iter()
+                .all(|a| a.len() == ACT_LEN)
         {
             memory
                 .history_activations

@@ -292,8 +292,10 @@ impl FmuState {
         paths_aside.subject_mesh_dir = None;
         paths_aside.validate()?;
         let mut saved = saved;
-        if saved.inputs.len() == Input::COUNT - 1 {
-            saved.inputs.push(0.0);
+        // States saved before the occlusion (9 inputs) or the sternocleidomastoids (10)
+        // existed: the inputs added since, last in value-reference order, read 0.
+        if (Input::COUNT - 2..Input::COUNT).contains(&saved.inputs.len()) {
+            saved.inputs.resize(Input::COUNT, 0.0);
         }
         if saved.inputs.len() != Input::COUNT {
             return Err(bad(format!(

@@ -235,16 +235,16 @@ impl Config {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GroupGains {
     /// Gains of the subject's right side.
-    pub right: [f64; 8],
+    pub right: [f64; crate::anatomy::MuscleGroup::COUNT],
     /// Gains of the subject's left side.
-    pub left: [f64; 8],
+    pub left: [f64; crate::anatomy::MuscleGroup::COUNT],
 }
 
 impl Default for GroupGains {
     fn default() -> Self {
         GroupGains {
-            right: [1.0; 8],
-            left: [1.0; 8],
+            right: [1.0; crate::anatomy::MuscleGroup::COUNT],
+            left: [1.0; crate::anatomy::MuscleGroup::COUNT],
         }
     }
 }

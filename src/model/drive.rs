@@ -267,9 +267,13 @@ impl Drive {
     /// Drive activation of `group` at time `t`: A w(u) for the family's wave (module doc),
     /// A (1 - w(u)) for the expiratory groups (internal intercostals, abdominal wall muscles);
     /// with the inspiratory fraction 1/2, A/2 (sin(2 pi f t + phi) + 1) and its antiphase
-    /// (phi + pi) exactly as eq. 2.4; 0 when the drive is off.
+    /// (phi + pi) exactly as eq. 2.4; 0 when the drive is off, and 0 always for the
+    /// sternocleidomastoids, which no breathing drive recruits.
     pub fn activation(&self, group: MuscleGroup, t: f64) -> f64 {
         let (wave, antiphase) = match group {
+            // Accessory muscles: silent in quiet breathing in healthy people (Raper et al.
+            // 1966, J Appl Physiol 21:497), moved by their activation input only.
+            MuscleGroup::Sternocleidomastoids => return 0.0,
             MuscleGroup::ExternalIntercostals | MuscleGroup::Scalenes => (self.ribs, false),
             MuscleGroup::InternalIntercostals => (self.ribs, true),
             MuscleGroup::Diaphragm => (self.diaphragm, false),

@@ -12,7 +12,7 @@ pub struct Frame {
     /// Time [s].
     pub time: f64,
     /// Applied activation per group, in [`MuscleGroup::ALL`] order.
-    pub activation: [f64; 8],
+    pub activation: [f64; MuscleGroup::COUNT],
     /// Lung volume [L].
     pub lung: f64,
     /// Thoracic volume [L].
@@ -35,7 +35,7 @@ pub struct Frame {
 
 /// Reads the current frame of `torso`.
 pub fn frame(torso: &mut Torso) -> Result<Frame> {
-    let mut activation = [0.0; 8];
+    let mut activation = [0.0; MuscleGroup::COUNT];
     for g in MuscleGroup::ALL {
         activation[g.index()] = torso.applied_activation(g);
     }

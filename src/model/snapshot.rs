@@ -2,6 +2,7 @@
 //! and checkpoints, the same data held natively in reusable buffers for rolling back a
 //! failed step.
 
+use crate::anatomy::MuscleGroup;
 use crate::solver::Integrator;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -24,7 +25,7 @@ pub struct Snapshot {
     /// State vector.
     pub state: Vec<f64>,
     /// Activation inputs, one per group in [`crate::anatomy::MuscleGroup::ALL`] order.
-    pub inputs: [f64; 8],
+    pub inputs: [f64; MuscleGroup::COUNT],
     /// Pressure at the airway opening [Pa]; snapshots written before it existed read 0.
     #[serde(default)]
     pub airway_opening: f64,
@@ -80,7 +81,7 @@ pub struct Checkpoint {
     pub(super) fingerprint: u64,
     pub(super) time: f64,
     pub(super) state: Vec<f64>,
-    pub(super) inputs: [f64; 8],
+    pub(super) inputs: [f64; MuscleGroup::COUNT],
     pub(super) airway_opening: f64,
     pub(super) occlusion: Option<f64>,
     pub(super) drive: Option<super::Drive>,

@@ -28,7 +28,7 @@ pub use sampled::Sample;
 pub const AIRWAY_OPENING_RANGE: (f64, f64) = (-50.0 * 98.0665, 50.0 * 98.0665);
 
 /// The gain of each group on each side: the side's overall gain times the group's.
-fn side_gains(config: &Config) -> ([f64; 8], [f64; 8]) {
+fn side_gains(config: &Config) -> ([f64; MuscleGroup::COUNT], [f64; MuscleGroup::COUNT]) {
     let g = &config.group_gains;
     (
         g.right.map(|x| x * config.gain_right),
@@ -217,22 +217,22 @@ impl Compiled {
 /// What acts on the model over an integration: inputs, airway-opening pressure, drive and
 /// gains, giving the activations clamp(input + drive + tone, 0, 1) at any time.
 struct Applied<'a> {
-    inputs: [f64; 8],
+    inputs: [f64; MuscleGroup::COUNT],
     /// Pressure at the airway opening [Pa].
     airway_opening: f64,
     /// The occluded airway's dry gas content [Pa m^3] (`None`: open).
     occlusion: Option<f64>,
     drive: &'a Drive,
     /// Gain of each group on the right and left sides (overall side gain times group gain).
-    gains: ([f64; 8], [f64; 8]),
+    gains: ([f64; MuscleGroup::COUNT], [f64; MuscleGroup::COUNT]),
     /// Each group's tone ([`tones`]).
-    tone: [f64; 8],
+    tone: [f64; MuscleGroup::COUNT],
 }
 
 /// Each group's tonic activation under `params`: the abdominal wall's tone
 /// ([`crate::dynamics::Params::abdominal_tone`]) on its four muscles, none on the others.
-fn tones(params: &crate::dynamics::Params) -> [f64; 8] {
-    let mut tone = [0.0; 8];
+fn tones(params: &crate::dynamics::Params) -> [f64; MuscleGroup::COUNT] {
+    let mut tone = [0.0; MuscleGroup::COUNT];
     for g in [
         MuscleGroup::TransversusAbdominis,
         MuscleGroup::RectusAbdominis,
@@ -246,8 +246,8 @@ fn tones(params: &crate::dynamics::Params) -> [f64; 8] {
 
 impl Applied<'_> {
     /// Each group's applied activation at time `t`: clamp(input + drive + tone, 0, 1).
-    fn groups(&self, t: f64) -> [f64; 8] {
-        let mut groups = [0.0; 8];
+    fn groups(&self, t: f64) -> [f64; MuscleGroup::COUNT] {
+        let mut groups = [0.0; MuscleGroup::COUNT];
         for g in MuscleGroup::ALL {
             groups[g.index()] =
                 (self.inputs[g.index()] + self.drive.activation(g, t) + self.tone[g.index()])
@@ -326,7 +326,7 @@ pub struct Torso {
     data: Data,
     y: Vec<f64>,
     time: f64,
-    inputs: [f64; 8],
+    inputs: [f64; MuscleGroup::COUNT],
     /// Pressure at the airway opening [Pa] (an input, like the activations).
     airway_opening: f64,
     /// The airway occluded: the lungs' dry gas content [Pa m^3] fixed when it closed
@@ -412,7 +412,7 @@ impl Torso {
             data: Data::new(model),
             y,
             time: 0.0,
-            inputs: [0.0; 8],
+            inputs: [0.0; MuscleGroup::COUNT],
             airway_opening: 0.0,
             occlusion: None,
             integrator,
@@ -625,7 +625,7 @@ impl Torso {
 
     /// Each group's tonic activation in this model (the abdominal wall's tone,
     /// [`crate::dynamics::Params::abdominal_tone`]).
-    fn tone(&self) -> [f64; 8] {
+    fn tone(&self) -> [f64; MuscleGroup::COUNT] {
         tones(&self.compiled.model.params)
     }
 
@@ -946,7 +946,7 @@ impl Torso {
             Quantity::SternumDisplacement(axis) if axis < 3 => {
                 self.observation().sternum_displacement[axis as usize]
             }
-            Quantity::Activation(g) if (g as usize) < 8 => {
+            Quantity::Activation(g) if (g as usize) < MuscleGroup::COUNT => {
                 self.applied_activation(MuscleGroup::ALL[g as usize])
             }
             Quantity::SolverSteps => self.integrator.stats().steps as f64,
@@ -1230,7 +1230,7 @@ impl Torso {
     /// equilibrium of the drive's start, solver memory cleared).
     pub fn reset(&mut self) {
         self.time = 0.0;
-        self.inputs = [0.0; 8];
+        self.inputs = [0.0; MuscleGroup::COUNT];
         self.airway_opening = 0.0;
         self.occlusion = None;
         self.integrator.reset();

@@ -279,32 +279,34 @@ pub enum Input {
 
 impl Input {
     /// Number of inputs.
-    pub const COUNT: usize = 10;
+    pub const COUNT: usize = MuscleGroup::COUNT + 2;
 
-    /// Every input, in value-reference order (the activations in [`MuscleGroup::ALL`] order,
-    /// then the airway opening, then the occlusion).
+    /// Every input, in value-reference order: the thesis's eight activations (in
+    /// [`MuscleGroup::ALL`] order), the airway opening, the occlusion, then the activations
+    /// added after them (the sternocleidomastoids).
     pub fn all() -> [Input; Input::COUNT] {
         let mut all = [Input::AirwayOpening; Input::COUNT];
-        for (slot, g) in all.iter_mut().zip(MuscleGroup::ALL) {
-            *slot = Input::Activation(g);
+        for g in MuscleGroup::ALL {
+            all[Input::Activation(g).index()] = Input::Activation(g);
         }
-        all[Input::COUNT - 1] = Input::AirwayOccluded;
+        all[Input::AirwayOccluded.index()] = Input::AirwayOccluded;
         all
     }
 
-    /// Position in [`Input::all`].
+    /// Position in [`Input::all`] (value-reference order).
     pub fn index(self) -> usize {
         match self {
-            Input::Activation(g) => g.index(),
-            Input::AirwayOpening => Input::COUNT - 2,
-            Input::AirwayOccluded => Input::COUNT - 1,
+            Input::Activation(g) if g.index() < 8 => g.index(),
+            Input::Activation(g) => g.index() + 2,
+            Input::AirwayOpening => 8,
+            Input::AirwayOccluded => 9,
         }
     }
 
     /// The input's value reference.
     pub fn vr(self) -> u32 {
         match self {
-            Input::Activation(g) => super::VR_ACTIVATION + g.index() as u32,
+            Input::Activation(g) => super::activation_vr(g),
             Input::AirwayOpening => super::VR_AIRWAY_OPENING,
             Input::AirwayOccluded => super::VR_AIRWAY_OCCLUDED,
         }

@@ -55,8 +55,26 @@ pub const MARKER_SLOTS: u16 = 60;
 pub const MAX_MARKER_OUTPUTS: u16 = crate::observe::markers::MAX_MARKERS as u16;
 /// Value reference of `time`.
 pub const VR_TIME: u32 = 0;
-/// First value reference of the activation inputs (in [`MuscleGroup::ALL`](crate::anatomy::MuscleGroup::ALL) order).
+/// First value reference of the activation inputs (in [`MuscleGroup::ALL`](crate::anatomy::MuscleGroup::ALL) order):
+/// the thesis's eight groups at 1-8 ([`activation_vr`]).
 pub const VR_ACTIVATION: u32 = 1;
+/// Value reference of the first activation input added after the airway inputs (the
+/// sternocleidomastoids' at 11), so that the references of the older inputs stay as they were.
+pub const VR_ACTIVATION_ADDED: u32 = 11;
+/// Groups whose activation references run from [`VR_ACTIVATION`]; later ones from
+/// [`VR_ACTIVATION_ADDED`].
+const THESIS_GROUPS: usize = 8;
+
+/// The value reference of `activation.<group>`: [`VR_ACTIVATION`] + index for the thesis's
+/// eight groups, [`VR_ACTIVATION_ADDED`] + (index - 8) for the groups added after them.
+pub fn activation_vr(group: crate::anatomy::MuscleGroup) -> u32 {
+    let k = group.index();
+    if k < THESIS_GROUPS {
+        VR_ACTIVATION + k as u32
+    } else {
+        VR_ACTIVATION_ADDED + (k - THESIS_GROUPS) as u32
+    }
+}
 /// Value reference of `pressure.airway_opening`, the input after the activations.
 pub const VR_AIRWAY_OPENING: u32 = 9;
 /// Value reference of `airway.occluded`, the Boolean input after the airway opening.

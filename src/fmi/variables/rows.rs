@@ -5,7 +5,7 @@
 
 use super::mapping::{Family, Input, Parameter, Value, start_config};
 use super::types::{Causality, Initial, Role, ScalarType, Start, Variability, Variable};
-use super::{VR_ACTIVATION, VR_AIRWAY_OCCLUDED, VR_AIRWAY_OPENING, VR_TIME, marker_vr};
+use super::{VR_AIRWAY_OCCLUDED, VR_AIRWAY_OPENING, VR_TIME, activation_vr, marker_vr};
 use crate::anatomy::skin::MarkerSet;
 use crate::anatomy::{MuscleGroup, SUBJECT_RANGES, Side};
 use crate::model::{Config, Quantity};
@@ -188,10 +188,10 @@ pub(super) fn build(markers: &MarkerOutputs) -> Vec<Variable> {
             .0
     });
 
-    for (k, g) in MuscleGroup::ALL.into_iter().enumerate() {
+    for g in MuscleGroup::ALL {
         let mut r = Row::new(
             format!("activation.{}", g.name()),
-            VR_ACTIVATION + k as u32,
+            activation_vr(g),
             Real,
             Role::Input(Input::Activation(g)),
             format!(

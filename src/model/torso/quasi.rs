@@ -18,6 +18,10 @@ use crate::dynamics::{Activations, Data, Model};
 use crate::solver::Ode;
 use serde::{Deserialize, Serialize};
 
+/// Length of the held activations in the memory: three sides per muscle group, then the
+/// airway-opening pressure.
+const HELD_LEN: usize = 3 * crate::anatomy::MuscleGroup::COUNT + 1;
+
 /// Litres per cubic metre: the reduced state is held in litres, so that the integrator's
 /// absolute tolerance (1e-8 by default) is a volume the user reads.
 const LITRES: f64 = 1e3;
@@ -156,7 +160,7 @@ impl Quasi {
             .held
             .as_deref()
             .unwrap_or(&memory.statics.activations);
-        if held.len() != 25 || held.iter().any(|v| !v.is_finite()) {
+        if held.len() != HELD_LEN || held.iter().any(|v| !v.is_finite()) {
             return Err(StaticsError::NonFinite);
         }
         self.statics.restore(model, data, &memory.statics)?;
@@ -168,7 +172,7 @@ impl Quasi {
         for (g, sides) in self.held.level.iter_mut().enumerate() {
             sides.copy_from_slice(&held[3 * g..3 * g + 3]);
         }
-        self.held.airway_opening = held[24];
+        self.held.airway_opening = held[HELD_LEN - 1];
         Ok(())
     }
 }
