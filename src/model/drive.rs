@@ -114,11 +114,11 @@ impl Default for Drive {
 /// of a cystic-fibrosis study; 9.0 +- 3.4 % in 100 healthy subjects, Jolley et al. 2009, Eur
 /// Respir J 33:289). EMG is taken as proportional to force (the diaphragm's Pdi-EMG relation
 /// is near linear); not fitted: with it the quiet tidal volume is an outcome. The choice of
-/// source matters: at Jolley et al.'s 9.0 % the default man standing breathes 0.680 L (9.1
-/// mL/kg, above 7 mL/kg + 25 %) with a 54.4 % rib-cage share, against 0.627 L and 62.1 % at
+/// source matters: at Jolley et al.'s 9.0 % the default man standing breathes 0.679 L (9.1
+/// mL/kg, above 7 mL/kg + 25 %) with a 54.2 % rib-cage share, against 0.626 L and 61.9 % at
 /// Reilly et al.'s 7.5 % (`torso simulate --muscle-law hill --diaphragm-amplitude 0.09
-/// --ribs-amplitude 0.058`); Reilly et al. is taken because it measured both families in the
-/// same subjects.
+/// --ribs-amplitude 0.058 --duration 16`, and 0.075); Reilly et al. is taken because it
+/// measured both families in the same subjects.
 pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 
 /// Peak activation of the rib-cage inspiratory muscles in quiet breathing under the
