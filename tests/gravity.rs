@@ -398,8 +398,10 @@ fn the_rests_are_stable_under_gravity_acting() {
 /// (`Drive::quiet_for`) breathes through the quasi-static formulation. Issue 35: with the
 /// reference loads held by constant preloads alone the chest wall buckled (in the drive's
 /// first step; at t = 2.09 s with the thesis law's amplitudes); with the tissues carrying what
-/// they can (`dynamics::pretension`) it runs (measured: last breath 2.697-3.110 L, tidal
-/// 0.413 L, relaxed rest 2.809 L; `cargo test --release --test gravity -- --nocapture`).
+/// they can (`dynamics::pretension`) it runs (measured: last breath 2.801-3.133 L, tidal
+/// 0.332 L, relaxed rest 2.799 L, quiet expiration passive supine,
+/// `dynamics::expiration_with_abdominals`; 2.697-3.110 L before;
+/// `cargo test --release --test gravity -- --nocapture`).
 #[test]
 fn hill_supine_breathes_under_gravity_acting() {
     breathes_quasi_statically(MuscleLaw::Hill, Posture::Supine);

@@ -533,6 +533,13 @@ pub struct Params {
     /// ([`abdominal_tone`]).
     #[serde(default)]
     pub abdominal_tone: f64,
+    /// Whether the drive's expiratory rib-cage group (the internal intercostals) follows the
+    /// abdominal family's wave rather than the rib family's
+    /// ([`expiration_with_abdominals`]): supine under the hill law, where quiet expiration is
+    /// passive and the rib cage's expiratory muscles are recruited with the abdominal ones.
+    /// Configurations written before it existed read `false` (the rib family's wave).
+    #[serde(default)]
+    pub expiration_with_abdominals: bool,
 }
 
 /// The abdominal wall's tonic activity upright, a fraction of maximal voluntary contraction:
@@ -563,6 +570,30 @@ pub fn abdominal_tone(posture: Posture, law: super::muscle::MuscleLaw) -> f64 {
     }
 }
 
+/// Whether, in `posture` under `law`, the drive's expiratory rib-cage muscles (the model's
+/// internal intercostals, standing for the rib cage's expiratory muscles: the internal
+/// interosseous intercostals of the caudal interspaces and the triangularis sterni) follow the
+/// abdominal family's expiratory wave instead of the rib family's
+/// ([`Params::expiration_with_abdominals`]).
+///
+/// - Supine, quiet expiration is passive: the triangularis sterni is usually silent in resting
+///   breathing and is recruited, with its activation largely coupled to the abdominal
+///   muscles', in active expiration, expulsive efforts, speech and cough (De Troyer, Ninane,
+///   Gilmartin, Lemerre & Estenne 1987, J Appl Physiol 62:919, needle EMG in 12 supine
+///   adults); the triangularis sterni and the abdominal muscles are usually silent supine
+///   (Estenne, Ninane & De Troyer 1988, Respir Physiol 74:151, 20 adults). So supine the
+///   group moves with the abdominal family: silent in quiet breathing (the quiet drive has no
+///   abdominal wave), active when a forced drive recruits the abdominal muscles.
+/// - Standing, 16 of the same 20 adults had triangularis sterni activity in quiet breathing,
+///   confined to expiration in 15 (Estenne et al. 1988): the group keeps the rib family's
+///   antiphase wave (the drive's structure, thesis 2.4.1). Sitting was not studied there; it
+///   is treated as upright.
+/// - Under the thesis's law, whose drives were calibrated with the rib family's wave in
+///   every posture, the structure is unchanged.
+pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLaw) -> bool {
+    posture == Posture::Supine && law == super::muscle::MuscleLaw::Hill
+}
+
 /// The factor on the passive chest wall's hand-set stiffnesses (and divisor of the abdominal
 /// wall's compliance, [`Params::scale_passive_wall`]) under the passive-and-active muscle law
 /// ([`super::muscle::MuscleLaw::Hill`]): with it the relaxed chest wall of the default subject
@@ -585,7 +616,8 @@ impl Params {
     /// Defaults for a posture under muscle law `law`: [`Params::for_posture`], and under the
     /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`], fitted to
     /// the relaxed chest wall's compliance once the muscles no longer carry its stiffness, and
-    /// the posture's abdominal tone ([`abdominal_tone`]).
+    /// the posture's abdominal tone ([`abdominal_tone`]) and its expiratory rib-cage drive
+    /// ([`expiration_with_abdominals`]).
     pub fn for_posture_and_law(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
         let mut p = Params::for_posture(posture);
         p.muscle_law = law;
@@ -593,6 +625,7 @@ impl Params {
             p.scale_passive_wall(HILL_PASSIVE_WALL_SCALE);
         }
         p.abdominal_tone = abdominal_tone(posture, law);
+        p.expiration_with_abdominals = expiration_with_abdominals(posture, law);
         p
     }
 
@@ -660,6 +693,7 @@ impl Params {
             muscle_law: super::muscle::MuscleLaw::Thesis,
             gravity_loads: GravityLoads::Preloaded,
             abdominal_tone: 0.0,
+            expiration_with_abdominals: false,
         }
     }
 

@@ -126,9 +126,15 @@ pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 /// maximum, in the same 15 subjects as [`HILL_QUIET_DIAPHRAGM`] (Reilly et al. 2011; 5.88
 /// (3.63) % in 43 healthy adults, MacBean et al. 2014, Thorax 69 Suppl 2:A170). The drive's
 /// rib family also drives the scalenes, for which no quiet-breathing fraction of maximum was
-/// found, at the same fraction, and the internal intercostals at it in antiphase (the drive's
-/// structure, thesis 2.4.1), though quiet expiration is mostly passive: an uncited 5.8 % of
-/// their maximal force in expiration.
+/// found, at the same fraction, and, upright, the internal intercostals at it in antiphase (the
+/// drive's structure, thesis 2.4.1): the rib cage's expiratory muscles are active in quiet
+/// expiration standing (the triangularis sterni in 15 of 20 adults, Estenne, Ninane & De
+/// Troyer 1988, Respir Physiol 74:151), at a magnitude no source gave, so 5.8 % of their
+/// maximal force in expiration is uncited. Supine, where quiet expiration is passive, they
+/// follow the abdominal family instead ([`crate::dynamics::expiration_with_abdominals`]).
+/// Measured (`torso bench physiology --muscle-law hill`): the upright rib-cage share of
+/// quiet breathing, 61.9 % with this expiratory wave, rests on it (22.7 % without it, the
+/// internal intercostals silent standing; measured with a scratch drive that zeroed them).
 pub const HILL_QUIET_RIBS: f64 = 0.058;
 
 /// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:

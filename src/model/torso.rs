@@ -88,8 +88,10 @@ impl Config {
     /// The constants of the dynamics this configuration compiles with: its `params` when set,
     /// else the defaults of its posture and muscle law ([`Params::for_posture_and_law`]; under
     /// gravity acting the standing ones, every posture being the standing anatomy) with its
-    /// gravity, its gravity loads and the true posture's abdominal tone, scaled with gravity
-    /// ([`crate::dynamics::abdominal_tone`]), or none when its `postural_tone` is off.
+    /// gravity, its gravity loads, the true posture's abdominal tone, scaled with gravity
+    /// ([`crate::dynamics::abdominal_tone`]), or none when its `postural_tone` is off, and
+    /// the true posture's expiratory rib-cage drive
+    /// ([`crate::dynamics::expiration_with_abdominals`]).
     pub fn model_params(&self) -> Params {
         self.params.clone().unwrap_or_else(|| {
             let posture = self.subject.posture;
@@ -107,6 +109,8 @@ impl Config {
             } else {
                 0.0
             };
+            p.expiration_with_abdominals =
+                crate::dynamics::expiration_with_abdominals(posture, self.muscle_law);
             p
         })
     }
@@ -227,6 +231,9 @@ struct Applied<'a> {
     gains: ([f64; MuscleGroup::COUNT], [f64; MuscleGroup::COUNT]),
     /// Each group's tone ([`tones`]).
     tone: [f64; MuscleGroup::COUNT],
+    /// Whether the internal intercostals take the drive's abdominal wave
+    /// ([`crate::dynamics::Params::expiration_with_abdominals`]).
+    expiration_with_abdominals: bool,
 }
 
 /// Each group's tonic activation under `params`: the abdominal wall's tone
@@ -245,12 +252,20 @@ fn tones(params: &crate::dynamics::Params) -> [f64; MuscleGroup::COUNT] {
 }
 
 impl Applied<'_> {
-    /// Each group's applied activation at time `t`: clamp(input + drive + tone, 0, 1).
+    /// Each group's applied activation at time `t`: clamp(input + drive + tone, 0, 1), the
+    /// internal intercostals' drive the abdominal family's wave where the posture couples
+    /// them ([`crate::dynamics::Params::expiration_with_abdominals`]).
     fn groups(&self, t: f64) -> [f64; MuscleGroup::COUNT] {
         let mut groups = [0.0; MuscleGroup::COUNT];
         for g in MuscleGroup::ALL {
+            let wave = if g == MuscleGroup::InternalIntercostals && self.expiration_with_abdominals
+            {
+                MuscleGroup::TransversusAbdominis
+            } else {
+                g
+            };
             groups[g.index()] =
-                (self.inputs[g.index()] + self.drive.activation(g, t) + self.tone[g.index()])
+                (self.inputs[g.index()] + self.drive.activation(wave, t) + self.tone[g.index()])
                     .clamp(0.0, 1.0);
         }
         groups
@@ -452,6 +467,7 @@ impl Torso {
             drive: &self.config.drive,
             gains: side_gains(&self.config),
             tone: self.tone(),
+            expiration_with_abdominals: self.compiled.model.params.expiration_with_abdominals,
         }
     }
 
@@ -669,6 +685,7 @@ impl Torso {
                 drive: &config.drive,
                 gains: side_gains(config),
                 tone: tones(&compiled.model.params),
+                expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
             },
             jacobian: jacobian.as_deref_mut(),
         };
@@ -778,6 +795,7 @@ impl Torso {
                 drive: &config.drive,
                 gains: side_gains(config),
                 tone: tones(&compiled.model.params),
+                expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
             },
             tolerance,
             failure,
@@ -796,6 +814,7 @@ impl Torso {
             drive: &self.config.drive,
             gains: side_gains(&self.config),
             tone: tones(&self.compiled.model.params),
+            expiration_with_abdominals: self.compiled.model.params.expiration_with_abdominals,
         }
         .activations(self.time);
         let failure = q.failure.take();
@@ -1077,6 +1096,7 @@ impl Torso {
                 drive: &config.drive,
                 gains: side_gains(config),
                 tone: tones(&compiled.model.params),
+                expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
             },
             jacobian: None,
         };

@@ -288,6 +288,7 @@ impl Torso {
                     drive: &config.drive,
                     gains: super::side_gains(config),
                     tone: super::tones(&compiled.model.params),
+                    expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
                 },
                 tolerance,
                 failure: &mut failure,
