@@ -89,6 +89,14 @@ pub const DEEP_EXCURSION_MEN: (f64, f64) = (4.7, f64::INFINITY);
 /// domes' absolute excursion, 4.4 cm right and 4.2 cm left), so only the sign is the bound.
 pub const REGIONAL_GRADIENT: (f64, f64) = (0.0, f64::INFINITY);
 
+/// The rotations of the right ribs 3 and 7 from FRC to TLC, pump-handle (about the
+/// transverse axis) and bucket-handle (about the antero-posterior axis) [deg]: 11 and 13 for
+/// rib 3, 7 and 10 for rib 7 (Wilson, Rehder, Krayer, Hoffman, Whitney & Rodarte 1987, J Appl
+/// Physiol 62:1872, CT of the ribs at FRC and TLC; means, as the project's physiology
+/// reference gives them). The full inspiratory activation adds less than the inspiratory
+/// capacity, so each rotation is bounded above by its mean at TLC.
+pub const RIB_ROTATION_TO_TLC: [(u32, f64, f64); 2] = [(3, 11.0, 13.0), (7, 7.0, 10.0)];
+
 /// Volume a full inspiratory effort with the airway open adds to FRC, default subject [L]:
 /// 2.9-4.3 (issue 35's range for the default man's inspiratory capacity; ECSC 1993, Quanjer
 /// et al., Eur Respir J 6 Suppl 16:5, TLC less FRC).
@@ -515,7 +523,7 @@ pub fn sniff(
 }
 
 /// A full inspiratory effort with the airway open.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FullInspiration {
     /// Lung volume at rest [L].
     pub rest: f64,
@@ -547,6 +555,12 @@ pub struct FullInspiration {
     /// Caudal displacement of the dome as a whole (its swept volume over its area, the FMU's
     /// `diaphragm.displacement`), rest to full inspiration [cm] (through the facade).
     pub dome_excursion: f64,
+    /// Each right rib's rotation about its rib-neck axis, rest to full inspiration, split
+    /// into its pump-handle (about the transverse axis) and bucket-handle (about the
+    /// antero-posterior axis) parts [deg], ribs 1-12 (through the facade): the rotation times
+    /// the axis's transverse and antero-posterior components, as Wilson et al. 1987 split the
+    /// ribs' motion.
+    pub rib_rotation: Vec<(f64, f64)>,
 }
 
 /// Time over which the inspiratory activations rise from 0 to 1 [s]: a deep inspiration to
@@ -693,6 +707,7 @@ pub fn full_inspiration(
     let lines = THIRDS.map(|f| right_dome_line(&torso, f));
     let rest_heights = crossings(&torso, &lines).ok();
     let dome0 = torso.read(Quantity::DiaphragmDisplacement)?;
+    let theta0 = torso.state().to_vec();
     let mut t = 0.0;
     let mut last = f64::NAN;
     let mut settled = false;
@@ -723,6 +738,20 @@ pub fn full_inspiration(
     let regional_excursion = rest_heights
         .zip(crossings(&torso, &lines).ok())
         .map(|(r, e)| [0, 1, 2].map(|k| 100.0 * (r[k] - e[k])));
+    let layout = Layout::new(&torso.compiled().model);
+    let theta1 = torso.state();
+    let rib_rotation = torso
+        .compiled()
+        .anatomy
+        .ribs
+        .iter()
+        .filter(|r| r.side.sign() > 0.0)
+        .enumerate()
+        .map(|(k, rib)| {
+            let turn = (theta1[layout.theta + k] - theta0[layout.theta + k]).to_degrees();
+            ((turn * rib.axis.z).abs(), (turn * rib.axis.x).abs())
+        })
+        .collect();
     Ok(FullInspiration {
         rest,
         inspired,
@@ -732,6 +761,7 @@ pub fn full_inspiration(
         regional_excursion,
         m_mode_line: [line.0, line.1],
         dome_excursion: 100.0 * (dome0 - torso.read(Quantity::DiaphragmDisplacement)?),
+        rib_rotation,
     })
 }
 
@@ -989,6 +1019,21 @@ pub fn physiology(lod: u32, law: impl Into<Laws>) -> Result<Physiology> {
                 "Boussuges et al. 2009",
                 "facade (no FMU output reports a dome point)",
             );
+            for (rib, pump, bucket) in RIB_ROTATION_TO_TLC {
+                let (p, b) = f.rib_rotation[rib as usize - 1];
+                for (kind, value, cited) in [("pump", p, pump), ("bucket", b, bucket)] {
+                    fig(
+                        format!(
+                            "right rib {rib}'s {kind}-handle rotation, full inspiration standing"
+                        ),
+                        value,
+                        "deg",
+                        (0.0, cited),
+                        "Wilson et al. 1987 (FRC to TLC)",
+                        "facade (no FMU output reports a rib)",
+                    );
+                }
+            }
             if let Some([posterior, middle, anterior]) = f.regional_excursion {
                 fig(
                     "right dome's excursion, posterior less middle third, full inspiration standing"
