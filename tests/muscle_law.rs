@@ -18,9 +18,9 @@
 use breathing_torso::anatomy::{MuscleGroup, Posture};
 use breathing_torso::bench::physiology::{
     EXCURSION_PER_LITRE, INSPIRATORY_CAPACITY, Laws, PARALYSED_SIDE_SHARE, PLEURAL_SWING,
-    QuietBreath, RIB_ROTATION_TO_TLC, SUPINE_ABDOMINAL_SHARE, SYSTEM_COMPLIANCE,
-    UPRIGHT_RIB_CAGE_SHARE, full_inspiration, occluded_inspiration, pimax_range, pressure_step,
-    quiet_breath, sniff,
+    QuietBreath, RIB_ROTATION_TO_TLC, SNIFF_TRANSDIAPHRAGMATIC, SUPINE_ABDOMINAL_SHARE,
+    SYSTEM_COMPLIANCE, UPRIGHT_RIB_CAGE_SHARE, full_inspiration, occluded_inspiration, pimax_range,
+    pressure_step, quiet_breath, sniff,
 };
 use breathing_torso::bench::relaxation::{Relaxation, relaxation};
 use breathing_torso::dynamics::GravityLoads;
@@ -531,6 +531,22 @@ fn hill_ribs_turn_no_more_than_to_tlc() {
             "rib {rib}: pump {p:.1} deg (at most {pump}), bucket {b:.1} deg (at most {bucket})"
         );
     }
+}
+
+/// Under the hill law a maximal sniff's transdiaphragmatic pressure exceeds 38 cmH2O (Wanke et
+/// al. 1990: 68 (SD 15) cmH2O at 95 % of TLC, 163 (18) at RV). The 422 N diaphragm
+/// (`muscle::HILL_DIAPHRAGM_FORCE`) would give about 100 cmH2O as a piston over the dome's
+/// 0.04 m^2; the model's dome converts less of its force into pressure.
+#[test]
+#[ignore = "issue 35: under the hill law a sniff from FRC measured 29.4 cmH2O of transdiaphragmatic pressure against at least 38 (Wanke et al. 1990)"]
+fn hill_sniff_transdiaphragmatic_pressure() {
+    let s = sniff(Posture::Standing, 1, MuscleLaw::Hill, 1.0).unwrap();
+    println!("{s:?}");
+    assert!(
+        within(s.transdiaphragmatic, SNIFF_TRANSDIAPHRAGMATIC),
+        "{} cmH2O against {SNIFF_TRANSDIAPHRAGMATIC:?}",
+        s.transdiaphragmatic
+    );
 }
 
 /// The hill law with gravity acting (the tissues carrying the reference loads,

@@ -246,6 +246,20 @@ fn healthy_hemidiaphragm_descends_in_a_sniff_beside_a_paralysed_one() {
     );
 }
 
+/// A maximal sniff's transdiaphragmatic pressure exceeds 38 cmH2O from any volume below 95 %
+/// of TLC (Wanke et al. 1990: 68 (SD 15) cmH2O there, 163 (18) at RV).
+#[test]
+#[ignore = "issue 35: a sniff from FRC (the inspiratory groups to 1 and back over 0.25 s each way) measured 37.7 cmH2O of transdiaphragmatic pressure against at least 38 (Wanke et al. 1990: 163 at RV, 68 at 95 % of TLC; the hill law 29.4)"]
+fn sniff_transdiaphragmatic_pressure() {
+    let s = sniff(Posture::Standing, LOD, MuscleLaw::Thesis, 1.0).unwrap();
+    println!("{s:?}");
+    assert!(
+        within(s.transdiaphragmatic, SNIFF_TRANSDIAPHRAGMATIC),
+        "{} cmH2O against {SNIFF_TRANSDIAPHRAGMATIC:?}",
+        s.transdiaphragmatic
+    );
+}
+
 /// `torso bench physiology --json` at level 0 prints every figure with a finite value, its
 /// range and whether the value lies in it; a level of detail out of range is refused by name.
 #[test]
@@ -262,7 +276,7 @@ fn bench_command_prints_json() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let figures = v["figures"].as_array().unwrap();
-    assert_eq!(figures.len(), 20, "{v}");
+    assert_eq!(figures.len(), 21, "{v}");
     for f in figures {
         let value = f["value"].as_f64().unwrap();
         // an open end of a range is written null

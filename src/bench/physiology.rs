@@ -102,6 +102,12 @@ pub const RIB_ROTATION_TO_TLC: [(u32, f64, f64); 2] = [(3, 11.0, 13.0), (7, 7.0,
 /// et al., Eur Respir J 6 Suppl 16:5, TLC less FRC).
 pub const INSPIRATORY_CAPACITY: (f64, f64) = (2.9, 4.3);
 
+/// The transdiaphragmatic pressure of a maximal sniff [cmH2O], lower bound: in six healthy
+/// adults it fell linearly with lung volume from 163 (SD 18) at RV to 68 (SD 15) at 95 % of
+/// TLC (Wanke, Schenz, Zwick, Popp, Ritschka & Flicker 1990, Thorax 45:352); a sniff from FRC
+/// starts below 95 % of TLC, so a healthy one exceeds 68 - 2 x 15 = 38.
+pub const SNIFF_TRANSDIAPHRAGMATIC: (f64, f64) = (38.0, f64::INFINITY);
+
 /// The paralysed hemidiaphragm's side takes under 40 % of tidal volume (issue 35).
 pub const PARALYSED_SIDE_SHARE: (f64, f64) = (0.0, 0.4);
 
@@ -481,6 +487,9 @@ pub struct Sniff {
     /// The left and right hemidiaphragms' displacements (cranial positive) from the start to
     /// the sniff's largest lung volume [cm].
     pub hemidiaphragm_motion: [f64; 2],
+    /// The largest transdiaphragmatic pressure of the sniff, `pressure.abdomen` less
+    /// `pressure.pleural` [cmH2O].
+    pub transdiaphragmatic: f64,
 }
 
 /// A sniff of the default subject in `posture` with the left hemidiaphragm's gain
@@ -500,9 +509,12 @@ pub fn sniff(
         "volume.lung",
         "diaphragm.displacement.left",
         "diaphragm.displacement.right",
+        "pressure.abdomen",
+        "pressure.pleural",
     ];
     let start = fmu.get(&names)?;
     let mut peak = start.clone();
+    let mut transdiaphragmatic = (start[3] - start[4]) / CMH2O;
     let h = 0.01;
     while fmu.t < 2.0 * SNIFF_HALF + 0.25 {
         let t = fmu.t + h;
@@ -512,6 +524,7 @@ pub fn sniff(
         }
         fmu.step(h)?;
         let v = fmu.get(&names)?;
+        transdiaphragmatic = transdiaphragmatic.max((v[3] - v[4]) / CMH2O);
         if v[0] > peak[0] {
             peak = v;
         }
@@ -519,6 +532,7 @@ pub fn sniff(
     Ok(Sniff {
         inspired: peak[0] - start[0],
         hemidiaphragm_motion: [100.0 * (peak[1] - start[1]), 100.0 * (peak[2] - start[2])],
+        transdiaphragmatic,
     })
 }
 
@@ -1136,6 +1150,17 @@ pub fn physiology(lod: u32, law: impl Into<Laws>) -> Result<Physiology> {
             );
         }
         Err(e) => failed.push(("sniff, paralysed left hemidiaphragm".into(), e.to_string())),
+    }
+    match sniff(Posture::Standing, lod, law, 1.0) {
+        Ok(q) => fig(
+            "largest transdiaphragmatic pressure of a sniff from FRC, standing".into(),
+            q.transdiaphragmatic,
+            "cmH2O",
+            SNIFF_TRANSDIAPHRAGMATIC,
+            "Wanke et al. 1990",
+            FMU,
+        ),
+        Err(e) => failed.push(("sniff".into(), e.to_string())),
     }
     Ok(Physiology {
         level_of_detail: lod,
