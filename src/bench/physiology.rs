@@ -92,9 +92,11 @@ pub const REGIONAL_GRADIENT: (f64, f64) = (0.0, f64::INFINITY);
 /// The rotations of the right ribs 3 and 7 from FRC to TLC, pump-handle (about the
 /// transverse axis) and bucket-handle (about the antero-posterior axis) [deg]: 11 and 13 for
 /// rib 3, 7 and 10 for rib 7 (Wilson, Rehder, Krayer, Hoffman, Whitney & Rodarte 1987, J Appl
-/// Physiol 62:1872, CT of the ribs at FRC and TLC; means, as the project's physiology
-/// reference gives them). The full inspiratory activation adds less than the inspiratory
-/// capacity, so each rotation is bounded above by its mean at TLC.
+/// Physiol 62:1872: CT of two relaxed supine men at FRC and at TLC held with the glottis
+/// closed; means without a spread, as the project's physiology reference gives them). A weak
+/// bound, two subjects lying down against the bench's standing subject: the full inspiratory
+/// activation adds less than the inspiratory capacity, so each rotation is bounded above by
+/// its mean at TLC, and below by 0 (an inspiratory turn).
 pub const RIB_ROTATION_TO_TLC: [(u32, f64, f64); 2] = [(3, 11.0, 13.0), (7, 7.0, 10.0)];
 
 /// Volume a full inspiratory effort with the airway open adds to FRC, default subject [L]:
@@ -103,9 +105,10 @@ pub const RIB_ROTATION_TO_TLC: [(u32, f64, f64); 2] = [(3, 11.0, 13.0), (7, 7.0,
 pub const INSPIRATORY_CAPACITY: (f64, f64) = (2.9, 4.3);
 
 /// The transdiaphragmatic pressure of a maximal sniff [cmH2O], lower bound: in six healthy
-/// adults it fell linearly with lung volume from 163 (SD 18) at RV to 68 (SD 15) at 95 % of
-/// TLC (Wanke, Schenz, Zwick, Popp, Ritschka & Flicker 1990, Thorax 45:352); a sniff from FRC
-/// starts below 95 % of TLC, so a healthy one exceeds 68 - 2 x 15 = 38.
+/// adults it fell with lung volume, linearly from 163 (SD 18) at RV up to 85 % of TLC, and to
+/// 68 (SD 15) at 95 % of TLC, below that line (Wanke, Schenz, Zwick, Popp, Ritschka & Flicker
+/// 1990, Thorax 45:352). It falls as the volume rises, and a sniff from FRC starts below 95 %
+/// of TLC, so a healthy one exceeds 68 - 2 x 15 = 38.
 pub const SNIFF_TRANSDIAPHRAGMATIC: (f64, f64) = (38.0, f64::INFINITY);
 
 /// The paralysed hemidiaphragm's side takes under 40 % of tidal volume (issue 35).
@@ -571,9 +574,10 @@ pub struct FullInspiration {
     pub dome_excursion: f64,
     /// Each right rib's rotation about its rib-neck axis, rest to full inspiration, split
     /// into its pump-handle (about the transverse axis) and bucket-handle (about the
-    /// antero-posterior axis) parts [deg], ribs 1-12 (through the facade): the rotation times
-    /// the axis's transverse and antero-posterior components, as Wilson et al. 1987 split the
-    /// ribs' motion.
+    /// antero-posterior axis) parts [deg], ribs 1-12 (through the facade): the rotation
+    /// (positive inspiratory, the axis's orientation) times the magnitudes of the axis's
+    /// transverse and antero-posterior components, as Wilson et al. 1987 split the ribs'
+    /// motion; an expiratory turn is negative.
     pub rib_rotation: Vec<(f64, f64)>,
 }
 
@@ -763,7 +767,7 @@ pub fn full_inspiration(
         .enumerate()
         .map(|(k, rib)| {
             let turn = (theta1[layout.theta + k] - theta0[layout.theta + k]).to_degrees();
-            ((turn * rib.axis.z).abs(), (turn * rib.axis.x).abs())
+            (turn * rib.axis.z.abs(), turn * rib.axis.x.abs())
         })
         .collect();
     Ok(FullInspiration {

@@ -772,6 +772,11 @@ impl Structure {
         if self.params.abdominal_tone != 0.0 {
             eat(self.params.abdominal_tone);
         }
+        // So does the posture's expiratory rib-cage drive; a model without it keeps its
+        // fingerprint too.
+        if self.params.expiration_with_abdominals {
+            eat(1.0);
+        }
         h
     }
 

@@ -7,7 +7,9 @@
 //! maximal reachable activation (the thesis's A_ribs, A_diaphragm, Table 4.3); the element
 //! then contracts as r = 1 - beta_max g a (see `dynamics`). The applied activation of a
 //! group is clamp(input + drive + tone, 0, 1), the tone the abdominal wall's standing tone
-//! under the hill law (`Params::abdominal_tone`).
+//! under the hill law (`Params::abdominal_tone`). Supine under the hill law the internal
+//! intercostals take the abdominal family's wave instead of the rib family's, since quiet
+//! expiration is passive there (`Params::expiration_with_abdominals`).
 //!
 //! Real breathing is not a sine: quiet inspiration takes about 0.4 of the breath (Tobin et
 //! al. 1983, "Breathing patterns. 1. Normal subjects", Chest 84:202; see docs/drive.md). The
@@ -43,8 +45,10 @@ pub struct Wave {
 }
 
 /// The drive of the three muscle families: ribs (external intercostals and scalenes; the
-/// internal intercostals are driven in antiphase, thesis 2.4.1), diaphragm, abdominals (the
-/// four abdominal wall muscles, in antiphase with inspiration: they help expiration).
+/// internal intercostals are driven in antiphase, thesis 2.4.1, except supine under the hill
+/// law, where they take the abdominals' wave, [`crate::dynamics::expiration_with_abdominals`]),
+/// diaphragm, abdominals (the four abdominal wall muscles, in antiphase with inspiration:
+/// they help expiration).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Drive {
     /// Whether the drive runs (FMI `drive.enabled`); off, the muscles follow the activation
@@ -134,7 +138,8 @@ pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 /// follow the abdominal family instead ([`crate::dynamics::expiration_with_abdominals`]).
 /// Measured (`torso bench physiology --muscle-law hill`): the upright rib-cage share of
 /// quiet breathing, 61.9 % with this expiratory wave, rests on it (22.7 % without it, the
-/// internal intercostals silent standing; measured with a scratch drive that zeroed them).
+/// internal intercostals silent standing, the drive applied by hand: `cargo run --release
+/// --example diaphragm_pressure`).
 pub const HILL_QUIET_RIBS: f64 = 0.058;
 
 /// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:
