@@ -11,7 +11,8 @@
 //!    diaphragm alone at 1, airway open: how far the right costal margin (the diaphragm's
 //!    insertions) rises, at the back and elsewhere, and how far the dome's apex descends;
 //! 4. the hill law's quiet breathing standing with the internal intercostals silent (the
-//!    drive applied by hand, every group but them): the rib-cage share it rests on.
+//!    drive applied by hand, every group but them): the rib-cage share it rests on;
+//! 5. where the dome's posterior insertions (the crura's) stand against the lumbar joints.
 //!
 //! `cargo run --release --example diaphragm_pressure`
 
@@ -188,4 +189,32 @@ fn main() {
             100.0 * rc / (rc + ab)
         );
     }
+
+    println!("5. the dome's insertions within 3 cm of the midline at the back, standing");
+    let t = torso(MuscleLaw::Thesis, Posture::Standing, |_| {});
+    let a = &t.compiled().anatomy;
+    let ab = &a.abdomen;
+    let rim: Vec<Point3<f64>> = (0..ab.len())
+        .filter(|&v| ab.roles[v] == VertexRole::Insertion)
+        .map(|v| a.anchors[ab.anchor[v] as usize].rest)
+        .collect();
+    let back = rim.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+    let crura: Vec<f64> = rim
+        .iter()
+        .filter(|p| p.z.abs() < 0.03 && p.x < back + 0.05)
+        .map(|p| p.y)
+        .collect();
+    println!(
+        "   heights {:.3}-{:.3} m",
+        crura.iter().copied().fold(f64::INFINITY, f64::min),
+        crura.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    );
+    let joints: Vec<String> = a
+        .spine
+        .joints
+        .iter()
+        .filter(|(n, _)| ["thoracic12", "lumbar1", "lumbar2", "lumbar3"].contains(&n.as_ref()))
+        .map(|(n, p)| format!("{n} {:.3}", p.y))
+        .collect();
+    println!("   spine joints: {}", joints.join(", "));
 }
