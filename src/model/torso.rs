@@ -251,7 +251,28 @@ fn tones(params: &crate::dynamics::Params) -> [f64; MuscleGroup::COUNT] {
     tone
 }
 
-impl Applied<'_> {
+impl<'a> Applied<'a> {
+    /// What acts on a model compiled with `params` under `config` (its drive and side gains),
+    /// with these inputs, airway-opening pressure and occlusion: the tone and the posture's
+    /// expiratory drive are the constants'.
+    fn new(
+        config: &'a Config,
+        params: &crate::dynamics::Params,
+        inputs: [f64; MuscleGroup::COUNT],
+        airway_opening: f64,
+        occlusion: Option<f64>,
+    ) -> Applied<'a> {
+        Applied {
+            inputs,
+            airway_opening,
+            occlusion,
+            drive: &config.drive,
+            gains: side_gains(config),
+            tone: tones(params),
+            expiration_with_abdominals: params.expiration_with_abdominals,
+        }
+    }
+
     /// Each group's applied activation at time `t`: clamp(input + drive + tone, 0, 1), the
     /// internal intercostals' drive the abdominal family's wave where the posture couples
     /// them ([`crate::dynamics::Params::expiration_with_abdominals`]).
@@ -460,15 +481,13 @@ impl Torso {
 
     /// What is applied now: the current inputs, drive, gains, tone and airway.
     fn applying(&self) -> Applied<'_> {
-        Applied {
-            inputs: self.inputs,
-            airway_opening: self.airway_opening,
-            occlusion: self.occlusion,
-            drive: &self.config.drive,
-            gains: side_gains(&self.config),
-            tone: self.tone(),
-            expiration_with_abdominals: self.compiled.model.params.expiration_with_abdominals,
-        }
+        Applied::new(
+            &self.config,
+            &self.compiled.model.params,
+            self.inputs,
+            self.airway_opening,
+            self.occlusion,
+        )
     }
 
     /// Puts the model at the static equilibrium of the activations applied now (inputs plus
@@ -639,12 +658,6 @@ impl Torso {
         self.applying().groups(self.time)[group.index()]
     }
 
-    /// Each group's tonic activation in this model (the abdominal wall's tone,
-    /// [`crate::dynamics::Params::abdominal_tone`]).
-    fn tone(&self) -> [f64; MuscleGroup::COUNT] {
-        tones(&self.compiled.model.params)
-    }
-
     /// Replaces the drive (validated first).
     pub fn set_drive(&mut self, drive: Drive) -> Result<()> {
         drive.validate()?;
@@ -678,15 +691,13 @@ impl Torso {
             model: &compiled.model,
             weights: &compiled.error_weights,
             data,
-            applied: Applied {
-                inputs: *inputs,
-                airway_opening: *airway_opening,
-                occlusion: *occlusion,
-                drive: &config.drive,
-                gains: side_gains(config),
-                tone: tones(&compiled.model.params),
-                expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
-            },
+            applied: Applied::new(
+                config,
+                &compiled.model.params,
+                *inputs,
+                *airway_opening,
+                *occlusion,
+            ),
             jacobian: jacobian.as_deref_mut(),
         };
         (system, y, time, integrator)
@@ -788,15 +799,13 @@ impl Torso {
             model: &compiled.model,
             data,
             statics,
-            applied: Applied {
-                inputs: *inputs,
-                airway_opening: *airway_opening,
-                occlusion: *occlusion,
-                drive: &config.drive,
-                gains: side_gains(config),
-                tone: tones(&compiled.model.params),
-                expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
-            },
+            applied: Applied::new(
+                config,
+                &compiled.model.params,
+                *inputs,
+                *airway_opening,
+                *occlusion,
+            ),
             tolerance,
             failure,
         };
@@ -807,15 +816,13 @@ impl Torso {
         };
         q.fresh = false;
         // the positions at the new time balance the activations the step ended with
-        q.held = Applied {
-            inputs: self.inputs,
-            airway_opening: self.airway_opening,
-            occlusion: self.occlusion,
-            drive: &self.config.drive,
-            gains: side_gains(&self.config),
-            tone: tones(&self.compiled.model.params),
-            expiration_with_abdominals: self.compiled.model.params.expiration_with_abdominals,
-        }
+        q.held = Applied::new(
+            &self.config,
+            &self.compiled.model.params,
+            self.inputs,
+            self.airway_opening,
+            self.occlusion,
+        )
         .activations(self.time);
         let failure = q.failure.take();
         self.observation = None;
@@ -1089,15 +1096,13 @@ impl Torso {
             model: &compiled.model,
             weights: &compiled.error_weights,
             data,
-            applied: Applied {
-                inputs: *inputs,
-                airway_opening: *airway_opening,
-                occlusion: *occlusion,
-                drive: &config.drive,
-                gains: side_gains(config),
-                tone: tones(&compiled.model.params),
-                expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
-            },
+            applied: Applied::new(
+                config,
+                &compiled.model.params,
+                *inputs,
+                *airway_opening,
+                *occlusion,
+            ),
             jacobian: None,
         };
         system.rhs(t, y, dydt);

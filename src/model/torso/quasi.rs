@@ -281,15 +281,13 @@ impl Torso {
                 model: &compiled.model,
                 data,
                 statics: &mut q.statics,
-                applied: Applied {
-                    inputs: *inputs,
-                    airway_opening: *airway_opening,
-                    occlusion: None,
-                    drive: &config.drive,
-                    gains: super::side_gains(config),
-                    tone: super::tones(&compiled.model.params),
-                    expiration_with_abdominals: compiled.model.params.expiration_with_abdominals,
-                },
+                applied: Applied::new(
+                    config,
+                    &compiled.model.params,
+                    *inputs,
+                    *airway_opening,
+                    None,
+                ),
                 tolerance,
                 failure: &mut failure,
             };
