@@ -8,16 +8,21 @@
 //!   eq. 3: [`PASSIVE_SHAPE`], [`PASSIVE_STRAIN`]). Below the slack length it is slightly
 //!   negative, and the element's tension, the softplus of its force
 //!   ([`super::forces::tension`]), makes it slack there.
-//! - **Active**: a F_max (f_L(x) + k_A (x - 1)) with x = l / l_opt the length over the optimal
-//!   length, f_L(x) = exp(-(x - 1)^2 / gamma) (Thelen 2003, eq. 4: [`ACTIVE_WIDTH`]) and k_A
-//!   the activation-proportional stiffness [`active_stiffness`]. f_L's slope is zero at the
+//! - **Active**: a F_max (f_L(x) + k_A s(x - 1)) with x = l / l_opt the length over the optimal
+//!   length, f_L(x) = exp(-(x - 1)^2 / gamma) (Thelen 2003, eq. 4: [`ACTIVE_WIDTH`]), k_A the
+//!   activation-proportional stiffness [`active_stiffness`] and s the stretch beyond the
+//!   optimal length (zero at or below it, [`STRETCH_BLEND`]). f_L's slope is zero at the
 //!   optimal length and negative beyond it, so an activation alone would soften the chest
-//!   wall's equilibrium until it lost definiteness; k_A is the smallest stiffness that keeps
-//!   the active force's slope non-negative at every length. Skeletal muscle does resist a
-//!   stretch while active, through its cross-bridges (the short-range stiffness, Cui et al.
-//!   2008, J Biomech 41:1945), but stiffly and over a short range from the length at which the
-//!   activation rose: a history a quasi-static model, whose positions are not states, does
-//!   not carry. k_A stands in for it over the whole range, softly.
+//!   wall's equilibrium until it lost definiteness there; k_A is the smallest stiffness that
+//!   keeps the active force's slope non-negative at every length. Below the optimal length,
+//!   on the ascending limb, f_L's own slope is positive and the force is Thelen's curve
+//!   itself: a k_A term there would only take force away (a diaphragm shortened to 0.7 of its
+//!   optimal length would keep 0.44 of F_max where the curve gives 0.82). Skeletal muscle
+//!   does resist a stretch while active, through its cross-bridges (the short-range
+//!   stiffness, Cui et al. 2008, J Biomech 41:1945), but stiffly and over a short range from
+//!   the length at which the activation rose: a history a quasi-static model, whose
+//!   positions are not states, does not carry. k_A stands in for it beyond the optimal
+//!   length, softly.
 //! - **Not modelled**: the force-velocity relation (it would make the positions states
 //!   again, against the quasi-static formulation) and activation dynamics (the activations
 //!   are inputs).
@@ -132,8 +137,16 @@ pub fn hill_force_factor(group: crate::anatomy::MuscleGroup) -> f64 {
     }
 }
 
+/// Stretch beyond the optimal length, as a fraction of it, over which k_A's term blends in:
+/// s(d) = d^2 / (2 w) up to w, d - w / 2 beyond, so the active force and its slope are
+/// continuous at the optimal length, as the equilibrium's Newton corrections assume (without
+/// the blend the slope would jump from 0 to k_A there), and the slope stays positive inside
+/// the blend (k_A / w exceeds f_L's curvature 2 / gamma).
+/// Numerical: a smoothing width, not a property of the tissue; 0.05 of the optimal length.
+pub const STRETCH_BLEND: f64 = 0.05;
+
 /// The activation-proportional stiffness k_A = sqrt(2 / gamma) exp(-1/2), the steepest
-/// descent of f_L (at x = 1 + sqrt(gamma / 2)), so that f_L(x) + k_A (x - 1) never falls with
+/// descent of f_L (at x = 1 + sqrt(gamma / 2)), so that f_L(x) + k_A s(x - 1) never falls with
 /// length: 1.279 for gamma = [`ACTIVE_WIDTH`].
 pub fn active_stiffness() -> f64 {
     (2.0 / ACTIVE_WIDTH).sqrt() * (-0.5f64).exp()
@@ -151,13 +164,21 @@ pub fn passive(e: f64) -> (f64, f64) {
     )
 }
 
-/// Active force over a F_max at normalised length `x` = l / l_opt: f_L(x) + k_A (x - 1), and
-/// its derivative in x.
+/// Active force over a F_max at normalised length `x` = l / l_opt: f_L(x) + k_A s(x - 1), s
+/// the stretch beyond the optimal length blended over [`STRETCH_BLEND`] (Thelen's f_L alone at
+/// or below the optimal length), and its derivative in x.
 #[inline]
 pub fn active(x: f64, k_a: f64) -> (f64, f64) {
     let d = x - 1.0;
     let f = (-d * d / ACTIVE_WIDTH).exp();
-    (f + k_a * d, -2.0 * d / ACTIVE_WIDTH * f + k_a)
+    let (h, dh) = if d <= 0.0 {
+        (0.0, 0.0)
+    } else if d < STRETCH_BLEND {
+        (0.5 * d * d / STRETCH_BLEND, d / STRETCH_BLEND)
+    } else {
+        (d - 0.5 * STRETCH_BLEND, 1.0)
+    };
+    (f + k_a * h, -2.0 * d / ACTIVE_WIDTH * f + k_a * dh)
 }
 
 /// The force [N] of a Hill element of largest isometric force `max_force`, optimal length
@@ -258,13 +279,36 @@ mod tests {
     }
 
     #[test]
+    fn below_the_optimal_length_the_active_force_is_thelens_curve() {
+        let k = active_stiffness();
+        for x in [0.4, 0.7, 0.917, 1.0] {
+            let f_l = (-(x - 1.0) * (x - 1.0) / ACTIVE_WIDTH).exp();
+            assert_eq!(active(x, k).0, f_l, "x {x}");
+        }
+        // the force and its slope are continuous where the stretch term starts and where its
+        // blend ends
+        for x0 in [1.0, 1.0 + STRETCH_BLEND] {
+            let (lo, hi) = (active(x0 - 1e-9, k), active(x0 + 1e-9, k));
+            assert!((lo.0 - hi.0).abs() < 1e-8, "force at {x0}");
+            assert!(
+                (lo.1 - hi.1).abs() < 1e-6,
+                "slope at {x0}: {} {}",
+                lo.1,
+                hi.1
+            );
+        }
+        // beyond the optimal length the stretch term holds the force up
+        assert!(active(1.3, k).0 > 1.0);
+    }
+
+    #[test]
     fn the_curves_have_their_cited_values() {
         // Thelen 2003: F_max at the strain e0, zero at slack; f_L(1) = 1.
         assert!((passive(PASSIVE_STRAIN).0 - 1.0).abs() < 1e-12);
         assert_eq!(passive(0.0).0, 0.0);
         assert!((active(1.0, 0.0).0 - 1.0).abs() < 1e-15);
         // derivatives against central differences
-        for x in [0.5, 0.9, 1.0, 1.2, 1.6] {
+        for x in [0.5, 0.9, 1.02, 1.2, 1.6] {
             let h = 1e-6;
             let k = active_stiffness();
             let fd = (active(x + h, k).0 - active(x - h, k).0) / (2.0 * h);

@@ -136,7 +136,8 @@ impl Default for Elements {
 /// a passive-and-active element ([`super::muscle`]): its optimal and slack lengths, its
 /// largest force and regional gain, no activation-shortened rest length, and, for the damping
 /// and the mass scaling that read `stiffness`, its tangent stiffness at rest under full
-/// activation (the passive slope plus k_A F_max / l_opt), damped like every element.
+/// activation as the law had it before k_A was confined to stretch beyond the optimal length
+/// (the passive slope plus (f_L' + k_A) F_max / l_opt), damped like every element.
 fn hill_element(
     elements: &mut Elements,
     m: &crate::anatomy::MuscleElement,
@@ -144,7 +145,7 @@ fn hill_element(
     posture: crate::anatomy::Posture,
     rayleigh: f64,
 ) {
-    use super::muscle::{RestLengths, active_stiffness, stiffness};
+    use super::muscle::{ACTIVE_WIDTH, RestLengths, active_stiffness, stiffness};
     use crate::anatomy::{MuscleGroup, Posture};
     let lengths = if m.group == MuscleGroup::Diaphragm {
         let ratio =
@@ -154,14 +155,12 @@ fn hill_element(
         RestLengths::at_rest(l0)
     };
     let f = m.max_force * super::muscle::hill_force_factor(m.group);
-    let k = stiffness(
-        l0,
-        lengths.optimal,
-        lengths.slack,
-        f,
-        1.0,
-        active_stiffness(),
-    );
+    // the passive slope, plus f_L's slope and k_A at full activation: the scale of the stiffness
+    // an active element can have, whichever side of its optimal length it stands
+    let x = l0 / lengths.optimal;
+    let f_l_slope = -2.0 * (x - 1.0) / ACTIVE_WIDTH * (-(x - 1.0).powi(2) / ACTIVE_WIDTH).exp();
+    let k = stiffness(l0, lengths.optimal, lengths.slack, f, 0.0, 0.0)
+        + f * (f_l_slope + active_stiffness()) / lengths.optimal;
     let e = elements.len() - 1;
     elements.max_force[e] = f;
     elements.optimal_length[e] = lengths.optimal;
