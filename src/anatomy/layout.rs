@@ -55,6 +55,40 @@ pub struct Joint {
 /// advantage depends partly on the fibres' orientation, with no angle in its abstract).
 pub const OBLIQUITY: f64 = 0.2;
 
+/// The external intercostals' inspiratory drive by interspace (the interspace below rib k is
+/// the k-th), relative to the third: (interspace, relative drive) points, linear between them,
+/// 1 above the first point and 0 below the last.
+/// Source: De Troyer, Gorman & Gandevia 2003, J Physiol 546:943 (6 healthy adults, quiet
+/// breathing, ultrasound-guided EMG): the dorsal third and fifth interspaces were active with
+/// every breath in every subject, at peak discharge frequencies of 11.9 (SE 0.3) and 6.7 (0.4)
+/// Hz, and the dorsal seventh "almost invariably silent"; ours 1 at the third, 6.7 / 11.9 =
+/// 0.563 at the fifth (the discharge frequency taken as the drive), 0 at the seventh and
+/// below. Their ventral third interspace fired at 6.0 (0.5) Hz, about half the dorsal one, as
+/// the dorsal-to-ventral gain (1 to 0.4) has it. Measured in quiet breathing only; the
+/// gradient is applied to every activation, maximal ones included, for want of a measurement
+/// in deep breaths (the parasternals keep their rostrocaudal gradient in voluntary breaths
+/// 20 % stronger than quiet ones: Respir Physiol Neurobiol 2011, 175:20,
+/// doi:10.1016/j.resp.2010.08.023, authors not on the page read).
+pub const EXTERNAL_INTERCOSTAL_DRIVE_BY_SPACE: [(f64, f64); 3] =
+    [(3.0, 1.0), (5.0, 0.563), (7.0, 0.0)];
+
+/// The external intercostals' relative inspiratory drive in interspace `space` (1-11), from
+/// [`EXTERNAL_INTERCOSTAL_DRIVE_BY_SPACE`].
+pub fn external_intercostal_drive(space: usize) -> f64 {
+    let x = space as f64;
+    let points = EXTERNAL_INTERCOSTAL_DRIVE_BY_SPACE;
+    if x <= points[0].0 {
+        return points[0].1;
+    }
+    for w in points.windows(2) {
+        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+        if x <= x1 {
+            return y0 + (y1 - y0) * (x - x0) / (x1 - x0);
+        }
+    }
+    points[points.len() - 1].1
+}
+
 /// Maximal active tension of an intercostal layer per metre of interspace [N/m]. 29 N/cm^2
 /// over a 3 mm layer (De Troyer 1998) gives 870 N/m; the 1200 N/m in use (1.4x that) is the
 /// value of the model's first calibration, with which the drive amplitudes of
@@ -176,7 +210,9 @@ pub fn muscles(
 /// External and internal intercostals between ribs k and k+1 (k = 1..11) on both sides.
 /// External fibres run from the upper rib down and forward (lower attachment more ventral),
 /// internal fibres down and backward; 250 elements per layer at full detail (thesis 2.2.1).
-/// Gains: external 1 at the head fading to 0.4 at the ventral end, internal mirrored.
+/// Gains: external 1 at the head fading to 0.4 at the ventral end, times the interspace's
+/// rostrocaudal drive ([`external_intercostal_drive`]: none from the seventh interspace down);
+/// internal mirrored, without a rostrocaudal gradient.
 fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<MuscleElement>) {
     for group in [
         MuscleGroup::ExternalIntercostals,
@@ -215,7 +251,7 @@ fn intercostals(ribs: &[Rib], f: f64, anchors: &mut Vec<Anchor>, out: &mut Vec<M
                         (on_rib(upper, su, anchors), on_rib(lower, sl, anchors))
                     };
                     let gain = if external {
-                        1.0 - 0.6 * s
+                        (1.0 - 0.6 * s) * external_intercostal_drive(level)
                     } else {
                         0.4 + 0.6 * s
                     };
@@ -780,4 +816,24 @@ fn abdomen_mirror(abdomen: &Abdomen) -> std::collections::HashMap<u32, u32> {
                 .map(|&m| (abdomen.anchor[v], abdomen.anchor[m]))
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_external_intercostal_drive_passes_through_its_cited_points() {
+        // De Troyer, Gorman & Gandevia 2003: full at the third, 6.7 / 11.9 Hz at the fifth,
+        // silent at the seventh
+        assert_eq!(external_intercostal_drive(1), 1.0);
+        assert_eq!(external_intercostal_drive(3), 1.0);
+        assert!((external_intercostal_drive(5) - 6.7 / 11.9).abs() < 1e-3);
+        assert_eq!(external_intercostal_drive(7), 0.0);
+        assert_eq!(external_intercostal_drive(11), 0.0);
+        // linear between them, falling caudally
+        let d: Vec<f64> = (1..=11).map(external_intercostal_drive).collect();
+        assert!(d.windows(2).all(|w| w[1] <= w[0]), "{d:?}");
+        assert!((d[3] - 0.5 * (1.0 + 0.563)).abs() < 1e-12);
+    }
 }

@@ -18,8 +18,8 @@ mod subject;
 
 pub use abdomen::{Abdomen, VertexRole, azimuth};
 pub use layout::{
-    ABDOMINAL_FORCES, CENTRAL_TENDON, DIAPHRAGM_FORCE, INTERCOSTAL_TENSION, Joint, MuscleElement,
-    SCM_FORCE_PER_SIDE,
+    ABDOMINAL_FORCES, CENTRAL_TENDON, DIAPHRAGM_FORCE, EXTERNAL_INTERCOSTAL_DRIVE_BY_SPACE,
+    INTERCOSTAL_TENSION, Joint, MuscleElement, SCM_FORCE_PER_SIDE, external_intercostal_drive,
 };
 pub use muscles::MuscleGroup;
 pub use prepared::{CavityFit, SubjectMesh};

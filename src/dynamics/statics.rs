@@ -103,7 +103,8 @@ const BISECTIONS: u32 = 6;
 /// to zero like sqrt(s* - s); the continuation's path starts at s = 0 and, where a fold
 /// stops it (s* >= 1/16 of the way), ends within 1/1024 of it after the halvings, so its
 /// stiffness there is at most sqrt((1/1024) / (1/16)) = 0.125 of the start's to leading
-/// order; twice that leaves room for the higher orders. Measured: soak scene 35's fold (below)
+/// order; twice that leaves room for the higher orders. Measured (before the external
+/// intercostals' rostrocaudal drive silenced the lowest interspaces): soak scene 35's fold
 /// keeps 4 % (-482 to -19.5 N/m); a path that stopped without softening, scene 5 before the
 /// damped steps let it run, kept 90 % (`torso bench soak --scenes 40 --seconds 20 --solver
 /// quasi-static`).
