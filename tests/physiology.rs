@@ -511,58 +511,74 @@ fn passive_motion_dissipates_energy_and_returns_to_rest() {
     assert!(last < 1e-3 * start, "energy left {last} of {start}");
 }
 
+/// The lung's, the thorax's and the chest wall's displaced tidal volumes of `drive` in
+/// `posture` over the two breaths after a settling one [L].
+fn displaced_volumes(posture: Posture, drive: Drive) -> (f64, f64, f64) {
+    let mut config = Config {
+        drive,
+        ..Config::default()
+    };
+    config.subject.posture = posture;
+    let mut torso = Torso::new(config).unwrap();
+    let period = 1.0 / drive.frequency;
+    let frames = run(&mut torso, 3.0 * period, 28.0).unwrap();
+    let last: Vec<_> = frames.iter().filter(|f| f.time >= period).collect();
+    let swing = |f: &dyn Fn(&&breathing_torso::model::run::Frame) -> f64| {
+        let v: Vec<f64> = last.iter().map(f).collect();
+        v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+    };
+    let lung = swing(&|f| f.lung);
+    let thorax = swing(&|f| f.thorax);
+    let wall = swing(&|f| f.rib_cage_displaced + f.abdomen_displaced);
+    println!(
+        "{posture:?} {:.2} Hz: lung {lung:.4} L, thorax {thorax:.4} L, chest wall {wall:.4} L ({:+.2} %)",
+        drive.frequency,
+        100.0 * (lung / wall - 1.0)
+    );
+    (lung, thorax, wall)
+}
+
 /// Lungs follow the chest wall: the heart, great vessels and mediastinum keep their volume
 /// over a breath, so the lung's tidal volume is the volume the chest wall displaces, as
 /// optoelectronic plethysmography measures it against spirometry (Aliverti et al. 2001, Am J
 /// Respir Crit Care Med 164:1016: -4.2 +- 6.2 % quiet, -3.0 +- 6.1 % deep, supine). The
 /// model's chest-wall displaced volume (rib-cage plus abdominal compartments) differs from the
-/// lung's change only by the abdominal contents' compression, so within 2 % in every posture
-/// for quiet and forced breaths; the lung swing equals the thorax's. Since the external
-/// intercostals' rostrocaudal drive (`anatomy::external_intercostal_drive`) the quiet breath
-/// misses by a little: standing the chest wall displaces 0.5247 L against the lung's 0.5358 L
-/// (+2.12 %), supine 0.5955 against 0.6078 L (+2.05 %); forced -1.51 / -1.15 %. The gap is
-/// about the contents' compression under the 264 Pa abdominal pressure swing at the
-/// calibrated bulk modulus (264 Pa x 13 L / 3e5 Pa = 11 mL), which is 15-46 times softer than
-/// the cited gut gas gives (docs/constants.md, `bulk_modulus`).
+/// lung's change only by the abdominal contents' compression, so within 2 %; the lung swing
+/// equals the thorax's. Forced breaths here, standing and supine (-1.51 / -1.15 %); the quiet
+/// ones below.
 #[test]
-#[ignore = "issue 35: quiet breathing's lung tidal volume exceeds the chest wall's displaced volume by 2.12 % standing (0.5358 against 0.5247 L) and 2.05 % supine, against 2 %"]
 fn lung_tidal_volume_is_the_chest_wall_displaced_volume() {
-    let mut misses = Vec::new();
     for posture in [Posture::Standing, Posture::Supine] {
         for drive in [Drive::quiet(), Drive::forced()] {
-            let mut config = Config {
-                drive,
-                ..Config::default()
-            };
-            config.subject.posture = posture;
-            let mut torso = Torso::new(config).unwrap();
-            let period = 1.0 / drive.frequency;
-            let frames = run(&mut torso, 3.0 * period, 28.0).unwrap();
-            let last: Vec<_> = frames.iter().filter(|f| f.time >= period).collect();
-            let swing = |f: &dyn Fn(&&breathing_torso::model::run::Frame) -> f64| {
-                let v: Vec<f64> = last.iter().map(f).collect();
-                v.iter().cloned().fold(f64::MIN, f64::max)
-                    - v.iter().cloned().fold(f64::MAX, f64::min)
-            };
-            let lung = swing(&|f| f.lung);
-            let thorax = swing(&|f| f.thorax);
-            let wall = swing(&|f| f.rib_cage_displaced + f.abdomen_displaced);
-            let diff = lung / wall - 1.0;
-            println!(
-                "{posture:?} {:.2} Hz: lung {lung:.4} L, thorax {thorax:.4} L, chest wall {wall:.4} L ({:+.2} %)",
-                drive.frequency,
-                100.0 * diff
-            );
+            let (lung, thorax, wall) = displaced_volumes(posture, drive);
+            // the lungs follow the thorax exactly, in every breath
             assert!((lung - thorax).abs() < 1e-9 * thorax.max(1.0));
-            if diff.abs() >= 0.02 {
-                misses.push(format!(
-                    "{posture:?} {:.2} Hz: lung {lung:.4} L against chest wall {wall:.4} L",
-                    drive.frequency
-                ));
+            if drive == Drive::forced() {
+                assert!(
+                    (lung / wall - 1.0).abs() < 0.02,
+                    "{posture:?}: lung {lung} L against chest wall {wall} L"
+                );
             }
         }
     }
-    assert!(misses.is_empty(), "{misses:?}");
+}
+
+/// The same 2 % for quiet breaths. Since the external intercostals' rostrocaudal drive
+/// (`anatomy::external_intercostal_drive`) it misses by a little: standing the chest wall
+/// displaces 0.5247 L against the lung's 0.5358 L (+2.12 %), supine 0.5955 against 0.6078 L
+/// (+2.07 %). The gap is about the contents' compression under the 264 Pa abdominal pressure
+/// swing at the calibrated bulk modulus (264 Pa x 13 L / 3e5 Pa = 11 mL), which is 15-46 times
+/// softer than the cited gut gas gives (docs/constants.md, `bulk_modulus`).
+#[test]
+#[ignore = "issue 35: quiet breathing's lung tidal volume exceeds the chest wall's displaced volume by 2.12 % standing (0.5358 against 0.5247 L) and 2.07 % supine, against 2 %"]
+fn quiet_lung_tidal_volume_is_the_chest_wall_displaced_volume() {
+    for posture in [Posture::Standing, Posture::Supine] {
+        let (lung, _, wall) = displaced_volumes(posture, Drive::quiet());
+        assert!(
+            (lung / wall - 1.0).abs() < 0.02,
+            "{posture:?}: lung {lung} L against chest wall {wall} L"
+        );
+    }
 }
 
 /// The quiet drive gives every subject a quiet breath of about 7 mL/kg ([`QUIET_VT_PER_KG`]):

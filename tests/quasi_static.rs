@@ -301,15 +301,17 @@ fn an_input_set_between_steps_acts_from_the_next_step() {
 }
 
 /// A relaxed default man lying supine whose airway opening is sucked down to -50 cmH2O (the
-/// end of its accepted range) over 1 s: deflated far below his residual volume, the chest
-/// wall's equilibrium loses its stability (at 0.725 s at level of detail 0). The quasi-static
+/// end of its accepted range) over 1 s: deflated towards his residual volume (1.647 L at the
+/// last good step, 0.714 s, against the 1.490 L at which the pleural law's lower barrier
+/// stands), the chest wall's equilibrium loses its stability (at 0.725 s at level of detail
+/// 0, about -36 cmH2O at the airway). The quasi-static
 /// mode must stop there with an error that says the chest wall buckles or its equilibrium
 /// path folds (and so would snap through), names subject, posture and inputs, and keep the
 /// last good state, not pass over to another branch. (Soak scene 35 of `torso bench soak
 /// --scenes 40 --seconds 20 --solver quasi-static`, a rib drive at 0.99 of its range, buckled
 /// in its first second until the external intercostals' rostrocaudal drive,
-/// `anatomy::external_intercostal_drive`, silenced the lowest interspaces; no scene of 200
-/// found a fold since.)
+/// `anatomy::external_intercostal_drive`, silenced the lowest interspaces; no scene of `torso
+/// bench soak --scenes 200 --seconds 3 --solver quasi-static` folds since.)
 #[test]
 fn a_buckling_chest_wall_is_a_clear_error_and_keeps_the_last_good_state() {
     use breathing_torso::Error;
@@ -326,6 +328,8 @@ fn a_buckling_chest_wall_is_a_clear_error_and_keeps_the_last_good_state() {
     let mut t = Torso::new(c).unwrap();
     let mut failure = None;
     let mut last_good = (0.0, lung(&mut t));
+    let rv =
+        last_good.1 * breathing_torso::dynamics::pleural::capacity_ratios(&t.config().subject).0;
     for k in 1..=112 {
         let time = k as f64 * FRAME;
         t.set_airway_opening(-50.0 * CMH2O * time.min(1.0)).unwrap();
@@ -341,7 +345,10 @@ fn a_buckling_chest_wall_is_a_clear_error_and_keeps_the_last_good_state() {
     let Error::Numerical { time, reason } = &e else {
         panic!("expected a numerical error, got {e}");
     };
-    println!("{e}");
+    println!(
+        "{e}\nlast good: {:.4} s, lung {:.4} L (residual volume {rv:.4} L)",
+        last_good.0, last_good.1
+    );
     // a loss of definiteness at an equilibrium, or a path whose stiffness along it falls
     // to zero (a fold), whichever the failed solve met first
     assert!(

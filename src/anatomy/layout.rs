@@ -62,8 +62,9 @@ pub const OBLIQUITY: f64 = 0.2;
 /// breathing, ultrasound-guided EMG): the dorsal third and fifth interspaces were active with
 /// every breath in every subject, at peak discharge frequencies of 11.9 (SE 0.3) and 6.7 (0.4)
 /// Hz, and the dorsal seventh "almost invariably silent"; ours 1 at the third, 6.7 / 11.9 =
-/// 0.563 at the fifth (the discharge frequency taken as the drive), 0 at the seventh and
-/// below. Their ventral third interspace fired at 6.0 (0.5) Hz, about half the dorsal one, as
+/// 0.563 at the fifth (the discharge frequency taken as the drive, an assumption: the fifth
+/// interspace's units were also recruited later, and force is not linear in firing rate), 0 at
+/// the seventh and, unrecorded, below it (an extrapolation). Their ventral third interspace fired at 6.0 (0.5) Hz, about half the dorsal one, as
 /// the dorsal-to-ventral gain (1 to 0.4) has it. Measured in quiet breathing only; the
 /// gradient is applied to every activation, maximal ones included, for want of a measurement
 /// in deep breaths (the parasternals keep their rostrocaudal gradient in voluntary breaths

@@ -135,9 +135,12 @@ impl Default for Elements {
 /// Turns the element just pushed for muscle `m` (rest length `l0` at FRC in `posture`) into
 /// a passive-and-active element ([`super::muscle`]): its optimal and slack lengths, its
 /// largest force and regional gain, no activation-shortened rest length, and, for the damping
-/// and the mass scaling that read `stiffness`, its tangent stiffness at rest under full
-/// activation as the law had it before k_A was confined to stretch beyond the optimal length
-/// (the passive slope plus (f_L' + k_A) F_max / l_opt), damped like every element.
+/// and the mass scaling that read `stiffness`, a stiffness scale: the tangent stiffness at
+/// rest under full activation as the law had it before k_A was confined to stretch beyond the
+/// optimal length (the passive slope plus (f_L' + k_A) F_max / l_opt). It is an upper bound on
+/// the present law's slope (for the standing diaphragm at x = 0.917, 1.64 against 0.36
+/// F_max / l_opt in its active part), kept so that the dynamics' numerics did not change with
+/// the law; damped like every element.
 fn hill_element(
     elements: &mut Elements,
     m: &crate::anatomy::MuscleElement,
