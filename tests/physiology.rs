@@ -4,12 +4,13 @@
 //! equilibrium.
 
 use breathing_torso::anatomy::{MuscleGroup, Posture};
-use breathing_torso::model::run::{BreathSummary, run, summarise};
+use breathing_torso::model::run::{BreathSummary, Frame, run, summarise};
 use breathing_torso::model::{Config, Drive, Wave};
 use breathing_torso::{Quantity, Torso};
 
-/// Runs `drive` for two breaths after one settling breath and summarises the last two.
-fn breathe(drive: Drive, posture: Posture) -> (BreathSummary, Torso) {
+/// Runs `drive` in `posture` for three breaths (one settling, two measured) at 28 Hz: the
+/// frames, the breath's period and the torso.
+fn three_breaths(drive: Drive, posture: Posture) -> (Vec<Frame>, f64, Torso) {
     let mut config = Config {
         drive,
         ..Config::default()
@@ -18,6 +19,12 @@ fn breathe(drive: Drive, posture: Posture) -> (BreathSummary, Torso) {
     let mut torso = Torso::new(config).unwrap();
     let period = 1.0 / drive.frequency;
     let frames = run(&mut torso, 3.0 * period, 28.0).unwrap();
+    (frames, period, torso)
+}
+
+/// Runs `drive` for two breaths after one settling breath and summarises the last two.
+fn breathe(drive: Drive, posture: Posture) -> (BreathSummary, Torso) {
+    let (frames, period, torso) = three_breaths(drive, posture);
     (summarise(&frames, period), torso)
 }
 
@@ -514,16 +521,9 @@ fn passive_motion_dissipates_energy_and_returns_to_rest() {
 /// The lung's, the thorax's and the chest wall's displaced tidal volumes of `drive` in
 /// `posture` over the two breaths after a settling one [L].
 fn displaced_volumes(posture: Posture, drive: Drive) -> (f64, f64, f64) {
-    let mut config = Config {
-        drive,
-        ..Config::default()
-    };
-    config.subject.posture = posture;
-    let mut torso = Torso::new(config).unwrap();
-    let period = 1.0 / drive.frequency;
-    let frames = run(&mut torso, 3.0 * period, 28.0).unwrap();
+    let (frames, period, _) = three_breaths(drive, posture);
     let last: Vec<_> = frames.iter().filter(|f| f.time >= period).collect();
-    let swing = |f: &dyn Fn(&&breathing_torso::model::run::Frame) -> f64| {
+    let swing = |f: &dyn Fn(&&Frame) -> f64| {
         let v: Vec<f64> = last.iter().map(f).collect();
         v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
     };
