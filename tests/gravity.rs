@@ -411,11 +411,10 @@ fn hill_supine_breathes_under_gravity_acting() {
 /// so the relaxed model must have an equilibrium over that range, and at least near its rest.
 /// With gravity acting and the hill law (`torso bench relaxation --lod L --muscle-law hill
 /// --gravity-loads acting`; docs/dynamics.md, "Gravity that acts"), the tissues carrying the
-/// reference loads: level 0 spans RV to TLC standing (1.819-7.291 L) and supine
-/// (1.477-5.920 L); level 1 standing stops 0.23 L short of TLC (1.841-6.916 L, no
-/// equilibrium at 7.147 L: its pressures are not finite), supine at RV (1.635-5.823 L, the
-/// path folds at 1.453 L). With constant preloads alone level 1 standing had buckled 0.044 L
-/// below its FRC.
+/// reference loads, and the abdominal wall's edges tension only: level 0 spans RV to TLC
+/// standing (1.819-7.291 L) and supine (1.475-5.909 L); level 1 supine spans it too
+/// (1.444-5.786 L), standing stops 1.61 L short of TLC (1.841-5.763 L, no equilibrium at 5.993
+/// L). With constant preloads alone level 1 standing had buckled 0.044 L below its FRC.
 #[test]
 #[ignore = "issue 35: gravity acting, hill law, level 1: the standing relaxed curve stops at 5.763 L (no equilibrium at 5.993 L; TLC 7.377); supine it spans RV to TLC"]
 fn relaxed_curves_span_rv_to_tlc_under_gravity_acting_issue_35() {

@@ -239,8 +239,7 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
         let tables = if acting { Posture::Standing } else { posture };
         let mut params = crate::dynamics::Params::for_posture_and_law(tables, law);
         if let Some(f) = fitted {
-            params = crate::dynamics::Params::for_posture(tables);
-            params.muscle_law = law;
+            params = crate::dynamics::Params::unscaled_for_posture_and_law(tables, law);
             params.scale_passive_wall(f);
         }
         params.gravity_loads = loads;
@@ -254,8 +253,7 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
             );
         }
         if args.fit && fitted.is_none() {
-            let mut unscaled = crate::dynamics::Params::for_posture(tables);
-            unscaled.muscle_law = law;
+            let mut unscaled = crate::dynamics::Params::unscaled_for_posture_and_law(tables, law);
             unscaled.gravity_loads = loads;
             config.params = Some(unscaled.clone());
             let steps = fit_passive_wall(&config, CHEST_WALL_COMPLIANCE)?;

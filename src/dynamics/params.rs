@@ -540,6 +540,12 @@ pub struct Params {
     /// Configurations written before it existed read `false` (the rib family's wave).
     #[serde(default)]
     pub expiration_with_abdominals: bool,
+    /// Whether the abdominal wall's membrane edges carry tension only, as the dome's do
+    /// ([`abdominal_wall_tension_only`]): a membrane wrinkles rather than carry compression,
+    /// and a compressed linear edge's negative transverse stiffness buckles the softer wall.
+    /// Configurations written before it existed read `false` (linear edges).
+    #[serde(default)]
+    pub abdominal_wall_tension_only: bool,
 }
 
 /// The abdominal wall's tonic activity upright, a fraction of maximal voluntary contraction:
@@ -594,17 +600,38 @@ pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLa
     posture == Posture::Supine && law == super::muscle::MuscleLaw::Hill
 }
 
+/// Whether the abdominal wall's membrane edges carry tension only under `law`
+/// ([`Params::abdominal_wall_tension_only`]).
+///
+/// - Under the passive-and-active law: yes. A membrane wrinkles rather than carry compression
+///   (tension-field theory: Stein & Hedgepeth 1961, NASA TN D-813; Mansfield 1969, Proc R Soc
+///   A 311:1), and a compressed linear edge has a negative transverse stiffness, -|f| / L. The
+///   law's soft passive wall (its foundation scaled by [`HILL_PASSIVE_WALL_SCALE`]) no longer
+///   holds the wall's vertices against it: with linear edges, deflating the relaxed standing
+///   chest wall below FRC wrinkled the lowest ring of the abdominal wall, each vertex snapping
+///   through by 1-2 mm between -4 and -6.5 cmH2O at the airway opening under the inertial
+///   solver, and the quasi-static relaxation curve ended 0.28 L below FRC standing and 0.04 L
+///   supine; with tension-only edges it spans RV to TLC in both postures (`torso bench
+///   relaxation --muscle-law hill`, docs/dynamics.md, "The relaxed wall below FRC").
+/// - Under the thesis's law: no. Its stiff wall's foundation holds the vertices, and its
+///   calibrated figures were measured with linear edges.
+pub fn abdominal_wall_tension_only(law: super::muscle::MuscleLaw) -> bool {
+    law == super::muscle::MuscleLaw::Hill
+}
+
 /// The factor on the passive chest wall's hand-set stiffnesses (and divisor of the abdominal
 /// wall's compliance, [`Params::scale_passive_wall`]) under the passive-and-active muscle law
 /// ([`super::muscle::MuscleLaw::Hill`]): with it the relaxed chest wall of the default subject
 /// standing at level of detail 1 has the adult's compliance, 0.2 L/cmH2O over the tidal range
 /// above FRC (Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13).
 /// Fitted with the law's cited maximal forces (`super::muscle::HILL_DIAPHRAGM_FORCE`,
-/// `super::muscle::HILL_INTERCOSTAL_TENSION`; 0.349 with the thesis law's 600 N and 1200 N/m).
+/// `super::muscle::HILL_INTERCOSTAL_TENSION`; 0.349 with the thesis law's 600 N and 1200 N/m)
+/// and the abdominal wall's tension-only edges ([`abdominal_wall_tension_only`]; 0.421 with
+/// linear ones).
 /// Fitted: `torso bench relaxation --muscle-law hill --fit --posture standing` (secant on the
 /// compliance of the relaxation curve, `bench::relaxation::fit_passive_wall`), which prints
-/// "fitted factor on the passive wall (Hill law): 0.421".
-pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.421;
+/// "fitted factor on the passive wall (Hill law): 0.440".
+pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.440;
 
 /// The adult relaxed chest wall's compliance over the tidal range above FRC [L/cmH2O], the
 /// target of [`HILL_PASSIVE_WALL_SCALE`]'s fit.
@@ -619,13 +646,21 @@ impl Params {
     /// the posture's abdominal tone ([`abdominal_tone`]) and its expiratory rib-cage drive
     /// ([`expiration_with_abdominals`]).
     pub fn for_posture_and_law(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
-        let mut p = Params::for_posture(posture);
-        p.muscle_law = law;
+        let mut p = Params::unscaled_for_posture_and_law(posture, law);
         if law == super::muscle::MuscleLaw::Hill {
             p.scale_passive_wall(HILL_PASSIVE_WALL_SCALE);
         }
+        p
+    }
+
+    /// [`Params::for_posture_and_law`] before its passive wall is scaled: what the fit of
+    /// [`HILL_PASSIVE_WALL_SCALE`] scales (`torso bench relaxation --fit`).
+    pub fn unscaled_for_posture_and_law(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
+        let mut p = Params::for_posture(posture);
+        p.muscle_law = law;
         p.abdominal_tone = abdominal_tone(posture, law);
         p.expiration_with_abdominals = expiration_with_abdominals(posture, law);
+        p.abdominal_wall_tension_only = abdominal_wall_tension_only(law);
         p
     }
 
@@ -694,6 +729,7 @@ impl Params {
             gravity_loads: GravityLoads::Preloaded,
             abdominal_tone: 0.0,
             expiration_with_abdominals: false,
+            abdominal_wall_tension_only: false,
         }
     }
 

@@ -33,8 +33,10 @@ pub const PASSIVE: u8 = u8::MAX;
 /// With linear edges the dome's flat top went into compression at the end of a quiet
 /// expiration and their negative transverse stiffness -|f| / L made its static equilibrium
 /// a saddle (measured: +0.03 to +0.41 N/m at level 1, `examples/quasi_static`), which the
-/// quasi-static mode could not follow. The abdominal wall's edges stay linear: the wall's
-/// foundation holds its vertices in every direction.
+/// quasi-static mode could not follow. The abdominal wall's edges take this slot too when
+/// [`super::Params::abdominal_wall_tension_only`] says so (the passive-and-active law's soft
+/// wall, whose foundation no longer holds them); otherwise they stay linear, the stiff wall's
+/// foundation holding its vertices in every direction.
 pub const PASSIVE_SLACK: u8 = u8::MAX - 1;
 
 /// Axial spring-damper elements (muscles and membrane), structure of arrays. Element e runs
@@ -511,7 +513,8 @@ impl Structure {
                 params.membrane_stiffness
             };
             elements.push(&[a, b], l0, k, rayleigh * k, PASSIVE, 2, 0.0);
-            if let (true, Some(slot)) = (dome(u) && dome(v), elements.slot.last_mut()) {
+            let tension_only = (dome(u) && dome(v)) || params.abdominal_wall_tension_only;
+            if let (true, Some(slot)) = (tension_only, elements.slot.last_mut()) {
                 *slot = PASSIVE_SLACK;
             }
         }
@@ -719,7 +722,8 @@ impl Structure {
     /// A fingerprint of the compiled model (FNV-1a over its defining numbers: rest positions,
     /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
     /// pleural law's asymptotes, barrier pressure and margin, gravity, under the
-    /// passive-and-active muscle law its muscles' forces and lengths, and the abdominal tone),
+    /// passive-and-active muscle law its muscles' forces and lengths, the abdominal tone, the
+    /// expiratory rib-cage drive and the abdominal wall's tension-only edges),
     /// so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -778,6 +782,10 @@ impl Structure {
         // fingerprint too.
         if self.params.expiration_with_abdominals {
             eat(1.0);
+        }
+        // So do the abdominal wall's tension-only edges (the slots, not the fields above).
+        if self.params.abdominal_wall_tension_only {
+            eat(2.0);
         }
         h
     }

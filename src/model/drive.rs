@@ -118,9 +118,9 @@ impl Default for Drive {
 /// of a cystic-fibrosis study; 9.0 +- 3.4 % in 100 healthy subjects, Jolley et al. 2009, Eur
 /// Respir J 33:289). EMG is taken as proportional to force (the diaphragm's Pdi-EMG relation
 /// is near linear); not fitted: with it the quiet tidal volume is an outcome. The choice of
-/// source matters: at Jolley et al.'s 9.0 % the default man standing breathes 0.775 L (10.3
-/// mL/kg) with a 39.9 % rib-cage share, against 0.697 L (9.3 mL/kg, also above 7 mL/kg + 25 %)
-/// and 49.5 % at Reilly et al.'s 7.5 % (`torso simulate --muscle-law hill --diaphragm-amplitude 0.09
+/// source matters: at Jolley et al.'s 9.0 % the default man standing breathes 0.786 L (10.5
+/// mL/kg) with a 44.9 % rib-cage share, against 0.707 L (9.4 mL/kg, also above 7 mL/kg + 25 %)
+/// and 54.7 % at Reilly et al.'s 7.5 % (`torso simulate --muscle-law hill --diaphragm-amplitude 0.09
 /// --ribs-amplitude 0.058 --duration 16`, and 0.075); Reilly et al. is taken because it
 /// measured both families in the same subjects.
 pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
@@ -137,9 +137,10 @@ pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 /// maximal force in expiration is uncited. Supine, where quiet expiration is passive, they
 /// follow the abdominal family instead ([`crate::dynamics::expiration_with_abdominals`]).
 /// Measured (`torso bench physiology --muscle-law hill`): the upright rib-cage share of
-/// quiet breathing, 49.5 % with this expiratory wave, rests on it (10.5 % without it, the
+/// quiet breathing, 54.7 % with this expiratory wave, rests on it (10.5 % without it, the
 /// internal intercostals silent standing, the drive applied by hand: `cargo run --release
-/// --example diaphragm_pressure`).
+/// --example diaphragm_pressure`; measured with the abdominal wall's linear edges, when the
+/// share was 49.5 % with the wave).
 pub const HILL_QUIET_RIBS: f64 = 0.058;
 
 /// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:
