@@ -99,6 +99,73 @@ fn the_relaxed_recoil_rises_with_volume() {
     }
 }
 
+/// The rib cage's and the diaphragm-abdomen's compliances of relaxed healthy adults, mean and
+/// SD [L/cmH2O] (Estenne, Yernault & De Troyer 1985, J Appl Physiol 59:1842: 61 adults,
+/// weighted spirometer and magnetometers, relaxation; read from the abstract): upright (seated),
+/// the 24-39-year-olds (the default man is 30), rib cage 0.164 +- 0.041 and diaphragm-abdomen
+/// 0.032 +- 0.012; supine, in 52 of them of all ages, 0.088 +- 0.038 and 0.070 +- 0.025. The
+/// bounds are the mean +- 2 SD.
+const ESTENNE_SEATED_YOUNG: [(f64, f64); 2] = [(0.164, 0.041), (0.032, 0.012)];
+const ESTENNE_SUPINE: [(f64, f64); 2] = [(0.088, 0.038), (0.070, 0.025)];
+
+fn within_two_sd(x: f64, (mean, sd): (f64, f64)) -> bool {
+    (mean - 2.0 * sd..=mean + 2.0 * sd).contains(&x)
+}
+
+/// Relaxed, the diaphragm passes the pleural pressure's changes on to the abdomen, so the rib
+/// cage's and the abdomen's displaced volumes against the pleural pressure add up to the chest
+/// wall's compliance (Konno & Mead 1968; Estenne et al. 1985), less the abdominal contents'
+/// compression (the lungs gain what the wall displaces plus what the contents give up): within
+/// 2 %, the bound of optoelectronic plethysmography against spirometry (Aliverti et al. 2001).
+#[test]
+fn the_compartments_compliances_add_up_to_the_chest_walls() {
+    for posture in [Posture::Standing, Posture::Sitting, Posture::Supine] {
+        let r = curves(posture);
+        let sum = r.rib_cage_compliance + r.abdomen_compliance;
+        println!(
+            "{posture:?}: rib cage {:.4} + abdomen {:.4} = {sum:.4} against C_cw {:.4} L/cmH2O",
+            r.rib_cage_compliance, r.abdomen_compliance, r.chest_wall_compliance
+        );
+        assert!(r.rib_cage_compliance > 0.0 && r.abdomen_compliance > 0.0);
+        assert!(
+            (sum / r.chest_wall_compliance - 1.0).abs() < 0.02,
+            "{posture:?}: {sum} against {}",
+            r.chest_wall_compliance
+        );
+    }
+}
+
+/// Upright, the relaxed rib cage is the compliant compartment and the diaphragm-abdomen the
+/// stiff one (Estenne et al. 1985: 0.164 +- 0.041 and 0.032 +- 0.012 L/cmH2O seated, aged
+/// 24-39). Not fitted: the passive wall's one factor is fitted to the whole chest wall's 0.2
+/// L/cmH2O standing, its split between the compartments is the hand-set constants'.
+#[test]
+#[ignore = "issue 35: with the hill law the relaxed rib cage seated is 0.0814 L/cmH2O (0.082-0.246 cited) and the diaphragm-abdomen 0.1058 (0.008-0.056): the upright abdomen takes 57 % of the relaxed chest wall's compliance against 16 %"]
+fn the_upright_compartments_have_adults_compliances() {
+    let r = curves(Posture::Sitting);
+    let [rc, ab] = ESTENNE_SEATED_YOUNG;
+    assert!(
+        within_two_sd(r.rib_cage_compliance, rc) && within_two_sd(r.abdomen_compliance, ab),
+        "rib cage {:.4}, abdomen {:.4} L/cmH2O against {rc:?}, {ab:?}",
+        r.rib_cage_compliance,
+        r.abdomen_compliance
+    );
+}
+
+/// Supine, the relaxed rib cage and diaphragm-abdomen compliances (Estenne et al. 1985: 0.088
+/// +- 0.038 and 0.070 +- 0.025 L/cmH2O). Not fitted (the fit is standing).
+#[test]
+fn the_supine_compartments_have_adults_compliances() {
+    let r = curves(Posture::Supine);
+    let [rc, ab] = ESTENNE_SUPINE;
+    assert!(
+        within_two_sd(r.rib_cage_compliance, rc) && within_two_sd(r.abdomen_compliance, ab),
+        "rib cage {:.4}, abdomen {:.4} L/cmH2O against {rc:?}, {ab:?}",
+        r.rib_cage_compliance,
+        r.abdomen_compliance
+    );
+}
+
 /// The chest wall relaxes near 55-60 % of vital capacity (Agostoni & Mead 1964).
 #[test]
 #[ignore = "issue 35: with the hill law the chest wall relaxes at 49.6 % of VC standing and 45.9 % supine, against 55-60 %"]

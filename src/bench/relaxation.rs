@@ -38,6 +38,11 @@ pub struct Point {
     pub chest_wall: f64,
     /// Respiratory system's recoil, the alveolar pressure with the airway shut [Pa].
     pub system: f64,
+    /// Volume the rib cage has displaced from rest [L] (`Quantity::RibCageDisplaced`: the
+    /// wall above the costal margin, as optoelectronic plethysmography splits it).
+    pub rib_cage: f64,
+    /// Volume the abdomen has displaced from rest [L] (`Quantity::AbdomenDisplaced`).
+    pub abdomen: f64,
 }
 
 /// The curves of one subject and posture, and the figures read off them.
@@ -58,6 +63,15 @@ pub struct Relaxation {
     pub chest_wall_compliance: f64,
     /// Respiratory system's compliance over the same range [L/cmH2O].
     pub system_compliance: f64,
+    /// The rib cage's share of the chest wall's compliance over the same range: the slope of
+    /// its displaced volume against the pleural pressure [L/cmH2O] (the rib-cage compliance
+    /// of Konno & Mead 1968 and Estenne, Yernault & De Troyer 1985, J Appl Physiol 59:1842:
+    /// relaxed, the diaphragm transmits the pleural pressure's changes to the abdomen, so the
+    /// two compartments' compliances against it add up to the chest wall's).
+    pub rib_cage_compliance: f64,
+    /// The abdomen's share (the diaphragm-abdomen compliance of Estenne et al. 1985), the
+    /// slope of its displaced volume against the pleural pressure [L/cmH2O].
+    pub abdomen_compliance: f64,
     /// The chest wall's relaxation volume, where its recoil is zero, as a fraction of vital
     /// capacity above RV; `None` if the curve does not cross zero.
     pub chest_wall_relaxation: Option<f64>,
@@ -138,6 +152,8 @@ pub fn relaxation(config: &Config, points: usize) -> Result<Relaxation> {
         tlc,
         chest_wall_compliance: slope(&|p| p.chest_wall),
         system_compliance: slope(&|p| p.system),
+        rib_cage_compliance: partial(&tidal, &|p| p.rib_cage),
+        abdomen_compliance: partial(&tidal, &|p| p.abdomen),
         chest_wall_relaxation: crossing(&|p| p.chest_wall),
         system_relaxation: crossing(&|p| p.system),
         pleural_at_frc: solved
@@ -160,6 +176,8 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
     let chest_wall = torso.read(Quantity::PleuralPressure)?;
     let system = torso.read(Quantity::AlveolarPressure)?;
     let lung = torso.read(Quantity::LungVolume)?;
+    let rib_cage = torso.read(Quantity::RibCageDisplaced)?;
+    let abdomen = torso.read(Quantity::AbdomenDisplaced)?;
     if !(chest_wall.is_finite() && system.is_finite() && lung.is_finite()) {
         // the reason: the same solve, asked through the reduced right-hand side
         let why = match torso.quasi_rate(0.0, v) {
@@ -175,6 +193,8 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
         lung,
         chest_wall,
         system,
+        rib_cage,
+        abdomen,
     })
 }
 
@@ -206,6 +226,20 @@ fn relaxed(config: &Config) -> Config {
         ..Drive::default()
     };
     c
+}
+
+/// A compartment's compliance [L/cmH2O] over `points`: the slope of the least-squares line of
+/// the volume `v` reads off each point against the pleural pressure.
+fn partial(points: &[&Point], v: &dyn Fn(&Point) -> f64) -> f64 {
+    let n = points.len() as f64;
+    let mx = points.iter().map(|p| p.chest_wall).sum::<f64>() / n;
+    let my = points.iter().map(|p| v(p)).sum::<f64>() / n;
+    let sxy: f64 = points
+        .iter()
+        .map(|p| (p.chest_wall - mx) * (v(p) - my))
+        .sum();
+    let sxx: f64 = points.iter().map(|p| (p.chest_wall - mx).powi(2)).sum();
+    sxy / sxx * CMH2O
 }
 
 /// Compliance [L/cmH2O] over `points`: the slope of the least-squares line of lung volume
