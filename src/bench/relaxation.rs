@@ -43,6 +43,8 @@ pub struct Point {
     pub rib_cage: f64,
     /// Volume the abdomen has displaced from rest [L] (`Quantity::AbdomenDisplaced`).
     pub abdomen: f64,
+    /// Abdominal pressure [Pa], relative to its value at the rest (`Quantity::AbdominalPressure`).
+    pub abdominal_pressure: f64,
 }
 
 /// The curves of one subject and posture, and the figures read off them.
@@ -72,6 +74,15 @@ pub struct Relaxation {
     /// The abdomen's share (the diaphragm-abdomen compliance of Estenne et al. 1985), the
     /// slope of its displaced volume against the pleural pressure [L/cmH2O].
     pub abdomen_compliance: f64,
+    /// The share of the pleural pressure's change over the same range that the relaxed
+    /// diaphragm carries: minus the slope of the transdiaphragmatic pressure (abdominal less
+    /// pleural) against the pleural pressure. Relaxed, people's transdiaphragmatic pressure is
+    /// zero at every lung volume (Agostoni & Rahn 1960, J Appl Physiol 15:1087, gastric and
+    /// oesophageal balloons in relaxation manoeuvres): a share of 0.
+    pub diaphragm_share: f64,
+    /// The abdomen's compliance against its own pressure over the same range, the slope of
+    /// its displaced volume against the abdominal pressure [L/cmH2O].
+    pub abdominal_wall_compliance: f64,
     /// The chest wall's relaxation volume, where its recoil is zero, as a fraction of vital
     /// capacity above RV; `None` if the curve does not cross zero.
     pub chest_wall_relaxation: Option<f64>,
@@ -154,6 +165,21 @@ pub fn relaxation(config: &Config, points: usize) -> Result<Relaxation> {
         system_compliance: slope(&|p| p.system),
         rib_cage_compliance: partial(&tidal, &|p| p.rib_cage),
         abdomen_compliance: partial(&tidal, &|p| p.abdomen),
+        diaphragm_share: -partial(&tidal, &|p| (p.abdominal_pressure - p.chest_wall) / CMH2O),
+        abdominal_wall_compliance: {
+            let n = tidal.len() as f64;
+            let mx = tidal.iter().map(|p| p.abdominal_pressure).sum::<f64>() / n;
+            let my = tidal.iter().map(|p| p.abdomen).sum::<f64>() / n;
+            let sxy: f64 = tidal
+                .iter()
+                .map(|p| (p.abdominal_pressure - mx) * (p.abdomen - my))
+                .sum();
+            let sxx: f64 = tidal
+                .iter()
+                .map(|p| (p.abdominal_pressure - mx).powi(2))
+                .sum();
+            sxy / sxx * CMH2O
+        },
         chest_wall_relaxation: crossing(&|p| p.chest_wall),
         system_relaxation: crossing(&|p| p.system),
         pleural_at_frc: solved
@@ -178,6 +204,7 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
     let lung = torso.read(Quantity::LungVolume)?;
     let rib_cage = torso.read(Quantity::RibCageDisplaced)?;
     let abdomen = torso.read(Quantity::AbdomenDisplaced)?;
+    let abdominal_pressure = torso.read(Quantity::AbdominalPressure)?;
     if !(chest_wall.is_finite() && system.is_finite() && lung.is_finite()) {
         // the reason: the same solve, asked through the reduced right-hand side
         let why = match torso.quasi_rate(0.0, v) {
@@ -195,6 +222,7 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
         system,
         rib_cage,
         abdomen,
+        abdominal_pressure,
     })
 }
 

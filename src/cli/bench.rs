@@ -212,7 +212,8 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
          pressure), default subject, level of detail {}, quasi-static equilibria; compliance \
          over FRC to FRC + {TIDAL_RANGE} L; adult figures: chest wall 0.2 L/cmH2O (Agostoni & \
          Mead 1964; Estenne et al. 1985: 0.166 seated, 0.158 supine, of which the rib cage \
-         0.141 and 0.088, the diaphragm-abdomen 0.025 and 0.070), system about 0.1 \
+         0.141 and 0.088, the diaphragm-abdomen 0.025 and 0.070; relaxed, the diaphragm \
+         carries none of it, Agostoni & Rahn 1960), system about 0.1 \
          L/cmH2O, chest wall relaxed near 55-60 % of vital capacity, pleural pressure about \
          -5 cmH2O at FRC",
         args.lod
@@ -281,14 +282,18 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
         let pct = |f: Option<f64>| f.map_or("none".to_string(), |f| format!("{:.1} %", 100.0 * f));
         println!(
             "{posture:?}: RV {:.3} L, FRC {:.3} L, TLC {:.3} L; C_cw {:.4} L/cmH2O (rib cage \
-             {:.4}, abdomen {:.4}), C_rs {:.4} L/cmH2O; chest wall relaxed at {} of VC, system \
-             at {} of VC; pleural pressure at FRC {:.2} cmH2O; curve {:.3}-{:.3} L ({} points){}",
+             {:.4}, abdomen {:.4}; the diaphragm carries {:.2} of the pleural pressure's change, \
+             the abdomen's own compliance {:.4}), C_rs {:.4} L/cmH2O; chest wall relaxed at {} of \
+             VC, system at {} of VC; pleural pressure at FRC {:.2} cmH2O; curve {:.3}-{:.3} L ({} \
+             points){}",
             r.rv,
             r.frc,
             r.tlc,
             r.chest_wall_compliance,
             r.rib_cage_compliance,
             r.abdomen_compliance,
+            r.diaphragm_share,
+            r.abdominal_wall_compliance,
             r.system_compliance,
             pct(r.chest_wall_relaxation),
             pct(r.system_relaxation),
