@@ -112,11 +112,12 @@ fn within_two_sd(x: f64, (mean, sd): (f64, f64)) -> bool {
     (mean - 2.0 * sd..=mean + 2.0 * sd).contains(&x)
 }
 
-/// Relaxed, the diaphragm passes the pleural pressure's changes on to the abdomen, so the rib
-/// cage's and the abdomen's displaced volumes against the pleural pressure add up to the chest
-/// wall's compliance (Konno & Mead 1968; Estenne et al. 1985), less the abdominal contents'
-/// compression (the lungs gain what the wall displaces plus what the contents give up): within
-/// 2 %, the bound of optoelectronic plethysmography against spirometry (Aliverti et al. 2001).
+/// The rib cage's and the abdomen's displaced volumes make up the lungs' volume change,
+/// whatever the diaphragm carries, so their slopes against the pleural pressure add up to the
+/// chest wall's compliance (Konno & Mead 1968; Estenne et al. 1985), less the abdominal
+/// contents' compression (the lungs gain what the wall displaces plus what the contents give
+/// up): within 2 %, the bound of optoelectronic plethysmography against spirometry (Aliverti
+/// et al. 2001).
 #[test]
 fn the_compartments_compliances_add_up_to_the_chest_walls() {
     for posture in [Posture::Standing, Posture::Sitting, Posture::Supine] {

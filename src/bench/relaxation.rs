@@ -68,8 +68,9 @@ pub struct Relaxation {
     /// The rib cage's share of the chest wall's compliance over the same range: the slope of
     /// its displaced volume against the pleural pressure [L/cmH2O] (the rib-cage compliance
     /// of Konno & Mead 1968 and Estenne, Yernault & De Troyer 1985, J Appl Physiol 59:1842:
-    /// relaxed, the diaphragm transmits the pleural pressure's changes to the abdomen, so the
-    /// two compartments' compliances against it add up to the chest wall's).
+    /// the two compartments' displaced volumes make up the lungs' volume change, so their
+    /// compliances against the pleural pressure add up to the chest wall's, less the
+    /// abdominal contents' compression).
     pub rib_cage_compliance: f64,
     /// The abdomen's share (the diaphragm-abdomen compliance of Estenne et al. 1985), the
     /// slope of its displaced volume against the pleural pressure [L/cmH2O].
@@ -165,21 +166,11 @@ pub fn relaxation(config: &Config, points: usize) -> Result<Relaxation> {
         system_compliance: slope(&|p| p.system),
         rib_cage_compliance: partial(&tidal, &|p| p.rib_cage),
         abdomen_compliance: partial(&tidal, &|p| p.abdomen),
-        diaphragm_share: -partial(&tidal, &|p| (p.abdominal_pressure - p.chest_wall) / CMH2O),
-        abdominal_wall_compliance: {
-            let n = tidal.len() as f64;
-            let mx = tidal.iter().map(|p| p.abdominal_pressure).sum::<f64>() / n;
-            let my = tidal.iter().map(|p| p.abdomen).sum::<f64>() / n;
-            let sxy: f64 = tidal
-                .iter()
-                .map(|p| (p.abdominal_pressure - mx) * (p.abdomen - my))
-                .sum();
-            let sxx: f64 = tidal
-                .iter()
-                .map(|p| (p.abdominal_pressure - mx).powi(2))
-                .sum();
-            sxy / sxx * CMH2O
-        },
+        diaphragm_share: -line_slope(&tidal, &|p| p.chest_wall, &|p| {
+            p.abdominal_pressure - p.chest_wall
+        }),
+        abdominal_wall_compliance: line_slope(&tidal, &|p| p.abdominal_pressure, &|p| p.abdomen)
+            * CMH2O,
         chest_wall_relaxation: crossing(&|p| p.chest_wall),
         system_relaxation: crossing(&|p| p.system),
         pleural_at_frc: solved
@@ -256,30 +247,27 @@ fn relaxed(config: &Config) -> Config {
     c
 }
 
-/// A compartment's compliance [L/cmH2O] over `points`: the slope of the least-squares line of
-/// the volume `v` reads off each point against the pleural pressure.
-fn partial(points: &[&Point], v: &dyn Fn(&Point) -> f64) -> f64 {
+/// The slope of the least-squares line of `y` against `x` over `points` (in their units).
+fn line_slope(points: &[&Point], x: &dyn Fn(&Point) -> f64, y: &dyn Fn(&Point) -> f64) -> f64 {
     let n = points.len() as f64;
-    let mx = points.iter().map(|p| p.chest_wall).sum::<f64>() / n;
-    let my = points.iter().map(|p| v(p)).sum::<f64>() / n;
-    let sxy: f64 = points
-        .iter()
-        .map(|p| (p.chest_wall - mx) * (v(p) - my))
-        .sum();
-    let sxx: f64 = points.iter().map(|p| (p.chest_wall - mx).powi(2)).sum();
-    sxy / sxx * CMH2O
+    let mx = points.iter().map(|p| x(p)).sum::<f64>() / n;
+    let my = points.iter().map(|p| y(p)).sum::<f64>() / n;
+    let sxy: f64 = points.iter().map(|p| (x(p) - mx) * (y(p) - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (x(p) - mx).powi(2)).sum();
+    sxy / sxx
 }
 
-/// Compliance [L/cmH2O] over `points`: the slope of the least-squares line of lung volume
-/// against the pressure `f` [Pa] reads off each point.
-fn compliance(points: &[&Point], f: &dyn Fn(&Point) -> f64) -> f64 {
-    let n = points.len() as f64;
-    let mx = points.iter().map(|p| f(p)).sum::<f64>() / n;
-    let my = points.iter().map(|p| p.lung).sum::<f64>() / n;
-    let sxy: f64 = points.iter().map(|p| (f(p) - mx) * (p.lung - my)).sum();
-    let sxx: f64 = points.iter().map(|p| (f(p) - mx).powi(2)).sum();
+/// A compartment's compliance [L/cmH2O] over `points`: the slope of the volume `v` [L] reads
+/// off each point against the pleural pressure.
+fn partial(points: &[&Point], v: &dyn Fn(&Point) -> f64) -> f64 {
     // L per Pa, to L per cmH2O
-    sxy / sxx * CMH2O
+    line_slope(points, &|p| p.chest_wall, v) * CMH2O
+}
+
+/// Compliance [L/cmH2O] over `points`: the slope of lung volume against the pressure `f` [Pa]
+/// reads off each point.
+fn compliance(points: &[&Point], f: &dyn Fn(&Point) -> f64) -> f64 {
+    line_slope(points, f, &|p| p.lung) * CMH2O
 }
 
 /// One evaluation of [`fit_passive_wall`]: the factor tried and the compliance it gave.
@@ -301,10 +289,9 @@ pub fn fit_passive_wall(config: &Config, target: f64) -> Result<Vec<FitStep>> {
     if !(target.is_finite() && target > 0.0) {
         return Err(Error::invalid("target compliance", target, "> 0 L/cmH2O"));
     }
-    let base = config
-        .params
-        .clone()
-        .unwrap_or_else(|| Params::for_posture(config.subject.posture));
+    let base = config.params.clone().unwrap_or_else(|| {
+        Params::unscaled_for_posture_and_law(config.subject.posture, config.muscle_law)
+    });
     let eval = |factor: f64| -> Result<FitStep> {
         let mut c = config.clone();
         let mut p = base.clone();

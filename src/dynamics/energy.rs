@@ -34,8 +34,9 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
         let stretch = len - el.rest_length[i];
         let k = el.stiffness[i];
         if el.slot[i] == super::structure::PASSIVE {
-            // an abdominal membrane edge: a linear spring in compression as in tension
-            // (`forces`: only muscles and the dome's edges are tension-only)
+            // an abdominal membrane edge with linear edges (the thesis law's wall): a linear
+            // spring in compression as in tension (`forces`; under
+            // `Params::abdominal_wall_tension_only` its slot is `PASSIVE_SLACK`, below)
             e += 0.5 * k * stretch * stretch;
             continue;
         }

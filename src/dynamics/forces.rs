@@ -4,7 +4,8 @@
 //!   l(t) = l0 r(t) (eq. 2.3) and r = 1 - beta_max a g s for muscles (a the side's activation
 //!   of the group, g the element's regional gain, s the tissue's rest length over the path's:
 //!   the smooth dome's arcs over the chords for a diaphragm fibre, else 1). Muscles only pull (Zajac 1989, thesis 2.1),
-//!   and so do the membrane edges of the diaphragm's dome ([`super::PASSIVE_SLACK`]): a
+//!   and so do the membrane edges of the diaphragm's dome ([`super::PASSIVE_SLACK`]), and
+//!   those of the abdominal wall under [`super::Params::abdominal_wall_tension_only`]: a
 //!   membrane wrinkles rather than carry compression (tension-field theory: Stein &
 //!   Hedgepeth 1961, NASA TN D-813; Mansfield 1969, Proc R Soc A 311:1). The tension of
 //!   either is the softplus eps ln(1 + exp(f / eps)) of f, a smooth toe of width eps

@@ -140,7 +140,13 @@ pub const LUNG_RECOIL_AT_FRC: f64 = 5.0 * 98.0665;
 /// 0.1 N is about 1 % of the smallest muscle element's tension in quiet breathing and a few
 /// thousandths of its largest; it is measured, not cited: halving it changes the default
 /// subject's quiet tidal volume by under 0.1 % (`cargo run --release --example
-/// fast_dynamics -- toe`).
+/// fast_dynamics -- toe`). Under gravity acting with the hill law it is not only numerical:
+/// the tissues carrying the reference loads sit near their slack, and halved the standing
+/// relaxed curve finds no equilibrium 0.19 L above or 0.04 L below FRC (3.686 and 3.456 L),
+/// the supine one none above 3.984 L; at 0.3 and 1 N the standing curve reaches 6.455 L and
+/// TLC where at 0.1 N it stops at 5.763 L, its compliance 0.149 and 0.137 against 0.172
+/// L/cmH2O (`torso bench relaxation --muscle-law hill --gravity-loads acting` with the constant
+/// changed).
 /// Numerical: the smoothing width of the tension-only law, chosen by the measurement above.
 pub const TENSION_TOE: f64 = 0.1;
 
@@ -613,8 +619,16 @@ pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLa
 ///   solver, and the quasi-static relaxation curve ended 0.28 L below FRC standing and 0.04 L
 ///   supine; with tension-only edges it spans RV to TLC in both postures (`torso bench
 ///   relaxation --muscle-law hill`, docs/dynamics.md, "The relaxed wall below FRC").
-/// - Under the thesis's law: no. Its stiff wall's foundation holds the vertices, and its
-///   calibrated figures were measured with linear edges.
+/// - Under the thesis's law: not yet. Its level-1 relaxed curve stops at the same 3.225 L
+///   (`tests/relaxation.rs`, `relaxation_curve_reaches_residual_volume`, ignored), and with
+///   tension-only edges it spans RV to TLC too (measured: C_cw 0.0923 to 0.0954 L/cmH2O, the
+///   default quiet tidal volume 0.536 to 0.546 L); the edges stay linear there because the
+///   thesis law's calibrated figures (its drives, the README's figures, the bundled
+///   recordings, the fits' acceptance) were measured with them and would all move.
+///
+/// The toe of the tension-only law ([`TENSION_TOE`]) sits at the rest's zero force: halving
+/// it moves the hill law's relaxed chest wall by +0.15 % standing and +2.3 % supine (gravity
+/// preloaded; `torso bench relaxation --muscle-law hill` with the constant changed).
 pub fn abdominal_wall_tension_only(law: super::muscle::MuscleLaw) -> bool {
     law == super::muscle::MuscleLaw::Hill
 }

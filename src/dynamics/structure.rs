@@ -25,7 +25,8 @@ pub const RIBS: usize = 24;
 pub const REST_LUNG_FRACTION: f64 = 0.75;
 
 /// Code of an element's group when it is passive (membrane), and the slot of a membrane edge
-/// of the abdominal wall (a linear spring).
+/// of the abdominal wall when it is a linear spring (without
+/// [`super::Params::abdominal_wall_tension_only`]).
 pub const PASSIVE: u8 = u8::MAX;
 
 /// Slot of a membrane edge of the diaphragm's dome (group [`PASSIVE`]): tension only, like a

@@ -137,10 +137,9 @@ pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 /// maximal force in expiration is uncited. Supine, where quiet expiration is passive, they
 /// follow the abdominal family instead ([`crate::dynamics::expiration_with_abdominals`]).
 /// Measured (`torso bench physiology --muscle-law hill`): the upright rib-cage share of
-/// quiet breathing, 54.7 % with this expiratory wave, rests on it (10.5 % without it, the
+/// quiet breathing, 54.7 % with this expiratory wave, rests on it (12.7 % without it, the
 /// internal intercostals silent standing, the drive applied by hand: `cargo run --release
-/// --example diaphragm_pressure`; measured with the abdominal wall's linear edges, when the
-/// share was 49.5 % with the wave).
+/// --example diaphragm_pressure`).
 pub const HILL_QUIET_RIBS: f64 = 0.058;
 
 /// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:
