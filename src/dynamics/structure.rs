@@ -151,7 +151,7 @@ fn hill_element(
     posture: crate::anatomy::Posture,
     rayleigh: f64,
 ) {
-    use super::muscle::{ACTIVE_WIDTH, RestLengths, active_stiffness, stiffness};
+    use super::muscle::{RestLengths, active, active_stiffness, stiffness};
     use crate::anatomy::{MuscleGroup, Posture};
     let lengths = if m.group == MuscleGroup::Diaphragm {
         let ratio =
@@ -163,8 +163,8 @@ fn hill_element(
     let f = m.max_force * super::muscle::hill_force_factor(m.group);
     // the passive slope, plus f_L's slope and k_A at full activation: the scale of the stiffness
     // an active element can have, whichever side of its optimal length it stands
-    let x = l0 / lengths.optimal;
-    let f_l_slope = -2.0 * (x - 1.0) / ACTIVE_WIDTH * (-(x - 1.0).powi(2) / ACTIVE_WIDTH).exp();
+    // Thelen's f_L's own slope: the active curve without its k_A term
+    let (_, f_l_slope) = active(l0 / lengths.optimal, 0.0);
     let k = stiffness(l0, lengths.optimal, lengths.slack, f, 0.0, 0.0)
         + f * (f_l_slope + active_stiffness()) / lengths.optimal;
     let e = elements.len() - 1;
