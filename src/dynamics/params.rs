@@ -87,7 +87,16 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// 0.15 L above FRC (the path folds at 3.027 L; `cargo test --release --test muscle_law
 /// the_relaxed_recoil_rises_with_volume` with this constant set to 3.08), so the model keeps
 /// the 1.8 of its first dynamics
-/// (commit cfbd824), set by hand, not fitted. Konno & Mead 1968 (J Appl Physiol 24:544) found
+/// (commit cfbd824), set by hand, not fitted. That fold was the abdominal wall's wrinkling:
+/// with its edges tension only (the hill law's, [`abdominal_wall_tension_only`]) x3.08 spans
+/// RV to TLC supine (C_cw 0.1494 L/cmH2O, supine abdominal share of quiet breathing 72.5 %;
+/// `torso bench relaxation --muscle-law hill --posture supine` and `torso bench physiology
+/// --muscle-law hill` with this constant changed); it stays 1.8 because it sets the thesis
+/// law's supine wall too, whose figures were measured with it. Peritoneal dialysis fills
+/// raise the abdominal pressure by 3.1 mmHg supine and 4.5 mmHg erect for the same fill in
+/// 25 patients (Al-Hwiesh et al. 2011, "Intraperitoneal pressure and intra-abdominal
+/// pressure: are they the same?", abstract; the fill volume not read): x1.45 from erect to
+/// supine, between ours and Estenne et al.'s. Konno & Mead 1968 (J Appl Physiol 24:544) found
 /// the abdomen over the tidal range nearly as compliant as the rib cage standing and somewhat
 /// more compliant supine (the same direction, no ratio).
 /// Unsourced: no source: chosen for a stable relaxed supine wall. Literature: x2.8 from
@@ -498,6 +507,15 @@ pub struct Params {
     /// the abdomen in the sources, Estenne et al. 1985's diaphragm-abdomen compartment
     /// (0.025 L/cmH2O seated, `SEATED_SUPINE_COMPLIANCES`), is not the same quantity: the
     /// model's wall has its membrane and relaxed muscles in parallel with this foundation.
+    /// With the relaxed diaphragm carrying no pressure, as in people (Agostoni & Rahn 1960,
+    /// J Appl Physiol 15:1087), it is the abdomen's own compliance, which the hill law's
+    /// relaxed model puts at 0.33 / 0.35 / 0.46 L/cmH2O standing / sitting / supine (`torso
+    /// bench relaxation --muscle-law hill --posture standing,sitting,supine`): ten and six
+    /// times Estenne et al.'s seated 0.032 +- 0.012 (aged 24-39) and supine 0.070 +- 0.025.
+    /// Peritoneal dialysis fills in awake supine patients raise the abdominal pressure by 2.2
+    /// cmH2O per litre above 2 L (Durand et al. 1996, Perit Dial Int 16 Suppl 1:S84) or 1-3
+    /// cmH2O/L (Pérez Díaz et al. 2017, Nefrología 37(6)): 0.33-1.0 L/cmH2O for the whole
+    /// abdomen, the diaphragm's side included, a different load and quantity again.
     /// Doubling it raises the relaxed chest wall's compliance by 31 % at +5 cmH2O and 5 % at
     /// -5 cmH2O, the largest effect at +5 cmH2O of any single passive constant.
     /// Calibrated: set by hand in commit aeb7bbe against `tests/physiology.rs`; no command
