@@ -99,7 +99,7 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// supine, between ours and Estenne et al.'s. Konno & Mead 1968 (J Appl Physiol 24:544) found
 /// the abdomen over the tidal range nearly as compliant as the rib cage standing and somewhat
 /// more compliant supine (the same direction, no ratio).
-/// Unsourced: no source: chosen for a stable relaxed supine wall. Literature: x2.8 from
+/// Unsourced: no source: chosen by hand, kept for the thesis law's measured figures. Literature: x2.8 from
 /// seated to supine (Estenne et al. 1985); ours x1.64 from sitting (1.8 / 1.1): disagrees.
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
