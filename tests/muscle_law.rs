@@ -112,6 +112,18 @@ fn within_two_sd(x: f64, (mean, sd): (f64, f64)) -> bool {
     (mean - 2.0 * sd..=mean + 2.0 * sd).contains(&x)
 }
 
+/// The relaxed compartments' compliances in `posture` within Estenne et al.'s `[rib cage,
+/// diaphragm-abdomen]` means +- 2 SD.
+fn compartments_within(posture: Posture, [rc, ab]: [(f64, f64); 2]) {
+    let r = curves(posture);
+    assert!(
+        within_two_sd(r.rib_cage_compliance, rc) && within_two_sd(r.abdomen_compliance, ab),
+        "{posture:?}: rib cage {:.4}, abdomen {:.4} L/cmH2O against {rc:?}, {ab:?}",
+        r.rib_cage_compliance,
+        r.abdomen_compliance
+    );
+}
+
 /// The rib cage's and the abdomen's displaced volumes make up the lungs' volume change,
 /// whatever the diaphragm carries, so their slopes against the pleural pressure add up to the
 /// chest wall's compliance (Konno & Mead 1968; Estenne et al. 1985), less the abdominal
@@ -143,28 +155,14 @@ fn the_compartments_compliances_add_up_to_the_chest_walls() {
 #[test]
 #[ignore = "issue 35: with the hill law the relaxed rib cage seated is 0.0814 L/cmH2O (0.082-0.246 cited) and the diaphragm-abdomen 0.1058 (0.008-0.056): the upright abdomen takes 57 % of the relaxed chest wall's compliance against 16 %"]
 fn the_upright_compartments_have_adults_compliances() {
-    let r = curves(Posture::Sitting);
-    let [rc, ab] = ESTENNE_SEATED_YOUNG;
-    assert!(
-        within_two_sd(r.rib_cage_compliance, rc) && within_two_sd(r.abdomen_compliance, ab),
-        "rib cage {:.4}, abdomen {:.4} L/cmH2O against {rc:?}, {ab:?}",
-        r.rib_cage_compliance,
-        r.abdomen_compliance
-    );
+    compartments_within(Posture::Sitting, ESTENNE_SEATED_YOUNG);
 }
 
 /// Supine, the relaxed rib cage and diaphragm-abdomen compliances (Estenne et al. 1985: 0.088
 /// +- 0.038 and 0.070 +- 0.025 L/cmH2O). Not fitted (the fit is standing).
 #[test]
 fn the_supine_compartments_have_adults_compliances() {
-    let r = curves(Posture::Supine);
-    let [rc, ab] = ESTENNE_SUPINE;
-    assert!(
-        within_two_sd(r.rib_cage_compliance, rc) && within_two_sd(r.abdomen_compliance, ab),
-        "rib cage {:.4}, abdomen {:.4} L/cmH2O against {rc:?}, {ab:?}",
-        r.rib_cage_compliance,
-        r.abdomen_compliance
-    );
+    compartments_within(Posture::Supine, ESTENNE_SUPINE);
 }
 
 /// Over the vital capacity the relaxed abdomen is less compliant than the rib cage (Konno &
