@@ -209,10 +209,11 @@ fn the_chest_wall_relaxes_near_55_to_60_percent_of_vital_capacity() {
 
 /// The relaxed chest wall stiffens towards TLC (Agostoni & Mead 1964; issue 35, deliverable
 /// 3): its compliance over the highest tenth of the vital capacity (the secant of the curve's
-/// points there) is below its compliance over the tidal range. Nothing in the hill law's
-/// passive wall stiffens at large volumes: the rib joints and cartilage are linear springs,
-/// the relaxed muscles that shorten as the lungs fill go slack, and the diaphragm, stretched at
-/// FRC (`muscle::DIAPHRAGM_SLACK_OVER_REST`), loses passive tension as it shortens.
+/// points there) is below its compliance over the tidal range. Under the hill law the rib cage
+/// does stiffen towards TLC, but the abdomen softens more: the diaphragm, stretched at FRC
+/// (`muscle::DIAPHRAGM_SLACK_OVER_REST`), loses passive tension as it shortens and passes more
+/// of the pleural pressure on to a linear abdominal wall
+/// (`the_abdomen_is_stiffer_than_the_rib_cage_over_the_vital_capacity`).
 #[test]
 #[ignore = "issue 35: with the hill law the relaxed chest wall is softer over the highest tenth of VC than over the tidal range: 0.331 against 0.200 L/cmH2O standing, 0.330 against 0.145 supine"]
 fn the_relaxed_chest_wall_stiffens_towards_tlc() {
