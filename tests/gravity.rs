@@ -266,12 +266,11 @@ fn supine_frc_falls_by_gravity_alone() {
 }
 
 /// The same under the thesis's law, whose relaxed chest wall is 2-5x stiffer than an adult's
-/// (docs/dynamics.md, "What sets the passive chest wall"). Issue 35: measured 0.338 L at level
-/// 0 and 0.407 L at level 1 (`cargo test --release --test gravity -- --ignored --nocapture`;
-/// 0.335 / 0.404 L with the abdominal wall's linear edges, 0.370 / 0.442 L with constant
-/// preloads alone), short of 0.5-1.0 L.
+/// (docs/dynamics.md, "What sets the passive chest wall"). Issue 35: measured 0.335 L at level
+/// 0 and 0.404 L at level 1 (`cargo test --release --test gravity -- --ignored --nocapture`;
+/// 0.370 / 0.442 L with constant preloads alone), short of 0.5-1.0 L.
 #[test]
-#[ignore = "issue 35: the thesis law's stiff chest wall: supine FRC falls 0.338 / 0.407 L (levels 0 / 1), 0.5-1.0 L cited"]
+#[ignore = "issue 35: the thesis law's stiff chest wall: supine FRC falls 0.335 / 0.404 L (levels 0 / 1), 0.5-1.0 L cited"]
 fn supine_frc_falls_by_gravity_alone_thesis_law_issue_35() {
     for lod in [0, 1] {
         let fall = supine_fall(MuscleLaw::Thesis, lod);

@@ -42,7 +42,8 @@ pub use params::{
     ABDOMINAL_CONTENTS_DENSITY, CHEST_WALL_COMPLIANCE, DIAPHRAGM_CONTRACTION_UPRIGHT, GRAVITY,
     GRAVITY_MAX, GravityLoads, HILL_PASSIVE_WALL_SCALE, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN,
     PLEURAL_BARRIER_PRESSURE, Params, STANDING_ABDOMINAL_TONE, abdominal_tone,
-    diaphragm_contraction, diaphragm_length_ratio, expiration_with_abdominals,
+    abdominal_wall_tension_only, diaphragm_contraction, diaphragm_length_ratio,
+    expiration_with_abdominals,
 };
 pub use state::{Layout, error_weights, rest_state};
 pub use structure::{

@@ -58,7 +58,7 @@ pub fn diaphragm_contraction(posture: Posture) -> f64 {
 /// seated, 0.088 +- 0.038 supine; diaphragm-abdomen 0.025 +- 0.012 seated, 0.070 +- 0.025
 /// supine; the whole chest wall's compliance did not change. Lying down thus stiffens the rib
 /// cage (x1.60), which the model applies to the rib joints' stiffness, and softens the abdomen
-/// (x2.8, which sets [`SUPINE_WALL_COMPLIANCE`]).
+/// (x2.8; see [`SUPINE_WALL_COMPLIANCE`]).
 /// Source: Estenne, Yernault & De Troyer 1985, J Appl Physiol 59:1842, the four means above
 /// (agrees: copied).
 pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.070]];
@@ -74,30 +74,53 @@ pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.
 /// with no figure for sitting against standing.
 pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 
-/// Abdominal wall compliance supine relative to standing: [`SITTING_WALL_COMPLIANCE`] times
-/// the measured seated-to-supine ratio of the diaphragm-abdomen compliance, x2.8 (Estenne,
-/// Yernault & De Troyer 1985, J Appl Physiol 59:1842: 0.025 +- 0.012 seated, 0.070 +- 0.025
-/// L/cmH2O supine in 52 relaxed adults; [`SEATED_SUPINE_COMPLIANCES`]), so 3.08.
-///
-/// History: the first dynamics (commit cfbd824) set 1.8 by hand, because forced supine
-/// breathing stalled with 3.08 (commit a69b5a9), and the passive-and-active law's relaxed supine
-/// curve then folded 0.15 L above FRC (at 3.027 L). That fold was the abdominal wall's
-/// wrinkling under linear edges; with tension-only edges ([`Params::abdominal_wall_tension_only`])
-/// the supine curve spans RV to TLC under both laws and forced supine breathing runs.
-/// Against 1.8, the default (thesis) law's supine respiratory-system compliance rises from
-/// 0.069 to 0.077 L/cmH2O and its supine abdominal share of quiet breathing from 64.2 to 65.0 %;
-/// the passive-and-active law's supine C_cw from 0.1453 to 0.1494 L/cmH2O, its supine share from
-/// 71.3 to 72.5 % (`torso bench physiology [--muscle-law hill]`, `torso bench relaxation
-/// --muscle-law hill --posture supine`). Peritoneal dialysis fills raise the abdominal
-/// pressure by 3.1 mmHg supine and 4.5 mmHg erect for the same fill in 25 patients
-/// (Al-Hwiesh et al. 2011, "Intraperitoneal pressure and intra-abdominal pressure: are they
-/// the same?", abstract; the fill volume not read): x1.45 from erect to supine, less than
-/// Estenne et al.'s ratio; Konno & Mead 1968 (J Appl Physiol 24:544) found the abdomen over the
-/// tidal range nearly as compliant as the rib cage standing and somewhat more compliant supine
-/// (the same direction, no ratio).
+/// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
+/// seated-to-supine ratio of the diaphragm-abdomen compliance is x2.8 (Estenne, Yernault & De
+/// Troyer 1985, J Appl Physiol 59:1842: 0.025 +- 0.012 seated, 0.070 +- 0.025 L/cmH2O supine in
+/// 52 relaxed adults; [`SEATED_SUPINE_COMPLIANCES`]), which would make this factor 3.08
+/// ([`SITTING_WALL_COMPLIANCE`] x 2.8). Commit a69b5a9 found forced supine breathing stalled
+/// with it; under the thesis's law it now runs (`cargo run --release --example
+/// posture_breathing -- --probe 1 1.711`: 15 s, 953 steps), and it moves the supine quiet
+/// breath little (level 1: tidal volume 0.610 -> 0.617 L, abdominal share 61.3 -> 62.2 %,
+/// respiratory-system compliance 0.0694 -> 0.0753 L/cmH2O). But under the passive-and-active
+/// law with its cited maximal forces the relaxed supine chest wall then has no equilibrium
+/// 0.15 L above FRC (the path folds at 3.027 L; `cargo test --release --test muscle_law
+/// the_relaxed_recoil_rises_with_volume` with this constant set to 3.08), so the model keeps
+/// the 1.8 of its first dynamics
+/// (commit cfbd824), set by hand, not fitted. That fold was the abdominal wall's wrinkling:
+/// with its edges tension only (the hill law's, [`abdominal_wall_tension_only`]) x3.08 spans
+/// RV to TLC supine (C_cw 0.1494 L/cmH2O, supine abdominal share of quiet breathing 72.5 %;
+/// `torso bench relaxation --muscle-law hill --posture supine` and `torso bench physiology
+/// --muscle-law hill` with this constant changed); it stays 1.8 because it sets the thesis
+/// law's supine wall too, whose figures were measured with it. Peritoneal dialysis fills
+/// raise the abdominal pressure by 3.1 mmHg supine and 4.5 mmHg erect for the same fill in
+/// 25 patients (Al-Hwiesh et al. 2011, "Intraperitoneal pressure and intra-abdominal
+/// pressure: are they the same?", abstract; the fill volume not read): x1.45 from erect to
+/// supine, between ours and Estenne et al.'s. Konno & Mead 1968 (J Appl Physiol 24:544) found
+/// the abdomen over the tidal range nearly as compliant as the rib cage standing and somewhat
+/// more compliant supine (the same direction, no ratio).
+/// Unsourced: no source: chosen by hand, kept for the thesis law's measured figures. Literature: x2.8 from
+/// seated to supine (Estenne et al. 1985); ours x1.64 from sitting (1.8 / 1.1): disagrees.
+pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
+
+/// Abdominal wall compliance supine relative to standing when the wall's membrane edges carry
+/// tension only ([`Params::abdominal_wall_tension_only`], the passive-and-active law's):
+/// [`SITTING_WALL_COMPLIANCE`] times Estenne et al.'s seated-to-supine ratio of the
+/// diaphragm-abdomen compliance, x2.8 ([`SEATED_SUPINE_COMPLIANCES`]), so 3.08. Such a wall
+/// does not wrinkle when the supine relaxed chest wall is deflated or inflated, so the measured
+/// ratio holds (hill law, level 1, against [`SUPINE_WALL_COMPLIANCE`]'s 1.8: relaxed supine
+/// C_cw 0.1453 -> 0.1494 L/cmH2O, C_rs 0.083 -> 0.084, abdominal share of quiet breathing 71.3
+/// -> 72.5 %, quiet tidal volume 0.369 -> 0.374 L; `torso bench relaxation --muscle-law hill
+/// --posture supine`, `torso bench physiology --muscle-law hill`). The thesis law's wall, its
+/// edges linear, keeps 1.8: with 3.08 its relaxed supine curve at level 0 stops at 2.424 L
+/// (the wall wrinkling) where with 1.8 it reaches 1.677 L. Giving the thesis law's wall
+/// tension-only edges too was tried and not kept: its relaxed curves then span RV to TLC, but
+/// its quasi-static quiet breathing at level 2 buckles at the end of the first expiration
+/// (3.24 s, `torso simulate --lod 2 --solver quasi-static` with the flag set; the softest mode
+/// of the stiffness there is the dome's slack top).
 /// Derived: [`SITTING_WALL_COMPLIANCE`] x [`SEATED_SUPINE_COMPLIANCES`]'s diaphragm-abdomen
 /// ratio, supine over seated (Estenne et al. 1985).
-pub const SUPINE_WALL_COMPLIANCE: f64 =
+pub const TENSION_ONLY_SUPINE_WALL_COMPLIANCE: f64 =
     SITTING_WALL_COMPLIANCE * SEATED_SUPINE_COMPLIANCES[1][1] / SEATED_SUPINE_COMPLIANCES[1][0];
 
 /// Default [`Params::pleural_barrier_pressure`]: 0.5 cmH2O [Pa]. Small enough that the
@@ -561,22 +584,10 @@ pub struct Params {
     /// Configurations written before it existed read `false` (the rib family's wave).
     #[serde(default)]
     pub expiration_with_abdominals: bool,
-    /// Whether the abdominal wall's membrane edges carry tension only, as the dome's do. Yes
-    /// in every posture and under both muscle laws. A membrane wrinkles rather than carry
-    /// compression (tension-field theory: Stein & Hedgepeth 1961, NASA TN D-813; Mansfield
-    /// 1969, Proc R Soc A 311:1), and a compressed linear edge has a negative transverse
-    /// stiffness, -|f| / L, which the wall's foundation must outweigh. With linear edges,
-    /// deflating the relaxed standing chest wall below FRC wrinkled the lowest ring of the
-    /// abdominal wall (under the inertial solver each vertex snapped through by 1-2 mm between
-    /// -4 and -6.5 cmH2O at the airway opening, passive-and-active law) and the quasi-static
-    /// relaxation curve ended 0.28 L below FRC standing under both laws (3.225 L at level 1);
-    /// with tension-only edges it spans RV to TLC (`torso bench relaxation`, `torso bench
-    /// relaxation --muscle-law hill`; docs/dynamics.md, "The relaxed wall below FRC"). The toe of
-    /// the tension-only law ([`TENSION_TOE`]) sits at the rest's zero force: halving it moves
-    /// the hill law's relaxed chest wall by +0.15 % standing and +2.3 % supine (gravity
-    /// preloaded; `torso bench relaxation --muscle-law hill` with the constant changed).
-    /// Configurations written before it existed read `false` (linear edges), so they keep the
-    /// model they were written with.
+    /// Whether the abdominal wall's membrane edges carry tension only, as the dome's do
+    /// ([`abdominal_wall_tension_only`]): a membrane wrinkles rather than carry compression,
+    /// and a compressed linear edge's negative transverse stiffness buckles the softer wall.
+    /// Configurations written before it existed read `false` (linear edges).
     #[serde(default)]
     pub abdominal_wall_tension_only: bool,
 }
@@ -633,6 +644,33 @@ pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLa
     posture == Posture::Supine && law == super::muscle::MuscleLaw::Hill
 }
 
+/// Whether the abdominal wall's membrane edges carry tension only under `law`
+/// ([`Params::abdominal_wall_tension_only`]).
+///
+/// - Under the passive-and-active law: yes. A membrane wrinkles rather than carry compression
+///   (tension-field theory: Stein & Hedgepeth 1961, NASA TN D-813; Mansfield 1969, Proc R Soc
+///   A 311:1), and a compressed linear edge has a negative transverse stiffness, -|f| / L. The
+///   law's soft passive wall (its foundation scaled by [`HILL_PASSIVE_WALL_SCALE`]) no longer
+///   holds the wall's vertices against it: with linear edges, deflating the relaxed standing
+///   chest wall below FRC wrinkled the lowest ring of the abdominal wall, each vertex snapping
+///   through by 1-2 mm between -4 and -6.5 cmH2O at the airway opening under the inertial
+///   solver, and the quasi-static relaxation curve ended 0.28 L below FRC standing and 0.04 L
+///   supine; with tension-only edges it spans RV to TLC in both postures (`torso bench
+///   relaxation --muscle-law hill`, docs/dynamics.md, "The relaxed wall below FRC").
+/// - Under the thesis's law: not yet. Its level-1 relaxed curve stops at the same 3.225 L
+///   (`tests/relaxation.rs`, `relaxation_curve_reaches_residual_volume`, ignored), and with
+///   tension-only edges it spans RV to TLC too (measured: C_cw 0.0923 to 0.0954 L/cmH2O, the
+///   default quiet tidal volume 0.536 to 0.546 L); the edges stay linear there because the
+///   thesis law's calibrated figures (its drives, the README's figures, the bundled
+///   recordings, the fits' acceptance) were measured with them and would all move.
+///
+/// The toe of the tension-only law ([`TENSION_TOE`]) sits at the rest's zero force: halving
+/// it moves the hill law's relaxed chest wall by +0.15 % standing and +2.3 % supine (gravity
+/// preloaded; `torso bench relaxation --muscle-law hill` with the constant changed).
+pub fn abdominal_wall_tension_only(law: super::muscle::MuscleLaw) -> bool {
+    law == super::muscle::MuscleLaw::Hill
+}
+
 /// The factor on the passive chest wall's hand-set stiffnesses (and divisor of the abdominal
 /// wall's compliance, [`Params::scale_passive_wall`]) under the passive-and-active muscle law
 /// ([`super::muscle::MuscleLaw::Hill`]): with it the relaxed chest wall of the default subject
@@ -640,8 +678,8 @@ pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLa
 /// above FRC (Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13).
 /// Fitted with the law's cited maximal forces (`super::muscle::HILL_DIAPHRAGM_FORCE`,
 /// `super::muscle::HILL_INTERCOSTAL_TENSION`; 0.349 with the thesis law's 600 N and 1200 N/m)
-/// and the abdominal wall's tension-only edges ([`Params::abdominal_wall_tension_only`]; 0.421
-/// with linear ones).
+/// and the abdominal wall's tension-only edges ([`abdominal_wall_tension_only`]; 0.421 with
+/// linear ones).
 /// Fitted: `torso bench relaxation --muscle-law hill --fit --posture standing` (secant on the
 /// compliance of the relaxation curve, `bench::relaxation::fit_passive_wall`), which prints
 /// "fitted factor on the passive wall (Hill law): 0.440".
@@ -674,6 +712,11 @@ impl Params {
         p.muscle_law = law;
         p.abdominal_tone = abdominal_tone(posture, law);
         p.expiration_with_abdominals = expiration_with_abdominals(posture, law);
+        p.abdominal_wall_tension_only = abdominal_wall_tension_only(law);
+        if p.abdominal_wall_tension_only && posture == Posture::Supine {
+            p.abdominal_wall_compliance *=
+                TENSION_ONLY_SUPINE_WALL_COMPLIANCE / SUPINE_WALL_COMPLIANCE;
+        }
         p
     }
 
@@ -742,7 +785,7 @@ impl Params {
             gravity_loads: GravityLoads::Preloaded,
             abdominal_tone: 0.0,
             expiration_with_abdominals: false,
-            abdominal_wall_tension_only: true,
+            abdominal_wall_tension_only: false,
         }
     }
 

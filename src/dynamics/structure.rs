@@ -35,9 +35,9 @@ pub const PASSIVE: u8 = u8::MAX;
 /// expiration and their negative transverse stiffness -|f| / L made its static equilibrium
 /// a saddle (measured: +0.03 to +0.41 N/m at level 1, `examples/quasi_static`), which the
 /// quasi-static mode could not follow. The abdominal wall's edges take this slot too when
-/// [`super::Params::abdominal_wall_tension_only`] says so (every posture's defaults, under
-/// both muscle laws: a compressed linear edge wrinkles the wall); configurations written
-/// before the flag keep linear edges.
+/// [`super::Params::abdominal_wall_tension_only`] says so (the passive-and-active law's soft
+/// wall, whose foundation no longer holds them); otherwise they stay linear, the stiff wall's
+/// foundation holding its vertices in every direction.
 pub const PASSIVE_SLACK: u8 = u8::MAX - 1;
 
 /// Axial spring-damper elements (muscles and membrane), structure of arrays. Element e runs
