@@ -74,7 +74,9 @@ pub const SEATED_SUPINE_COMPLIANCES: [[f64; 2]; 2] = [[0.141, 0.088], [0.025, 0.
 /// with no figure for sitting against standing.
 pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 
-/// Abdominal wall compliance supine relative to standing (x1.64 from sitting). The measured
+/// Abdominal wall compliance supine relative to standing (x1.64 from sitting), for a wall whose
+/// membrane edges are linear (the thesis law's; the hill law's tension-only wall takes
+/// [`TENSION_ONLY_SUPINE_WALL_COMPLIANCE`]). The measured
 /// seated-to-supine ratio of the diaphragm-abdomen compliance is x2.8 (Estenne, Yernault & De
 /// Troyer 1985, J Appl Physiol 59:1842: 0.025 +- 0.012 seated, 0.070 +- 0.025 L/cmH2O supine in
 /// 52 relaxed adults; [`SEATED_SUPINE_COMPLIANCES`]), which would make this factor 3.08
@@ -91,8 +93,10 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 /// with its edges tension only (the hill law's, [`abdominal_wall_tension_only`]) x3.08 spans
 /// RV to TLC supine (C_cw 0.1494 L/cmH2O, supine abdominal share of quiet breathing 72.5 %;
 /// `torso bench relaxation --muscle-law hill --posture supine` and `torso bench physiology
-/// --muscle-law hill` with this constant changed); it stays 1.8 because it sets the thesis
-/// law's supine wall too, whose figures were measured with it. Peritoneal dialysis fills
+/// --muscle-law hill`), which [`TENSION_ONLY_SUPINE_WALL_COMPLIANCE`] now gives that law. It
+/// stays 1.8 for the thesis law's linear-edged wall, which wrinkles with 3.08 (level 0's
+/// relaxed supine curve stops at 2.424 L instead of reaching 1.677 L), and whose figures were
+/// measured with 1.8. Peritoneal dialysis fills
 /// raise the abdominal pressure by 3.1 mmHg supine and 4.5 mmHg erect for the same fill in
 /// 25 patients (Al-Hwiesh et al. 2011, "Intraperitoneal pressure and intra-abdominal
 /// pressure: are they the same?", abstract; the fill volume not read): x1.45 from erect to
@@ -104,11 +108,12 @@ pub const SITTING_WALL_COMPLIANCE: f64 = 1.1;
 pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 
 /// Abdominal wall compliance supine relative to standing when the wall's membrane edges carry
-/// tension only ([`Params::abdominal_wall_tension_only`], the passive-and-active law's):
-/// [`SITTING_WALL_COMPLIANCE`] times Estenne et al.'s seated-to-supine ratio of the
-/// diaphragm-abdomen compliance, x2.8 ([`SEATED_SUPINE_COMPLIANCES`]), so 3.08. Such a wall
-/// does not wrinkle when the supine relaxed chest wall is deflated or inflated, so the measured
-/// ratio holds (hill law, level 1, against [`SUPINE_WALL_COMPLIANCE`]'s 1.8: relaxed supine
+/// tension only ([`Params::abdominal_wall_tension_only`], the passive-and-active law's): the
+/// hand-set sitting factor [`SITTING_WALL_COMPLIANCE`] times Estenne et al.'s measured
+/// seated-to-supine ratio of the diaphragm-abdomen compartment's compliance, x2.8
+/// ([`SEATED_SUPINE_COMPLIANCES`]), so 3.08. The ratio is the compartment's, applied to the
+/// wall's foundation (not the same quantity, [`Params::abdominal_wall_compliance`]). Such a
+/// wall does not wrinkle when the supine relaxed chest wall is deflated or inflated (hill law, level 1, against [`SUPINE_WALL_COMPLIANCE`]'s 1.8: relaxed supine
 /// C_cw 0.1453 -> 0.1494 L/cmH2O, C_rs 0.083 -> 0.084, abdominal share of quiet breathing 71.3
 /// -> 72.5 %, quiet tidal volume 0.369 -> 0.374 L; `torso bench relaxation --muscle-law hill
 /// --posture supine`, `torso bench physiology --muscle-law hill`). The thesis law's wall, its
@@ -116,8 +121,9 @@ pub const SUPINE_WALL_COMPLIANCE: f64 = 1.8;
 /// (the wall wrinkling) where with 1.8 it reaches 1.677 L. Giving the thesis law's wall
 /// tension-only edges too was tried and not kept: its relaxed curves then span RV to TLC, but
 /// its quasi-static quiet breathing at level 2 buckles at the end of the first expiration
-/// (3.24 s, `torso simulate --lod 2 --solver quasi-static` with the flag set; the softest mode
-/// of the stiffness there is the dome's slack top).
+/// (3.24 s, `torso simulate --lod 2 --solver quasi-static` with
+/// [`Params::abdominal_wall_tension_only`] set in the configuration's params; the least stable
+/// mode of the stiffness there lies on the dome's slack top).
 /// Derived: [`SITTING_WALL_COMPLIANCE`] x [`SEATED_SUPINE_COMPLIANCES`]'s diaphragm-abdomen
 /// ratio, supine over seated (Estenne et al. 1985).
 pub const TENSION_ONLY_SUPINE_WALL_COMPLIANCE: f64 =
@@ -521,7 +527,8 @@ pub struct Params {
     /// Compliance of the abdominal wall [m^3/Pa] (elastic support of the wall by its muscles,
     /// fascia and skin), spread over the free wall vertices as a foundation stiffness.
     /// Default 2.0e-6 m^3/Pa standing (0.196 L/cmH2O; x1.1 sitting and x1.8 supine,
-    /// `SITTING_WALL_COMPLIANCE`, `SUPINE_WALL_COMPLIANCE`), calibrated, not measured: raised from 1.5e-6 in
+    /// `SITTING_WALL_COMPLIANCE`, `SUPINE_WALL_COMPLIANCE`; x3.08 supine under the hill law,
+    /// `TENSION_ONLY_SUPINE_WALL_COMPLIANCE`), calibrated, not measured: raised from 1.5e-6 in
     /// the calibration commit aeb7bbe against the checks of `tests/physiology.rs` it added
     /// (tidal volumes, diaphragm excursion, rib-cage share). The only measured compliance of
     /// the abdomen in the sources, Estenne et al. 1985's diaphragm-abdomen compartment
@@ -529,9 +536,9 @@ pub struct Params {
     /// model's wall has its membrane and relaxed muscles in parallel with this foundation.
     /// With the relaxed diaphragm carrying no pressure, as in people (Agostoni & Rahn 1960,
     /// J Appl Physiol 15:1087), it is the abdomen's own compliance, which the hill law's
-    /// relaxed model puts at 0.33 / 0.35 / 0.46 L/cmH2O standing / sitting / supine (`torso
-    /// bench relaxation --muscle-law hill --posture standing,sitting,supine`): ten and six
-    /// times Estenne et al.'s seated 0.032 +- 0.012 (aged 24-39) and supine 0.070 +- 0.025.
+    /// relaxed model puts at 0.33 / 0.35 / 0.61 L/cmH2O standing / sitting / supine (`torso
+    /// bench relaxation --muscle-law hill --posture standing,sitting,supine`; 0.46 supine with
+    /// the thesis law's supine factor): ten and nine times Estenne et al.'s seated 0.032 +- 0.012 (aged 24-39) and supine 0.070 +- 0.025.
     /// Peritoneal dialysis fills in awake supine patients raise the abdominal pressure by 2.2
     /// cmH2O per litre above 2 L (Durand et al. 1996, Perit Dial Int 16 Suppl 1:S84) or 1-3
     /// cmH2O/L (Pérez Díaz et al. 2017, Nefrología 37(6)): 0.33-1.0 L/cmH2O for the whole
@@ -657,12 +664,13 @@ pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLa
 ///   solver, and the quasi-static relaxation curve ended 0.28 L below FRC standing and 0.04 L
 ///   supine; with tension-only edges it spans RV to TLC in both postures (`torso bench
 ///   relaxation --muscle-law hill`, docs/dynamics.md, "The relaxed wall below FRC").
-/// - Under the thesis's law: not yet. Its level-1 relaxed curve stops at the same 3.225 L
+/// - Under the thesis's law: no. Its level-1 relaxed curve stops at the same 3.225 L
 ///   (`tests/relaxation.rs`, `relaxation_curve_reaches_residual_volume`, ignored), and with
 ///   tension-only edges it spans RV to TLC too (measured: C_cw 0.0923 to 0.0954 L/cmH2O, the
-///   default quiet tidal volume 0.536 to 0.546 L); the edges stay linear there because the
-///   thesis law's calibrated figures (its drives, the README's figures, the bundled
-///   recordings, the fits' acceptance) were measured with them and would all move.
+///   default quiet tidal volume 0.536 to 0.546 L). But its quasi-static quiet breathing at
+///   level 2 then buckles at the end of the first expiration (3.24 s; the least stable mode
+///   lies on the dome's slack top; docs/dynamics.md, "The relaxed wall below FRC"), where with
+///   linear edges it runs.
 ///
 /// The toe of the tension-only law ([`TENSION_TOE`]) sits at the rest's zero force: halving
 /// it moves the hill law's relaxed chest wall by +0.15 % standing and +2.3 % supine (gravity
@@ -695,8 +703,10 @@ impl Params {
     /// Defaults for a posture under muscle law `law`: [`Params::for_posture`], and under the
     /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`], fitted to
     /// the relaxed chest wall's compliance once the muscles no longer carry its stiffness, and
-    /// the posture's abdominal tone ([`abdominal_tone`]) and its expiratory rib-cage drive
-    /// ([`expiration_with_abdominals`]).
+    /// the posture's abdominal tone ([`abdominal_tone`]), its expiratory rib-cage drive
+    /// ([`expiration_with_abdominals`]), the abdominal wall's tension-only edges
+    /// ([`abdominal_wall_tension_only`]) and with them, supine, the wall's factor
+    /// `TENSION_ONLY_SUPINE_WALL_COMPLIANCE`.
     pub fn for_posture_and_law(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
         let mut p = Params::unscaled_for_posture_and_law(posture, law);
         if law == super::muscle::MuscleLaw::Hill {
