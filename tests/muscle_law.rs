@@ -255,6 +255,30 @@ fn the_relaxed_curve_spans_the_vital_capacity() {
     }
 }
 
+/// The supine wall's compliance factor follows the wall's edges: with tension-only edges (the
+/// hill law's) it is Estenne et al.'s seated-to-supine ratio of the diaphragm-abdomen
+/// compliance on the sitting factor (1.1 x 0.070 / 0.025), with linear edges (the thesis
+/// law's) the hand-set 1.8; sitting and standing are the same under both laws.
+#[test]
+fn the_supine_wall_factor_follows_the_walls_edges() {
+    let ratio = |law: MuscleLaw, posture: Posture| {
+        Params::for_posture_and_law(posture, law).abdominal_wall_compliance
+            / Params::for_posture_and_law(Posture::Standing, law).abdominal_wall_compliance
+    };
+    // Estenne, Yernault & De Troyer 1985 (J Appl Physiol 59:1842): diaphragm-abdomen
+    // compliance 0.070 L/cmH2O supine, 0.025 seated
+    let estenne = 0.070 / 0.025;
+    let sitting = ratio(MuscleLaw::Hill, Posture::Sitting);
+    assert!((sitting - ratio(MuscleLaw::Thesis, Posture::Sitting)).abs() < 1e-12);
+    assert!(
+        (ratio(MuscleLaw::Hill, Posture::Supine) - sitting * estenne).abs() < 1e-12,
+        "hill supine {} against {}",
+        ratio(MuscleLaw::Hill, Posture::Supine),
+        sitting * estenne
+    );
+    assert!((ratio(MuscleLaw::Thesis, Posture::Supine) - 1.8).abs() < 1e-12);
+}
+
 /// Under the hill law every membrane edge of the abdominal wall carries tension only, as the
 /// dome's do (a membrane wrinkles rather than carry compression); under the thesis law the
 /// wall's edges stay linear and only the dome's are tension only. The edges that carry tension
