@@ -151,7 +151,11 @@ fn the_compartments_compliances_add_up_to_the_chest_walls() {
 /// Upright, the relaxed rib cage is the compliant compartment and the diaphragm-abdomen the
 /// stiff one (Estenne et al. 1985: 0.164 +- 0.041 and 0.032 +- 0.012 L/cmH2O seated, aged
 /// 24-39). Not fitted: the passive wall's one factor is fitted to the whole chest wall's 0.2
-/// L/cmH2O standing, its split between the compartments is the hand-set constants'.
+/// L/cmH2O standing, its split between the compartments is the hand-set constants'. The
+/// two-factor fit (`the_compartments_fit_reaches_its_targets`) meets it, but the fitted wall
+/// loses the quiet excursion per litre, the M-mode excursion and gravity's supine FRC fall
+/// (docs/dynamics.md, "Fitting the two compartments apart"), so the defaults keep the one
+/// factor.
 #[test]
 #[ignore = "issue 35: with the hill law the relaxed rib cage seated is 0.0814 L/cmH2O (0.082-0.246 cited) and the diaphragm-abdomen 0.1058 (0.008-0.056): the upright abdomen takes 57 % of the relaxed chest wall's compliance against 16 %"]
 fn the_upright_compartments_have_adults_compliances() {
@@ -163,6 +167,44 @@ fn the_upright_compartments_have_adults_compliances() {
 #[test]
 fn the_supine_compartments_have_adults_compliances() {
     compartments_within(Posture::Supine, ESTENNE_SUPINE);
+}
+
+/// The two-factor fit of the passive wall's compartments (`bench::relaxation::fit_compartments`,
+/// `torso bench relaxation --muscle-law hill --fit-compartments`) reaches young seated
+/// adults' rib cage and diaphragm-abdomen compliances (Estenne et al. 1985) from the law's
+/// defaults, its last step is what the fitted wall measures, and it moves only the
+/// cartilage and the abdominal wall. A test of the fit, not of the model: the default wall is
+/// not the fitted one (docs/dynamics.md, "Fitting the two compartments apart").
+#[test]
+fn the_compartments_fit_reaches_its_targets() {
+    use breathing_torso::bench::relaxation::{
+        SEATED_COMPARTMENTS, fit_compartments, tidal_compartments,
+    };
+    let config = hill(Posture::Sitting);
+    let steps = fit_compartments(&config, SEATED_COMPARTMENTS).unwrap();
+    let last = *steps.last().unwrap();
+    println!("{} iterates, last {last:?}", steps.len());
+    assert!((last.rib_cage / SEATED_COMPARTMENTS[0] - 1.0).abs() < 5e-3);
+    assert!((last.abdomen / SEATED_COMPARTMENTS[1] - 1.0).abs() < 5e-3);
+    // a softer rib cage and a stiffer abdomen than the defaults' (seated 0.0815 and 0.1056)
+    assert!(
+        last.cartilage < 1.0 && last.abdominal_wall > 1.0,
+        "{last:?}"
+    );
+    let defaults = Params::for_posture_and_law(Posture::Sitting, MuscleLaw::Hill);
+    let mut p = defaults.clone();
+    p.scale_compartments(last.cartilage, last.abdominal_wall);
+    let mut only = defaults.clone();
+    only.cartilage_stiffness = p.cartilage_stiffness;
+    only.membrane_stiffness = p.membrane_stiffness;
+    only.abdominal_wall_compliance = p.abdominal_wall_compliance;
+    assert_eq!(only, p, "only the cartilage and the abdominal wall move");
+    let mut c = config.clone();
+    c.params = Some(p);
+    let [rc, ab] = tidal_compartments(&c).unwrap();
+    assert!((rc - last.rib_cage).abs() < 1e-9 && (ab - last.abdomen).abs() < 1e-9);
+    let err = fit_compartments(&config, [0.164, f64::NAN]).unwrap_err();
+    assert!(err.to_string().contains("target compartments"), "{err}");
 }
 
 /// Over the vital capacity the relaxed abdomen is less compliant than the rib cage (Konno &

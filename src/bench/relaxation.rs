@@ -336,6 +336,147 @@ pub fn fit_passive_wall(config: &Config, target: f64) -> Result<Vec<FitStep>> {
     })
 }
 
+/// The relaxed compartments' compliances of young seated adults, rib cage and
+/// diaphragm-abdomen [L/cmH2O]: Estenne, Yernault & De Troyer 1985, J Appl Physiol 59:1842
+/// (61 adults, weighted spirometer and magnetometers, relaxation; the abstract's means for the
+/// 24-39-year-olds, 0.164 +- 0.041 and 0.032 +- 0.012; the default subject is 30). The target
+/// of [`fit_compartments`].
+pub const SEATED_COMPARTMENTS: [f64; 2] = [0.164, 0.032];
+
+/// The relaxed rib cage's and abdomen's compliances [L/cmH2O] over FRC to FRC +
+/// [`TIDAL_RANGE`] alone (six equilibria), as [`relaxation`] measures them: the slopes of
+/// their displaced volumes against the pleural pressure.
+pub fn tidal_compartments(config: &Config) -> Result<[f64; 2]> {
+    let c = relaxed(config);
+    let mut torso = Torso::new(c)?;
+    let frc = torso.read(Quantity::LungVolume)?;
+    let mut points = vec![frc_point(&mut torso, frc)?];
+    for k in 1..=5 {
+        points.push(at_volume(&mut torso, frc + TIDAL_RANGE * k as f64 / 5.0)?);
+    }
+    let points: Vec<&Point> = points.iter().collect();
+    Ok([
+        partial(&points, &|p| p.rib_cage),
+        partial(&points, &|p| p.abdomen),
+    ])
+}
+
+/// One evaluation of [`fit_compartments`]: the factors tried and the compliances they gave.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CompartmentStep {
+    /// Factor on the cartilage joints' stiffness ([`Params::scale_compartments`]).
+    pub cartilage: f64,
+    /// Factor on the abdominal wall's stiffness.
+    pub abdominal_wall: f64,
+    /// Relaxed rib cage's compliance over the tidal range [L/cmH2O].
+    pub rib_cage: f64,
+    /// Relaxed diaphragm-abdomen's compliance over the tidal range [L/cmH2O].
+    pub abdomen: f64,
+}
+
+/// Fits the two factors of [`Params::scale_compartments`] (applied to `config`'s parameters
+/// or its posture's and law's defaults, [`Params::for_posture_and_law`]) so that the relaxed
+/// rib cage's and abdomen's compliances over the tidal range ([`tidal_compartments`]) are
+/// `target` [L/cmH2O] (rib cage, abdomen): Newton steps on the logarithms (each compliance
+/// is nearly a power of each factor; the Jacobian by differences of 0.05 in the log, each
+/// step at most a factor 4), to 0.5 % of both targets. The two compartments are coupled (a
+/// stiffer abdominal wall also stiffens the rib cage through the diaphragm and the abdominal
+/// pressure on the lower ribs), hence the full Jacobian. Returns the evaluations at the
+/// iterates, the last the fit.
+pub fn fit_compartments(config: &Config, target: [f64; 2]) -> Result<Vec<CompartmentStep>> {
+    if !target.iter().all(|t| t.is_finite() && *t > 0.0) {
+        return Err(Error::invalid(
+            "target compartments' compliances",
+            format!("{target:?}"),
+            "both > 0 L/cmH2O",
+        ));
+    }
+    let base = config
+        .params
+        .clone()
+        .unwrap_or_else(|| Params::for_posture_and_law(config.subject.posture, config.muscle_law));
+    let eval = |x: [f64; 2]| -> Result<[f64; 2]> {
+        let mut c = config.clone();
+        let mut p = base.clone();
+        p.scale_compartments(x[0].exp(), x[1].exp());
+        c.params = Some(p);
+        let y = tidal_compartments(&c)?;
+        if !y.iter().all(|v| v.is_finite() && *v > 0.0) {
+            return Err(Error::Numerical {
+                time: 0.0,
+                reason: format!(
+                    "the compartments' compliances are not positive at factors {:.4} and \
+                     {:.4}: rib cage {:.4}, abdomen {:.4} L/cmH2O",
+                    x[0].exp(),
+                    x[1].exp(),
+                    y[0],
+                    y[1]
+                ),
+            });
+        }
+        Ok([y[0].ln(), y[1].ln()])
+    };
+    let goal = [target[0].ln(), target[1].ln()];
+    let step = |x: [f64; 2], y: [f64; 2]| CompartmentStep {
+        cartilage: x[0].exp(),
+        abdominal_wall: x[1].exp(),
+        rib_cage: y[0].exp(),
+        abdomen: y[1].exp(),
+    };
+    let mut x = [0.0, 0.0];
+    let mut y = eval(x)?;
+    let mut steps = vec![step(x, y)];
+    const H: f64 = 0.05;
+    for _ in 0..10 {
+        if (0..2).all(|i| (y[i] - goal[i]).abs() < 5e-3) {
+            return Ok(steps);
+        }
+        let y0 = eval([x[0] + H, x[1]])?;
+        let y1 = eval([x[0], x[1] + H])?;
+        // J[i][j] = d ln C_i / d ln factor_j
+        let j = [
+            [(y0[0] - y[0]) / H, (y1[0] - y[0]) / H],
+            [(y0[1] - y[1]) / H, (y1[1] - y[1]) / H],
+        ];
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if !(det.is_finite() && det.abs() > 1e-9) {
+            return Err(Error::Numerical {
+                time: 0.0,
+                reason: format!(
+                    "the compartments' compliances do not depend on the two factors apart at \
+                     cartilage {:.4}, abdominal wall {:.4} (Jacobian {j:?})",
+                    x[0].exp(),
+                    x[1].exp()
+                ),
+            });
+        }
+        let r = [goal[0] - y[0], goal[1] - y[1]];
+        let dx = [
+            (j[1][1] * r[0] - j[0][1] * r[1]) / det,
+            (j[0][0] * r[1] - j[1][0] * r[0]) / det,
+        ];
+        let limit = 4f64.ln();
+        x = [
+            x[0] + dx[0].clamp(-limit, limit),
+            x[1] + dx[1].clamp(-limit, limit),
+        ];
+        y = eval(x)?;
+        steps.push(step(x, y));
+    }
+    if (0..2).all(|i| (y[i] - goal[i]).abs() < 5e-3) {
+        return Ok(steps);
+    }
+    let last = steps[steps.len() - 1];
+    Err(Error::Numerical {
+        time: 0.0,
+        reason: format!(
+            "the compartments' fit did not reach rib cage {} and abdomen {} L/cmH2O in 10 \
+             Newton steps (last: cartilage {:.4}, abdominal wall {:.4}: {:.4} and {:.4})",
+            target[0], target[1], last.cartilage, last.abdominal_wall, last.rib_cage, last.abdomen
+        ),
+    })
+}
+
 /// The relaxed respiratory system's rest, its FRC under the loads: the lung volume [L] at
 /// which the alveolar pressure of the relaxed equilibrium, with the airway shut, is zero (so
 /// that with the airway open no air flows), found by secant steps from the model's rest

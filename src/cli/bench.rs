@@ -193,6 +193,14 @@ pub struct RelaxationArgs {
     /// with the fitted factor.
     #[arg(long)]
     pub fit: bool,
+    /// Fit the passive wall's two compartments apart (the cartilage joints' stiffness and the
+    /// abdominal wall's, `Params::scale_compartments`, from the muscle law's defaults) so that
+    /// the relaxed rib cage's and diaphragm-abdomen's compliances over the tidal range are
+    /// young seated adults' (Estenne et al. 1985: 0.164 and 0.032 L/cmH2O), for the first
+    /// posture given (sitting, as they were measured); then print the curves of every
+    /// posture with the fitted factors. Not with --fit.
+    #[arg(long)]
+    pub fit_compartments: bool,
     /// How gravity loads the model: preloaded (each posture's generated anatomy is its rest)
     /// or acting (the standing anatomy with gravity turned; each posture's rest, its relaxed
     /// FRC, found under the loads and printed).
@@ -230,7 +238,15 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
         )
     })?;
     let acting = loads == crate::dynamics::GravityLoads::Acting;
+    if args.fit && args.fit_compartments {
+        return Err(Error::invalid(
+            "--fit-compartments",
+            "with --fit",
+            "one fit at a time: --fit or --fit-compartments",
+        ));
+    }
     let mut fitted: Option<f64> = None;
+    let mut fitted_compartments: Option<(f64, f64)> = None;
     for name in args.posture.split(',') {
         let posture = Posture::from_name(name.trim())
             .map_err(|_| Error::invalid("--posture", name, "standing, sitting or supine"))?;
@@ -275,6 +291,35 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
             fitted = Some(f);
             params = unscaled;
             params.scale_passive_wall(f);
+        }
+        if args.fit_compartments {
+            use crate::bench::relaxation::{SEATED_COMPARTMENTS, fit_compartments};
+            if fitted_compartments.is_none() {
+                params.gravity_loads = loads;
+                config.params = Some(params.clone());
+                let steps = fit_compartments(&config, SEATED_COMPARTMENTS)?;
+                for s in &steps {
+                    println!(
+                        "fit ({posture:?}): cartilage x{:.4}, abdominal wall x{:.4}: rib cage \
+                         {:.4}, abdomen {:.4} L/cmH2O",
+                        s.cartilage, s.abdominal_wall, s.rib_cage, s.abdomen
+                    );
+                }
+                let last = steps[steps.len() - 1];
+                println!(
+                    "fitted factors on the compartments ({law:?} law): cartilage {:.4}, abdominal \
+                     wall {:.3} (rib cage {:.4}, abdomen {:.4} L/cmH2O against {:?})",
+                    last.cartilage,
+                    last.abdominal_wall,
+                    last.rib_cage,
+                    last.abdomen,
+                    SEATED_COMPARTMENTS
+                );
+                fitted_compartments = Some((last.cartilage, last.abdominal_wall));
+            }
+            if let Some((c, a)) = fitted_compartments {
+                params.scale_compartments(c, a);
+            }
         }
         params.gravity_loads = loads;
         config.params = Some(params);

@@ -744,6 +744,18 @@ impl Params {
         self.abdominal_wall_compliance /= factor;
     }
 
+    /// Scales the passive chest wall's two compartments apart: the cartilage joints' stiffness
+    /// (which, in the closed loop of ribs and sternum, sets most of the relaxed rib cage's
+    /// compliance) times `cartilage`, and the abdominal wall (its membranes' stiffness times
+    /// `abdominal_wall`, its compliance divided by it). The rib joints, the dome's membrane,
+    /// central tendon and support keep their values. What
+    /// `bench::relaxation::fit_compartments` fits to the relaxed compartments' compliances.
+    pub fn scale_compartments(&mut self, cartilage: f64, abdominal_wall: f64) {
+        self.cartilage_stiffness *= cartilage;
+        self.membrane_stiffness *= abdominal_wall;
+        self.abdominal_wall_compliance /= abdominal_wall;
+    }
+
     /// Largest contraction of an element of `group` (see [`Params::beta_max`]): the
     /// diaphragm's own, [`Params::beta_max`] for every other group (the scalenes and the
     /// sternocleidomastoids alike).
