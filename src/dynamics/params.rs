@@ -483,6 +483,13 @@ pub struct Params {
     /// costovertebral articulation: +-0.1 N m turned it by a median 13.2 deg (6.4-20.9 deg; Lebschy
     /// et al. 2024, J Biomech 163:111923), a secant stiffness of 0.87 (0.55-1.8) N m/rad; ours, 2
     /// N m/rad, also carries a share of the chest wall's recoil, so it is not the same quantity.
+    /// Under the hill law it is 0.88 N m/rad (x [`HILL_PASSIVE_WALL_SCALE`]), Lebschy et al.'s
+    /// figure, but that secant spans only +-6.6 deg about neutral (the abstract; 2 bodies, 4
+    /// rib levels): the law's rib 3 turns 13.6 deg in full inspiration, beyond the tested
+    /// range. Costovertebral units load non-linearly, a low-stiffness zone then stiffer
+    /// quasi-linear zones (Lemosse et al. 1998, Eur Spine J 7:16, 27 units from 9 cadavers;
+    /// abstract, no numbers read): a joint that stiffens beyond the neutral zone is not
+    /// modelled.
     pub rib_joint_stiffness: f64,
     /// In-plane stiffness of an abdominal membrane edge [N/m] (2D modulus about 1.15 k).
     /// Default 400 N/m, set by hand; no source (the value of the first dynamics, commit
