@@ -375,7 +375,8 @@ pub struct CompartmentStep {
 }
 
 /// Fits the two factors of [`Params::scale_compartments`] (applied to `config`'s parameters
-/// or its posture's and law's defaults, [`Params::for_posture_and_law`]) so that the relaxed
+/// or its posture's and law's wall before the compartments' factors,
+/// [`Params::before_compartments`]) so that the relaxed
 /// rib cage's and abdomen's compliances over the tidal range ([`tidal_compartments`]) are
 /// `target` [L/cmH2O] (rib cage, abdomen): Newton steps on the logarithms (each compliance
 /// is nearly a power of each factor; the Jacobian by differences of 0.05 in the log, each
@@ -394,7 +395,7 @@ pub fn fit_compartments(config: &Config, target: [f64; 2]) -> Result<Vec<Compart
     let base = config
         .params
         .clone()
-        .unwrap_or_else(|| Params::for_posture_and_law(config.subject.posture, config.muscle_law));
+        .unwrap_or_else(|| Params::before_compartments(config.subject.posture, config.muscle_law));
     let eval = |x: [f64; 2]| -> Result<[f64; 2]> {
         let mut c = config.clone();
         let mut p = base.clone();

@@ -194,7 +194,8 @@ pub struct RelaxationArgs {
     #[arg(long)]
     pub fit: bool,
     /// Fit the passive wall's two compartments apart (the cartilage joints' stiffness and the
-    /// abdominal wall's, `Params::scale_compartments`, from the muscle law's defaults) so that
+    /// abdominal wall's, `Params::scale_compartments`, from the muscle law's wall before its
+    /// compartments' factors, `Params::before_compartments`) so that
     /// the relaxed rib cage's and diaphragm-abdomen's compliances over the tidal range are
     /// young seated adults' (Estenne et al. 1985: 0.164 and 0.032 L/cmH2O), for the first
     /// posture given (sitting, as they were measured); then print the curves of every
@@ -294,6 +295,7 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
         }
         if args.fit_compartments {
             use crate::bench::relaxation::{SEATED_COMPARTMENTS, fit_compartments};
+            params = crate::dynamics::Params::before_compartments(tables, law);
             if fitted_compartments.is_none() {
                 params.gravity_loads = loads;
                 config.params = Some(params.clone());

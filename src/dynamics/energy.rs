@@ -49,6 +49,13 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
             d.y = 0.0;
         }
         e += 0.5 * s.stiffness[i] * d.norm_squared();
+        let lambda = s.stiffening[i];
+        if lambda > 0.0 {
+            // the normal part's linear energy replaced by the unloading law's
+            let u = -d.dot(&s.normal[i]);
+            let k = s.stiffness[i];
+            e += super::forces::unloading_energy(k, lambda, u) - 0.5 * k * u * u;
+        }
     }
     for r in 0..RIBS {
         e += 0.5 * model.rib_stiffness[r] * y[l.theta + r].powi(2);

@@ -482,6 +482,32 @@ pub fn tension(f: f64, toe: f64) -> f64 {
     }
 }
 
+/// The outward normal force [N] of a wall foundation spring of stiffness `k` [N/m] and
+/// unloading length `lambda` [m] at an outward displacement `u` [m] from its rest
+/// (`Params::abdominal_wall_unloading`): -k u outwards, k lambda (1 - exp(u / lambda)) inwards,
+/// which is the load k lambda the vertex carried at rest given up along an exponential. Its
+/// slope is -k at rest on both sides.
+#[inline]
+pub fn unloading_force(k: f64, lambda: f64, u: f64) -> f64 {
+    if u >= 0.0 {
+        -k * u
+    } else {
+        -k * lambda * (u / lambda).exp_m1()
+    }
+}
+
+/// The energy [J] of [`unloading_force`]: k u^2 / 2 outwards, k lambda^2 (exp(x) - 1 - x) with
+/// x = u / lambda inwards.
+#[inline]
+pub fn unloading_energy(k: f64, lambda: f64, u: f64) -> f64 {
+    if u >= 0.0 {
+        0.5 * k * u * u
+    } else {
+        let x = u / lambda;
+        k * lambda * lambda * (x.exp_m1() - x)
+    }
+}
+
 /// Cartilage joints and wall foundation.
 fn vector_springs(model: &Structure, data: &mut Data) {
     let s = &model.springs;
@@ -492,9 +518,20 @@ fn vector_springs(model: &Structure, data: &mut Data) {
     let (pos, vel, force) = (&data.pos[..], &data.vel[..m], &mut data.force[..m]);
     for i in 0..n {
         let (a, b) = (ia[i] as usize, ib[i] as usize);
-        let mut f = (pos[b] - pos[a]) * stiffness[i] + (vel[b] - vel[a]) * damping[i];
+        let d = pos[b] - pos[a];
+        let mut f = d * stiffness[i] + (vel[b] - vel[a]) * damping[i];
         if horizontal[i] {
             f.y = 0.0;
+        }
+        let lambda = s.stiffening[i];
+        if lambda > 0.0 {
+            // the normal part, for the wall vertex's outward displacement u
+            let n = s.normal[i];
+            let u = -d.dot(&n);
+            if u < 0.0 {
+                let k = stiffness[i];
+                f += n * (k * u + unloading_force(k, lambda, u));
+            }
         }
         force[a] += f;
         force[b] -= f;
@@ -808,6 +845,79 @@ mod tests {
             y[l.vertex_v + i] = 0.02 * ((i as f64) * 0.11).cos();
         }
         y
+    }
+
+    /// The wall's unloading law: minus its energy's derivative (central differences), linear
+    /// outwards, with the slope -k on both sides of the rest, and inwards never pulling more
+    /// than the load k lambda the vertex carried at rest.
+    #[test]
+    fn the_unloading_law_is_its_energys_derivative_and_bounded() {
+        use super::{unloading_energy, unloading_force};
+        let (k, lambda) = (2.0e3, 5.0e-3);
+        for i in 0..=60 {
+            let u = -0.05 + 0.001 * i as f64;
+            let h = 1e-7;
+            let de = (unloading_energy(k, lambda, u + h) - unloading_energy(k, lambda, u - h))
+                / (2.0 * h);
+            let f = unloading_force(k, lambda, u);
+            assert!(
+                (f + de).abs() < 1e-6 * k * lambda,
+                "u {u}: {f} against {}",
+                -de
+            );
+            assert!(f < k * lambda, "u {u}: {f}");
+        }
+        let h = 1e-9;
+        let slope = |u: f64| {
+            (unloading_force(k, lambda, u + h) - unloading_force(k, lambda, u - h)) / (2.0 * h)
+        };
+        assert!((slope(-2.0 * h) / -k - 1.0).abs() < 1e-5);
+        assert!((slope(2.0 * h) / -k - 1.0).abs() < 1e-5);
+        assert!((unloading_force(k, lambda, -1.0) / (k * lambda) - 1.0).abs() < 1e-12);
+    }
+
+    /// Under the hill law every wall vertex has an unloading length, its rest load over the
+    /// foundation's stiffness per area, and the load falls with height by the contents'
+    /// hydrostatic gradient (Loring et al. 1994): the lengths are linear in height, with slope
+    /// rho g / kappa, wherever they are above the floor. Under the thesis law there are none.
+    #[test]
+    fn the_walls_unloading_lengths_follow_its_rest_load() {
+        use crate::anatomy::Posture;
+        use crate::dynamics::Structure;
+        use crate::dynamics::muscle::MuscleLaw;
+        use crate::dynamics::params::{ABDOMINAL_CONTENTS_DENSITY, WALL_LOAD_FLOOR};
+        let anatomy = Anatomy::build(&Subject::default(), 0).unwrap();
+        let thesis = Structure::compile(&anatomy, Params::for_posture(Posture::Standing));
+        assert!(thesis.springs.stiffening.iter().all(|&l| l == 0.0));
+        let params = Params::for_posture_and_law(Posture::Standing, MuscleLaw::Hill);
+        let s = Structure::compile(&anatomy, params.clone());
+        let wall: Vec<usize> = (0..s.springs.a.len())
+            .filter(|&i| s.springs.stiffening[i] > 0.0)
+            .collect();
+        assert!(wall.len() > 10, "{} wall springs", wall.len());
+        // kappa from the lowest vertex's load (the cited bottom load)
+        let height = |i: usize| -s.gravity.dot(&s.rest[s.springs.a[i] as usize].coords);
+        let low = *wall
+            .iter()
+            .min_by(|&&i, &&j| height(i).total_cmp(&height(j)))
+            .unwrap();
+        let bottom =
+            crate::dynamics::params::wall_load_at_lowest(Posture::Standing, params.gravity);
+        let kappa = bottom / s.springs.stiffening[low];
+        let mut checked = 0;
+        for &i in &wall {
+            let load = bottom - ABDOMINAL_CONTENTS_DENSITY * (height(i) - height(low));
+            let expected = load.max(WALL_LOAD_FLOOR) / kappa;
+            assert!(
+                (s.springs.stiffening[i] / expected - 1.0).abs() < 1e-9,
+                "spring {i}: {} against {expected} m",
+                s.springs.stiffening[i]
+            );
+            checked += usize::from(load > WALL_LOAD_FLOOR);
+        }
+        assert!(checked > 10, "{checked} above the floor");
+        // kappa is the foundation's stiffness per area: A_wall / C_wall
+        assert!(kappa > 0.0 && kappa.is_finite());
     }
 
     /// The contents' hydrostatic loads are minus the gradient of their potential

@@ -40,9 +40,10 @@ pub use data::{Activations, Data};
 pub use model::Model;
 pub use params::{
     ABDOMINAL_CONTENTS_DENSITY, CHEST_WALL_COMPLIANCE, DIAPHRAGM_CONTRACTION_UPRIGHT, GRAVITY,
-    GRAVITY_MAX, GravityLoads, HILL_PASSIVE_WALL_SCALE, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN,
-    PLEURAL_BARRIER_PRESSURE, Params, STANDING_ABDOMINAL_TONE, abdominal_tone,
-    abdominal_wall_tension_only, diaphragm_contraction, diaphragm_length_ratio,
+    GRAVITY_MAX, GravityLoads, HILL_ABDOMINAL_WALL_FACTOR, HILL_CARTILAGE_FACTOR,
+    HILL_PASSIVE_WALL_SCALE, LUNG_RECOIL_AT_FRC, PLEURAL_BARRIER_MARGIN, PLEURAL_BARRIER_PRESSURE,
+    Params, STANDING_ABDOMINAL_TONE, abdominal_tone, abdominal_wall_tension_only,
+    abdominal_wall_unloading, diaphragm_contraction, diaphragm_length_ratio,
     expiration_with_abdominals,
 };
 pub use state::{Layout, error_weights, rest_state};

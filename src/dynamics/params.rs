@@ -604,6 +604,17 @@ pub struct Params {
     /// Configurations written before it existed read `false` (linear edges).
     #[serde(default)]
     pub abdominal_wall_tension_only: bool,
+    /// Whether the abdominal wall's foundation softens as the wall unloads: each wall vertex
+    /// carries at rest the contents' pressure there, and moving inwards from its rest it gives
+    /// that load up along an exponential, its normal force k lambda (1 - exp(u / lambda)) for
+    /// an outward displacement u < 0 (linear, k u, outwards), with lambda the load over the
+    /// foundation's stiffness per area ([`wall_load_at_lowest`] less the contents'
+    /// hydrostatic fall, [`ABDOMINAL_CONTENTS_DENSITY`]). A tissue that carries a load is on
+    /// the stiff limb of its J-shaped curve and softens as it unloads (Fung 1967, Am J
+    /// Physiol 213:1532): an upright wall stiff enough for the seated partition can still
+    /// let the contents in when lying down unloads it. Serde default false (linear).
+    #[serde(default)]
+    pub abdominal_wall_unloading: bool,
 }
 
 /// The abdominal wall's tonic activity upright, a fraction of maximal voluntary contraction:
@@ -658,6 +669,27 @@ pub fn expiration_with_abdominals(posture: Posture, law: super::muscle::MuscleLa
     posture == Posture::Supine && law == super::muscle::MuscleLaw::Hill
 }
 
+/// The pressure of the abdominal contents at the abdominal wall's lowest point at rest,
+/// relative to the body surface [Pa], at gravity `gravity` [m/s^2] (scaled from 9.81).
+/// Source: bladder pressure of healthy adults, the lowest point of the cavity: standing 20
+/// mmHg (27.2 cmH2O) and sitting 16.7 mmHg (22.7 cmH2O), 20 adults aged up to 30 (Cobb et
+/// al. 2005, J Surg Res 129:231, abstract); supine 10.5 +- 4.7 cmH2O (standing 31.0 +- 6.4),
+/// 39 continent women (Am J Obstet Gynecol 2005, 192:1722, abstract).
+pub fn wall_load_at_lowest(posture: Posture, gravity: f64) -> f64 {
+    let cmh2o = match posture {
+        Posture::Standing => 27.2,
+        Posture::Sitting => 22.7,
+        Posture::Supine => 10.5,
+    };
+    cmh2o * 98.0665 * gravity / GRAVITY
+}
+
+/// The smallest load a wall vertex is taken to carry at rest [Pa] (0.5 cmH2O), so that its
+/// unloading length stays positive where the contents' hydrostatic fall reaches the surface
+/// pressure ([`Params::abdominal_wall_unloading`]).
+/// Numerical: a floor, not a property of the body.
+pub const WALL_LOAD_FLOOR: f64 = 0.5 * 98.0665;
+
 /// Whether the abdominal wall's membrane edges carry tension only under `law`
 /// ([`Params::abdominal_wall_tension_only`]).
 ///
@@ -700,6 +732,33 @@ pub fn abdominal_wall_tension_only(law: super::muscle::MuscleLaw) -> bool {
 /// "fitted factor on the passive wall (Hill law): 0.440".
 pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.440;
 
+/// The factor on the cartilage joints' stiffness under the passive-and-active law, after
+/// [`HILL_PASSIVE_WALL_SCALE`] ([`Params::scale_compartments`]): with it and
+/// [`HILL_ABDOMINAL_WALL_FACTOR`] the relaxed rib cage and diaphragm-abdomen of the default
+/// subject seated at level of detail 1 have young seated adults' compliances over the tidal
+/// range, 0.164 and 0.032 L/cmH2O (Estenne, Yernault & De Troyer 1985, J Appl Physiol
+/// 59:1842; `bench::relaxation::SEATED_COMPARTMENTS`). In the model's closed loop of rigid
+/// ribs and sternum the cartilage, not the rib joints, sets the rib cage's compliance; the
+/// fitted joint, 78 N/m, stands for the cartilage's and ribs' bending that rigid ribs lack.
+/// Fitted: `torso bench relaxation --muscle-law hill --fit-compartments --posture sitting`
+/// (Newton steps on the logarithms, `bench::relaxation::fit_compartments`), which prints
+/// "fitted factors on the compartments (Hill law): cartilage 0.0178, abdominal wall 9.361".
+pub const HILL_CARTILAGE_FACTOR: f64 = 0.0178;
+
+/// The factor on the abdominal wall's stiffness (its membranes times, its foundation's
+/// compliance divided) under the passive-and-active law, after [`HILL_PASSIVE_WALL_SCALE`];
+/// fitted with [`HILL_CARTILAGE_FACTOR`], which see.
+/// Fitted: `torso bench relaxation --muscle-law hill --fit-compartments --posture sitting`,
+/// which prints "abdominal wall 9.361".
+pub const HILL_ABDOMINAL_WALL_FACTOR: f64 = 9.361;
+
+/// Whether the abdominal wall's foundation softens as it unloads under `law`
+/// ([`Params::abdominal_wall_unloading`]): under the passive-and-active law, whose upright
+/// wall is fitted stiff ([`HILL_ABDOMINAL_WALL_FACTOR`]).
+pub fn abdominal_wall_unloading(law: super::muscle::MuscleLaw) -> bool {
+    law == super::muscle::MuscleLaw::Hill
+}
+
 /// The adult relaxed chest wall's compliance over the tidal range above FRC [L/cmH2O], the
 /// target of [`HILL_PASSIVE_WALL_SCALE`]'s fit.
 /// Source: Agostoni & Mead 1964, Handbook of Physiology, Respiration I, ch. 13: about 0.2
@@ -715,6 +774,18 @@ impl Params {
     /// ([`abdominal_wall_tension_only`]) and with them, supine, the wall's factor
     /// `TENSION_ONLY_SUPINE_WALL_COMPLIANCE`.
     pub fn for_posture_and_law(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
+        let mut p = Params::before_compartments(posture, law);
+        if law == super::muscle::MuscleLaw::Hill {
+            p.scale_compartments(HILL_CARTILAGE_FACTOR, HILL_ABDOMINAL_WALL_FACTOR);
+        }
+        p
+    }
+
+    /// [`Params::for_posture_and_law`] before its compartments are fitted apart: under the
+    /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`] alone;
+    /// what the fit of [`HILL_CARTILAGE_FACTOR`] and [`HILL_ABDOMINAL_WALL_FACTOR`] scales
+    /// (`torso bench relaxation --fit-compartments`).
+    pub fn before_compartments(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
         let mut p = Params::unscaled_for_posture_and_law(posture, law);
         if law == super::muscle::MuscleLaw::Hill {
             p.scale_passive_wall(HILL_PASSIVE_WALL_SCALE);
@@ -730,6 +801,7 @@ impl Params {
         p.abdominal_tone = abdominal_tone(posture, law);
         p.expiration_with_abdominals = expiration_with_abdominals(posture, law);
         p.abdominal_wall_tension_only = abdominal_wall_tension_only(law);
+        p.abdominal_wall_unloading = abdominal_wall_unloading(law);
         if p.abdominal_wall_tension_only && posture == Posture::Supine {
             p.abdominal_wall_compliance *=
                 TENSION_ONLY_SUPINE_WALL_COMPLIANCE / SUPINE_WALL_COMPLIANCE;
@@ -815,6 +887,7 @@ impl Params {
             abdominal_tone: 0.0,
             expiration_with_abdominals: false,
             abdominal_wall_tension_only: false,
+            abdominal_wall_unloading: false,
         }
     }
 

@@ -6,7 +6,9 @@
 //! from it before [`super::Model`] is assembled.
 
 use super::muscle::MuscleLaw;
-use super::params::{ABDOMINAL_CONTENTS_DENSITY, GravityLoads, Params};
+use super::params::{
+    ABDOMINAL_CONTENTS_DENSITY, GravityLoads, Params, WALL_LOAD_FLOOR, wall_load_at_lowest,
+};
 use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -231,6 +233,11 @@ pub struct VectorSprings {
     pub stiffness: Vec<f64>,
     /// Damping [N s/m].
     pub damping: Vec<f64>,
+    /// Outward unit normal of the wall at a foundation spring's vertex, at rest (zero for the
+    /// other springs).
+    pub normal: Vec<Vector3<f64>>,
+    /// Stiffening length lambda [m] of the foundation along `normal` (0: linear).
+    pub stiffening: Vec<f64>,
 }
 
 /// Where an anchor's position comes from, compiled.
@@ -528,16 +535,21 @@ impl Structure {
             springs.b.push(j.b);
             springs.stiffness.push(k);
             springs.damping.push(rayleigh * k);
+            springs.normal.push(Vector3::zeros());
+            springs.stiffening.push(0.0);
         }
         // Wall foundation: each free wall vertex tied to its rest position with stiffness
         // kappa A_v, kappa = A_wall / C_wall, so a uniform pressure P displaces the wall by
         // P / kappa and its volume by P C_wall.
         let mut vertex_area = vec![0.0; ab.len()];
+        let mut vertex_normal = vec![Vector3::zeros(); ab.len()];
         for t in &ab.triangles {
             let [p, q, r] = t.map(|v| rest[ab.anchor[v as usize] as usize]);
-            let a = 0.5 * (q - p).cross(&(r - p)).norm();
+            let face = (q - p).cross(&(r - p));
+            let a = 0.5 * face.norm();
             for v in t {
                 vertex_area[*v as usize] += a / 3.0;
+                vertex_normal[*v as usize] += face;
             }
         }
         let wall: Vec<usize> = (0..ab.len())
@@ -545,16 +557,19 @@ impl Structure {
             .collect();
         let wall_area: f64 = wall.iter().map(|&v| vertex_area[v]).sum();
         let kappa = wall_area / params.abdominal_wall_compliance;
+
         // the wall's tissue resistance R_w, spread like its compliance: a uniform pressure
         // P = R_w dV/dt moves the wall at P / (R_w A_wall), so each vertex's damper is
         // R_w A_wall A_v (`Params::abdominal_wall_resistance`)
         let eta = params.abdominal_wall_resistance * wall_area;
         let mut ground_anchors = Vec::new();
+        let mut wall_normal = Vec::new();
         for &v in &wall {
             let a = ab.anchor[v];
             let k = kappa * vertex_area[v];
             let c = rayleigh * k + eta * vertex_area[v];
             ground_anchors.push((a, rest[a as usize], k, c, false));
+            wall_normal.push(vertex_normal[v].try_normalize(1e-12).unwrap_or_default());
         }
         // Dome support: the dome slides within the rib cage (zone of apposition) and under the
         // lungs; its horizontal motion is held by a foundation of stiffness kappa_h per area.
@@ -565,7 +580,30 @@ impl Structure {
         }
         let mut rest = rest;
         let mut carrier = carrier;
-        for (a, p, k, c, horizontal) in ground_anchors {
+        // The wall's unloading lengths: the load each wall vertex carries at rest, the
+        // contents' pressure at the lowest wall vertex less their hydrostatic fall above it,
+        // over the foundation's stiffness per area (`Params::abdominal_wall_unloading`).
+        let mut unloading = vec![0.0; wall.len()];
+        if params.abdominal_wall_unloading && gravity != Vector3::zeros() {
+            let height = |v: usize| -gravity.dot(&rest[ab.anchor[v] as usize].coords);
+            let low = wall
+                .iter()
+                .map(|&v| height(v))
+                .fold(f64::INFINITY, f64::min);
+            let bottom = wall_load_at_lowest(posture, params.gravity);
+            for (l, &v) in unloading.iter_mut().zip(&wall) {
+                // `height` carries |g|: rho |g| h
+                let load = bottom - ABDOMINAL_CONTENTS_DENSITY * (height(v) - low);
+                *l = load.max(WALL_LOAD_FLOOR) / kappa;
+            }
+        }
+        for (i, (a, p, k, c, horizontal)) in ground_anchors.into_iter().enumerate() {
+            springs
+                .normal
+                .push(wall_normal.get(i).copied().unwrap_or_default());
+            springs
+                .stiffening
+                .push(unloading.get(i).copied().unwrap_or(0.0));
             springs.horizontal.push(horizontal);
             rest.push(p);
             carrier.push(Carrier::Ground);
@@ -787,6 +825,12 @@ impl Structure {
         // So do the abdominal wall's tension-only edges (the slots, not the fields above).
         if self.params.abdominal_wall_tension_only {
             eat(2.0);
+        }
+        // And the wall's unloading lengths.
+        if self.params.abdominal_wall_unloading {
+            for l in &self.springs.stiffening {
+                eat(*l);
+            }
         }
         h
     }
