@@ -412,10 +412,12 @@ fn hill_supine_breathes_under_gravity_acting() {
 /// so the relaxed model must have an equilibrium over that range, and at least near its rest.
 /// With gravity acting and the hill law (`torso bench relaxation --lod L --muscle-law hill
 /// --gravity-loads acting`; docs/dynamics.md, "Gravity that acts"), the tissues carrying the
-/// reference loads, and the abdominal wall's edges tension only: level 0 spans RV to TLC
-/// standing (1.819-7.291 L) and supine (1.475-5.909 L); level 1 supine spans it too
-/// (1.444-5.786 L), standing stops 1.61 L short of TLC (1.841-5.763 L, no equilibrium at 5.993
-/// L). With constant preloads alone level 1 standing had buckled 0.044 L below its FRC.
+/// reference loads, the abdominal wall's edges tension only, its compartments fitted apart
+/// and the wall softening as it unloads: level 0 spans RV to TLC standing (1.819-7.291 L) and
+/// supine (1.645-6.593 L); level 1 standing spans it too (1.841-7.377 L), supine stops 1.43 L
+/// short of TLC (1.625-5.087 L, no equilibrium at 5.291 L). Before the compartments were
+/// fitted apart level 1 supine spanned it and standing stopped at 5.763 L; with constant
+/// preloads alone level 1 standing had buckled 0.044 L below its FRC.
 #[test]
 #[ignore = "issue 35: gravity acting, hill law, level 1: the supine relaxed curve stops at 5.087 L (no equilibrium at 5.291 L; TLC 6.513); standing it spans RV to TLC (before the compartments were fitted apart standing stopped at 5.763 L and supine spanned)"]
 fn relaxed_curves_span_rv_to_tlc_under_gravity_acting_issue_35() {

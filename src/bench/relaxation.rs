@@ -380,7 +380,9 @@ pub struct CompartmentStep {
 /// rib cage's and abdomen's compliances over the tidal range ([`tidal_compartments`]) are
 /// `target` [L/cmH2O] (rib cage, abdomen): Newton steps on the logarithms (each compliance
 /// is nearly a power of each factor; the Jacobian by differences of 0.05 in the log, each
-/// step at most a factor 4), to 0.5 % of both targets. The two compartments are coupled (a
+/// step at most a factor 4), to 0.5 % of both targets. With `config.params` unset the base is
+/// the posture's own defaults, gravity preloaded. A step into a volume without equilibrium
+/// ends the fit with that error (no backtracking). The two compartments are coupled (a
 /// stiffer abdominal wall also stiffens the rib cage through the diaphragm and the abdominal
 /// pressure on the lower ribs), hence the full Jacobian. Returns the evaluations at the
 /// iterates, the last the fit.
@@ -428,8 +430,10 @@ pub fn fit_compartments(config: &Config, target: [f64; 2]) -> Result<Vec<Compart
     let mut y = eval(x)?;
     let mut steps = vec![step(x, y)];
     const H: f64 = 0.05;
+    // within 0.5 % of both targets
+    let reached = |y: [f64; 2]| (0..2).all(|i| (y[i] - goal[i]).exp_m1().abs() < 5e-3);
     for _ in 0..10 {
-        if (0..2).all(|i| (y[i] - goal[i]).abs() < 5e-3) {
+        if reached(y) {
             return Ok(steps);
         }
         let y0 = eval([x[0] + H, x[1]])?;
@@ -464,7 +468,7 @@ pub fn fit_compartments(config: &Config, target: [f64; 2]) -> Result<Vec<Compart
         y = eval(x)?;
         steps.push(step(x, y));
     }
-    if (0..2).all(|i| (y[i] - goal[i]).abs() < 5e-3) {
+    if reached(y) {
         return Ok(steps);
     }
     let last = steps[steps.len() - 1];

@@ -262,15 +262,6 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
             params.scale_passive_wall(f);
         }
         params.gravity_loads = loads;
-        if acting {
-            let mut c = config.clone();
-            c.params = Some(params.clone());
-            let (v, p) = crate::bench::relaxation::relaxed_frc(&c)?;
-            println!(
-                "{posture:?}, gravity acting: relaxed FRC {v:.4} L, pleural pressure {:.2} cmH2O",
-                p / CMH2O
-            );
-        }
         if args.fit && fitted.is_none() {
             let mut unscaled = crate::dynamics::Params::unscaled_for_posture_and_law(tables, law);
             unscaled.gravity_loads = loads;
@@ -324,6 +315,16 @@ fn relaxation(args: &RelaxationArgs) -> Result<()> {
             }
         }
         params.gravity_loads = loads;
+        if acting {
+            // the rest of the wall the curves are measured on (after any fit)
+            let mut c = config.clone();
+            c.params = Some(params.clone());
+            let (v, p) = crate::bench::relaxation::relaxed_frc(&c)?;
+            println!(
+                "{posture:?}, gravity acting: relaxed FRC {v:.4} L, pleural pressure {:.2} cmH2O",
+                p / CMH2O
+            );
+        }
         config.params = Some(params);
         let r = relaxation(&config, args.points)?;
         let pct = |f: Option<f64>| f.map_or("none".to_string(), |f| format!("{:.1} %", 100.0 * f));

@@ -49,7 +49,7 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
             d.y = 0.0;
         }
         e += 0.5 * s.stiffness[i] * d.norm_squared();
-        let lambda = s.stiffening[i];
+        let lambda = s.unloading[i];
         if lambda > 0.0 {
             // the normal part's linear energy replaced by the unloading law's
             let u = -d.dot(&s.normal[i]);

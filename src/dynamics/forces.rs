@@ -523,7 +523,7 @@ fn vector_springs(model: &Structure, data: &mut Data) {
         if horizontal[i] {
             f.y = 0.0;
         }
-        let lambda = s.stiffening[i];
+        let lambda = s.unloading[i];
         if lambda > 0.0 {
             // the normal part, for the wall vertex's outward displacement u
             let n = s.normal[i];
@@ -888,11 +888,11 @@ mod tests {
         use crate::dynamics::params::{ABDOMINAL_CONTENTS_DENSITY, WALL_LOAD_FLOOR};
         let anatomy = Anatomy::build(&Subject::default(), 0).unwrap();
         let thesis = Structure::compile(&anatomy, Params::for_posture(Posture::Standing));
-        assert!(thesis.springs.stiffening.iter().all(|&l| l == 0.0));
+        assert!(thesis.springs.unloading.iter().all(|&l| l == 0.0));
         let params = Params::for_posture_and_law(Posture::Standing, MuscleLaw::Hill);
         let s = Structure::compile(&anatomy, params.clone());
         let wall: Vec<usize> = (0..s.springs.a.len())
-            .filter(|&i| s.springs.stiffening[i] > 0.0)
+            .filter(|&i| s.springs.unloading[i] > 0.0)
             .collect();
         assert!(wall.len() > 10, "{} wall springs", wall.len());
         // kappa from the lowest vertex's load (the cited bottom load)
@@ -903,21 +903,28 @@ mod tests {
             .unwrap();
         let bottom =
             crate::dynamics::params::wall_load_at_lowest(Posture::Standing, params.gravity);
-        let kappa = bottom / s.springs.stiffening[low];
+        let kappa = bottom / s.springs.unloading[low];
         let mut checked = 0;
         for &i in &wall {
             let load = bottom - ABDOMINAL_CONTENTS_DENSITY * (height(i) - height(low));
             let expected = load.max(WALL_LOAD_FLOOR) / kappa;
             assert!(
-                (s.springs.stiffening[i] / expected - 1.0).abs() < 1e-9,
+                (s.springs.unloading[i] / expected - 1.0).abs() < 1e-9,
                 "spring {i}: {} against {expected} m",
-                s.springs.stiffening[i]
+                s.springs.unloading[i]
             );
             checked += usize::from(load > WALL_LOAD_FLOOR);
         }
         assert!(checked > 10, "{checked} above the floor");
-        // kappa is the foundation's stiffness per area: A_wall / C_wall
-        assert!(kappa > 0.0 && kappa.is_finite());
+        // kappa is the foundation's stiffness per area, A_wall / C_wall, and each spring's
+        // stiffness kappa A_v: their sum over kappa^2 is the wall's compliance
+        let sum: f64 = wall.iter().map(|&i| s.springs.stiffness[i]).sum();
+        let compliance = sum / (kappa * kappa);
+        assert!(
+            (compliance / params.abdominal_wall_compliance - 1.0).abs() < 1e-9,
+            "{compliance} against {} m^3/Pa",
+            params.abdominal_wall_compliance
+        );
     }
 
     /// The contents' hydrostatic loads are minus the gradient of their potential

@@ -768,7 +768,10 @@ pub const CHEST_WALL_COMPLIANCE: f64 = 0.2;
 impl Params {
     /// Defaults for a posture under muscle law `law`: [`Params::for_posture`], and under the
     /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`], fitted to
-    /// the relaxed chest wall's compliance once the muscles no longer carry its stiffness, and
+    /// the relaxed chest wall's compliance once the muscles no longer carry its stiffness, its
+    /// cartilage and abdominal wall then scaled apart by [`HILL_CARTILAGE_FACTOR`] and
+    /// [`HILL_ABDOMINAL_WALL_FACTOR`], fitted to the seated compartments, the wall that softens
+    /// as it unloads ([`abdominal_wall_unloading`]), and
     /// the posture's abdominal tone ([`abdominal_tone`]), its expiratory rib-cage drive
     /// ([`expiration_with_abdominals`]), the abdominal wall's tension-only edges
     /// ([`abdominal_wall_tension_only`]) and with them, supine, the wall's factor

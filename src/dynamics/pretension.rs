@@ -26,8 +26,9 @@
 //! bounded by its largest isometric force F_max (the passive curve's cited range, Thelen 2003:
 //! the relaxed tissue carries F_max at the strain e0 = [`super::muscle::PASSIVE_STRAIN`]); under
 //! the thesis's linear law by the same strain, c l0 e0. The zero-length vector springs and the
-//! rib joints are linear: a rest offset in them is exactly a constant load, so they are left
-//! out and their share stays a preload.
+//! rib joints are linear about the rest (the abdominal wall's foundation under
+//! `Params::abdominal_wall_unloading` too, up to its unloading length): a rest offset in them
+//! is a constant load, so they are left out and their share stays a preload.
 
 use super::accelerations::Preload;
 use super::muscle::{MuscleLaw, PASSIVE_SHAPE, PASSIVE_STRAIN};

@@ -7,7 +7,7 @@
 
 use super::muscle::MuscleLaw;
 use super::params::{
-    ABDOMINAL_CONTENTS_DENSITY, GravityLoads, Params, WALL_LOAD_FLOOR, wall_load_at_lowest,
+    ABDOMINAL_CONTENTS_DENSITY, GRAVITY, GravityLoads, Params, WALL_LOAD_FLOOR, wall_load_at_lowest,
 };
 use super::pleural::{PleuralLaw, capacity_ratios};
 use crate::anatomy::{Anatomy, Body, MuscleGroup, Side, VertexRole};
@@ -236,8 +236,10 @@ pub struct VectorSprings {
     /// Outward unit normal of the wall at a foundation spring's vertex, at rest (zero for the
     /// other springs).
     pub normal: Vec<Vector3<f64>>,
-    /// Stiffening length lambda [m] of the foundation along `normal` (0: linear).
-    pub stiffening: Vec<f64>,
+    /// Unloading length lambda [m] of a wall foundation spring along `normal`: its rest load
+    /// over its stiffness per area, over which it softens as the wall moves inwards
+    /// (`Params::abdominal_wall_unloading`, [`super::forces::unloading_force`]); 0: linear.
+    pub unloading: Vec<f64>,
 }
 
 /// Where an anchor's position comes from, compiled.
@@ -536,7 +538,7 @@ impl Structure {
             springs.stiffness.push(k);
             springs.damping.push(rayleigh * k);
             springs.normal.push(Vector3::zeros());
-            springs.stiffening.push(0.0);
+            springs.unloading.push(0.0);
         }
         // Wall foundation: each free wall vertex tied to its rest position with stiffness
         // kappa A_v, kappa = A_wall / C_wall, so a uniform pressure P displaces the wall by
@@ -582,15 +584,23 @@ impl Structure {
         let mut carrier = carrier;
         // The wall's unloading lengths: the load each wall vertex carries at rest, the
         // contents' pressure at the lowest wall vertex less their hydrostatic fall above it,
-        // over the foundation's stiffness per area (`Params::abdominal_wall_unloading`).
+        // over the foundation's stiffness per area (`Params::abdominal_wall_unloading`). The
+        // rest's gravity: under gravity acting the standing reference's, standard gravity
+        // whatever the run's (`model::reference_loads`); preloaded, the run's own (at gravity
+        // 0 the wall carries no load and its foundation stays linear).
         let mut unloading = vec![0.0; wall.len()];
-        if params.abdominal_wall_unloading && gravity != Vector3::zeros() {
-            let height = |v: usize| -gravity.dot(&rest[ab.anchor[v] as usize].coords);
+        let rest_gravity = match params.gravity_loads {
+            GravityLoads::Acting => GRAVITY,
+            GravityLoads::Preloaded => params.gravity,
+        };
+        if params.abdominal_wall_unloading && rest_gravity > 0.0 {
+            let down = Vector3::new(g[0], g[1], g[2]) * rest_gravity;
+            let height = |v: usize| -down.dot(&rest[ab.anchor[v] as usize].coords);
             let low = wall
                 .iter()
                 .map(|&v| height(v))
                 .fold(f64::INFINITY, f64::min);
-            let bottom = wall_load_at_lowest(posture, params.gravity);
+            let bottom = wall_load_at_lowest(posture, rest_gravity);
             for (l, &v) in unloading.iter_mut().zip(&wall) {
                 // `height` carries |g|: rho |g| h
                 let load = bottom - ABDOMINAL_CONTENTS_DENSITY * (height(v) - low);
@@ -602,7 +612,7 @@ impl Structure {
                 .normal
                 .push(wall_normal.get(i).copied().unwrap_or_default());
             springs
-                .stiffening
+                .unloading
                 .push(unloading.get(i).copied().unwrap_or(0.0));
             springs.horizontal.push(horizontal);
             rest.push(p);
@@ -762,7 +772,8 @@ impl Structure {
     /// element, spring and joint stiffnesses, bulk modulus, lung elastance, rest volumes, the
     /// pleural law's asymptotes, barrier pressure and margin, gravity, under the
     /// passive-and-active muscle law its muscles' forces and lengths, the abdominal tone, the
-    /// expiratory rib-cage drive and the abdominal wall's tension-only edges),
+    /// expiratory rib-cage drive, the abdominal wall's tension-only edges and its unloading
+    /// lengths),
     /// so that a snapshot is only restored into the model it was taken from.
     pub fn fingerprint(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -828,7 +839,7 @@ impl Structure {
         }
         // And the wall's unloading lengths.
         if self.params.abdominal_wall_unloading {
-            for l in &self.springs.stiffening {
+            for l in &self.springs.unloading {
                 eat(*l);
             }
         }

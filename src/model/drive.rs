@@ -121,8 +121,10 @@ impl Default for Drive {
 /// source matters: at Jolley et al.'s 9.0 % the default man standing breathes 0.786 L (10.5
 /// mL/kg) with a 44.9 % rib-cage share, against 0.707 L (9.4 mL/kg, also above 7 mL/kg + 25 %)
 /// and 54.7 % at Reilly et al.'s 7.5 % (`torso simulate --muscle-law hill --diaphragm-amplitude 0.09
-/// --ribs-amplitude 0.058 --duration 16`, and 0.075); Reilly et al. is taken because it
-/// measured both families in the same subjects.
+/// --ribs-amplitude 0.058 --duration 16`, and 0.075; measured before the passive wall's
+/// compartments were fitted apart, with which the standing breath is 0.683 L and its rib-cage
+/// share 76.2 %); Reilly et al. is taken because it measured both families in the same
+/// subjects.
 pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 
 /// Peak activation of the rib-cage inspiratory muscles in quiet breathing under the
@@ -136,10 +138,11 @@ pub const HILL_QUIET_DIAPHRAGM: f64 = 0.075;
 /// Troyer 1988, Respir Physiol 74:151), at a magnitude no source gave, so 5.8 % of their
 /// maximal force in expiration is uncited. Supine, where quiet expiration is passive, they
 /// follow the abdominal family instead ([`crate::dynamics::expiration_with_abdominals`]).
-/// Measured (`torso bench physiology --muscle-law hill`): the upright rib-cage share of
-/// quiet breathing, 54.7 % with this expiratory wave, rests on it (12.7 % without it, the
-/// internal intercostals silent standing, the drive applied by hand: `cargo run --release
-/// --example diaphragm_pressure`).
+/// Measured (`torso bench physiology --muscle-law hill`, before the passive wall's compartments
+/// were fitted apart): the upright rib-cage share of quiet breathing, 54.7 % with this
+/// expiratory wave, rests on it (12.7 % without it, the internal intercostals silent standing,
+/// the drive applied by hand: `cargo run --release --example diaphragm_pressure`); with the
+/// compartments fitted apart it is 76.2 %.
 pub const HILL_QUIET_RIBS: f64 = 0.058;
 
 /// The factor that carries the thesis-law drives' amplitudes to the passive-and-active law:
