@@ -43,6 +43,8 @@ pub struct Joint {
     pub a: u32,
     /// Anchor on the second body.
     pub b: u32,
+    /// Level of the rib whose cartilage ends here (1-10).
+    pub level: u8,
 }
 
 /// Obliquity of the intercostal fibres: the arc-length fraction of the rib separating a
@@ -184,7 +186,11 @@ pub fn cartilage_joints(ribs: &[Rib], anchors: &mut Vec<Anchor>) -> Vec<Joint> {
                 Body::Rib(rib_index(level - 1, side) as u8)
             };
             let b = push_anchor(anchors, body, end);
-            joints.push(Joint { a, b });
+            joints.push(Joint {
+                a,
+                b,
+                level: level as u8,
+            });
         }
     }
     joints

@@ -927,6 +927,38 @@ mod tests {
         );
     }
 
+    /// Under the hill law the first rib's cartilage joint, a synchondrosis, keeps the passive
+    /// wall's stiffness while the others take the compartments' factor; under the thesis law
+    /// all are alike; a negative first-cartilage stiffness is refused by name.
+    #[test]
+    fn the_first_cartilage_keeps_the_passive_walls_stiffness() {
+        use crate::anatomy::Posture;
+        use crate::dynamics::muscle::MuscleLaw;
+        use crate::dynamics::{HILL_CARTILAGE_FACTOR, Structure};
+        let anatomy = Anatomy::build(&Subject::default(), 0).unwrap();
+        let hill = Params::for_posture_and_law(Posture::Standing, MuscleLaw::Hill);
+        let before = Params::before_compartments(Posture::Standing, MuscleLaw::Hill);
+        for (params, first, rest) in [
+            (Params::for_posture(Posture::Standing), 1.0e4, 1.0e4),
+            (
+                hill.clone(),
+                before.cartilage_stiffness,
+                before.cartilage_stiffness * HILL_CARTILAGE_FACTOR,
+            ),
+        ] {
+            let s = Structure::compile(&anatomy, params);
+            assert_eq!(anatomy.joints.len(), 20);
+            for (j, k) in anatomy.joints.iter().zip(&s.springs.stiffness) {
+                let expected = if j.level == 1 { first } else { rest };
+                assert!((k / expected - 1.0).abs() < 1e-12, "level {}: {k}", j.level);
+            }
+        }
+        let mut bad = hill;
+        bad.first_cartilage_stiffness = -1.0;
+        let err = bad.validate().unwrap_err().to_string();
+        assert!(err.contains("first_cartilage_stiffness"), "{err}");
+    }
+
     /// The contents' hydrostatic loads are minus the gradient of their potential
     /// ([`crate::dynamics::energy::hydrostatic_energy`]) at every free vertex of a deformed
     /// abdomen (central differences), standing and supine, and that potential changes by

@@ -472,6 +472,19 @@ pub struct Params {
     /// compression and 11-15 MPa in indentation (Weber, Rothschild & Niehoff 2021, Sci Rep,
     /// doi:10.1038/s41598-021-93176-x); no stiffness of the sternocostal junction was found.
     pub cartilage_stiffness: f64,
+    /// Stiffness of the first rib's cartilage joint [N/m]; 0 (the default): the same as
+    /// [`Params::cartilage_stiffness`]. The first costal cartilage meets the manubrium in a
+    /// synchondrosis, a cartilaginous joint without a joint cavity, where the second to
+    /// seventh meet the sternum in synovial joints (Gray's Anatomy, 41st ed., 2016, ch. 53,
+    /// "sternocostal joints"), and the first rib moves with the manubrium. So under the
+    /// passive-and-active law the compartments' factor on the cartilage
+    /// ([`HILL_CARTILAGE_FACTOR`], fitted to the relaxed rib cage's compliance, a softness
+    /// standing for the synovial joints' sliding and the cartilages' bending) leaves it at the
+    /// passive wall's cartilage stiffness ([`Params::before_compartments`]).
+    /// Derived: 0 by default; under the hill law `cartilage_stiffness` x
+    /// [`HILL_PASSIVE_WALL_SCALE`], before the compartments' factor.
+    #[serde(default)]
+    pub first_cartilage_stiffness: f64,
     /// Rotational stiffness of a costovertebral joint with its share of chest-wall recoil
     /// [N m/rad]. Default 2 N m/rad upright, set by hand; no source: 20 in the first dynamics
     /// (commit cfbd824), lowered to 2 in the first calibration (commit 16087cb, whose message
@@ -739,18 +752,20 @@ pub const HILL_PASSIVE_WALL_SCALE: f64 = 0.440;
 /// range, 0.164 and 0.032 L/cmH2O (Estenne, Yernault & De Troyer 1985, J Appl Physiol
 /// 59:1842; `bench::relaxation::SEATED_COMPARTMENTS`). In the model's closed loop of rigid
 /// ribs and sternum the cartilage, not the rib joints, sets the rib cage's compliance; the
-/// fitted joint, 78 N/m, stands for the cartilage's and ribs' bending that rigid ribs lack.
+/// fitted joint, 50 N/m, stands for the synovial sternocostal joints' sliding and the
+/// cartilages' and ribs' bending that rigid ribs lack (the first rib's synchondrosis keeps
+/// the passive wall's 4400 N/m, [`Params::first_cartilage_stiffness`]).
 /// Fitted: `torso bench relaxation --muscle-law hill --fit-compartments --posture sitting`
 /// (Newton steps on the logarithms, `bench::relaxation::fit_compartments`), which prints
-/// "fitted factors on the compartments (Hill law): cartilage 0.0178, abdominal wall 9.361".
-pub const HILL_CARTILAGE_FACTOR: f64 = 0.0178;
+/// "fitted factors on the compartments (Hill law): cartilage 0.0113, abdominal wall 9.314".
+pub const HILL_CARTILAGE_FACTOR: f64 = 0.0113;
 
 /// The factor on the abdominal wall's stiffness (its membranes times, its foundation's
 /// compliance divided) under the passive-and-active law, after [`HILL_PASSIVE_WALL_SCALE`];
 /// fitted with [`HILL_CARTILAGE_FACTOR`], which see.
 /// Fitted: `torso bench relaxation --muscle-law hill --fit-compartments --posture sitting`,
-/// which prints "abdominal wall 9.361".
-pub const HILL_ABDOMINAL_WALL_FACTOR: f64 = 9.361;
+/// which prints "abdominal wall 9.314".
+pub const HILL_ABDOMINAL_WALL_FACTOR: f64 = 9.314;
 
 /// Whether the abdominal wall's foundation softens as it unloads under `law`
 /// ([`Params::abdominal_wall_unloading`]): under the passive-and-active law, whose upright
@@ -792,6 +807,8 @@ impl Params {
         let mut p = Params::unscaled_for_posture_and_law(posture, law);
         if law == super::muscle::MuscleLaw::Hill {
             p.scale_passive_wall(HILL_PASSIVE_WALL_SCALE);
+            // the synchondrosis keeps the passive wall's stiffness
+            p.first_cartilage_stiffness = p.cartilage_stiffness;
         }
         p
     }
@@ -819,6 +836,7 @@ impl Params {
     pub fn scale_passive_wall(&mut self, factor: f64) {
         self.rib_joint_stiffness *= factor;
         self.cartilage_stiffness *= factor;
+        self.first_cartilage_stiffness *= factor;
         self.membrane_stiffness *= factor;
         self.dome_membrane_stiffness *= factor;
         self.tendon_stiffness *= factor;
@@ -877,6 +895,7 @@ impl Params {
             pleural_barrier_pressure: PLEURAL_BARRIER_PRESSURE,
             pleural_barrier_margin: PLEURAL_BARRIER_MARGIN,
             cartilage_stiffness: 1.0e4,
+            first_cartilage_stiffness: 0.0,
             rib_joint_stiffness: 2.0 * rib_stiffness_factor,
             membrane_stiffness: 400.0,
             dome_membrane_stiffness: 40.0,
@@ -930,6 +949,13 @@ impl Params {
             if !(v.is_finite() && v > 0.0) {
                 return Err(crate::Error::invalid(name, v, "finite and > 0"));
             }
+        }
+        if !(self.first_cartilage_stiffness.is_finite() && self.first_cartilage_stiffness >= 0.0) {
+            return Err(crate::Error::invalid(
+                "params.first_cartilage_stiffness",
+                self.first_cartilage_stiffness,
+                "finite and >= 0 (0: as params.cartilage_stiffness)",
+            ));
         }
         if !(self.abdominal_wall_resistance.is_finite() && self.abdominal_wall_resistance >= 0.0) {
             return Err(crate::Error::invalid(

@@ -531,7 +531,13 @@ impl Structure {
         // Cartilage joints.
         let mut springs = VectorSprings::default();
         for j in &anatomy.joints {
-            let k = params.cartilage_stiffness;
+            // the first rib's cartilage meets the manubrium in a synchondrosis
+            // (`Params::first_cartilage_stiffness`)
+            let k = if j.level == 1 && params.first_cartilage_stiffness > 0.0 {
+                params.first_cartilage_stiffness
+            } else {
+                params.cartilage_stiffness
+            };
             springs.horizontal.push(false);
             springs.a.push(j.a);
             springs.b.push(j.b);
