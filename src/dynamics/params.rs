@@ -800,7 +800,8 @@ impl Params {
     }
 
     /// [`Params::for_posture_and_law`] before its compartments are fitted apart: under the
-    /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`] alone;
+    /// passive-and-active law the passive wall scaled by [`HILL_PASSIVE_WALL_SCALE`] alone,
+    /// the first rib's cartilage held at that stiffness ([`Params::first_cartilage_stiffness`]);
     /// what the fit of [`HILL_CARTILAGE_FACTOR`] and [`HILL_ABDOMINAL_WALL_FACTOR`] scales
     /// (`torso bench relaxation --fit-compartments`).
     pub fn before_compartments(posture: Posture, law: super::muscle::MuscleLaw) -> Params {
