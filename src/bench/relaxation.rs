@@ -220,15 +220,21 @@ fn at_volume(torso: &mut Torso, v: f64) -> Result<Point> {
 /// The relaxed chest wall's compliance [L/cmH2O] over FRC to FRC + [`TIDAL_RANGE`] alone (six
 /// equilibria: FRC and five volumes above it), as [`relaxation`] measures it.
 pub fn tidal_chest_wall_compliance(config: &Config) -> Result<f64> {
-    let c = relaxed(config);
-    let mut torso = Torso::new(c)?;
+    let points = tidal_points(config)?;
+    let points: Vec<&Point> = points.iter().collect();
+    Ok(compliance(&points, &|p| p.chest_wall))
+}
+
+/// The relaxed equilibria at FRC and five volumes evenly above it up to FRC +
+/// [`TIDAL_RANGE`], the points the tidal figures are read from.
+fn tidal_points(config: &Config) -> Result<Vec<Point>> {
+    let mut torso = Torso::new(relaxed(config))?;
     let frc = torso.read(Quantity::LungVolume)?;
     let mut points = vec![frc_point(&mut torso, frc)?];
     for k in 1..=5 {
         points.push(at_volume(&mut torso, frc + TIDAL_RANGE * k as f64 / 5.0)?);
     }
-    let points: Vec<&Point> = points.iter().collect();
-    Ok(compliance(&points, &|p| p.chest_wall))
+    Ok(points)
 }
 
 /// `config` with the solver, drive and airway the curves are measured with: quasi-static,
@@ -347,13 +353,7 @@ pub const SEATED_COMPARTMENTS: [f64; 2] = [0.164, 0.032];
 /// [`TIDAL_RANGE`] alone (six equilibria), as [`relaxation`] measures them: the slopes of
 /// their displaced volumes against the pleural pressure.
 pub fn tidal_compartments(config: &Config) -> Result<[f64; 2]> {
-    let c = relaxed(config);
-    let mut torso = Torso::new(c)?;
-    let frc = torso.read(Quantity::LungVolume)?;
-    let mut points = vec![frc_point(&mut torso, frc)?];
-    for k in 1..=5 {
-        points.push(at_volume(&mut torso, frc + TIDAL_RANGE * k as f64 / 5.0)?);
-    }
+    let points = tidal_points(config)?;
     let points: Vec<&Point> = points.iter().collect();
     Ok([
         partial(&points, &|p| p.rib_cage),
