@@ -416,6 +416,40 @@ fn relaxed_motion_dissipates_energy_under_the_hill_law() {
     assert!(last < 1e-3 * start, "energy left {last} of {start}");
 }
 
+/// Standing, with the abdominal wall's tone held, a motion away from rest loses energy and
+/// returns to rest: each muscle's energy at its held activation (`muscle::energy`) is the
+/// potential of its force, so the mechanical energy at the held activations never rises
+/// between samples and falls to the toned rest's.
+#[test]
+fn motion_under_the_standing_tone_dissipates_energy() {
+    let mut config = hill(Posture::Standing);
+    config.drive = Drive::default();
+    assert!(config.params.as_ref().unwrap().abdominal_tone > 0.0);
+    let mut torso = Torso::new(config.clone()).unwrap();
+    let rest = torso.mechanical_energy_held();
+    // the passive energy alone is not this potential: the tone's force is left out
+    assert!((torso.mechanical_energy() - rest).abs() > 1e-6);
+    // a breath in, held by the diaphragm, then released to the tone alone
+    torso.set_activation(MuscleGroup::Diaphragm, 0.3).unwrap();
+    torso.advance_to(1.0).unwrap();
+    torso.set_activation(MuscleGroup::Diaphragm, 0.0).unwrap();
+    let start = torso.mechanical_energy_held() - rest;
+    let mut last = start;
+    let mut worst_rise: f64 = 0.0;
+    for i in 1..=200 {
+        torso.advance_to(1.0 + 0.02 * i as f64).unwrap();
+        let e = torso.mechanical_energy_held() - rest;
+        worst_rise = worst_rise.max(e - last);
+        last = e;
+    }
+    println!(
+        "toned: energy above rest {start:.4e} J -> {last:.4e} J, largest rise {worst_rise:.2e} J"
+    );
+    assert!(start > 0.0);
+    assert!(worst_rise <= 1e-6 * start, "energy rose by {worst_rise}");
+    assert!(last < 1e-3 * start, "energy left {last} of {start}");
+}
+
 /// Each inspiratory group, activated alone, inflates the lungs, and the diaphragm does it by
 /// descending (thesis 2.1; De Troyer & Boriek 2011, Compr Physiol 1:1273).
 #[test]

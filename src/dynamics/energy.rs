@@ -1,19 +1,31 @@
 //! Mechanical energy of a state, for tests of dissipation: kinetic energy of ribs, sternum and
 //! vertices; elastic energy of elements (muscles and the dome's membrane edges count only
 //! when stretched, as they only pull; the abdominal membrane's edges, linear springs, in
-//! compression too; evaluated at zero activation), vector springs and rib joints; the pressure potentials of the
-//! abdomen, K (V - V0 - V0 ln(V/V0)), and of the lungs, the integral of their recoil
-//! ([`super::pleural::PleuralLaw::energy`], E_L (V - V0)^2 / 2 near rest); gravity; and the
-//! potential of the constant preloads.
+//! compression too; the muscles at zero activation or at held activations), vector springs
+//! and rib joints; the pressure potentials of the abdomen, K (V - V0 - V0 ln(V/V0)), and of
+//! the lungs, the integral of their recoil ([`super::pleural::PleuralLaw::energy`],
+//! E_L (V - V0)^2 / 2 near rest); gravity; and the potential of the constant preloads.
 
 use super::model::Model;
 use super::structure::{RIBS, path_length, volume};
-use super::{Data, kinematics};
+use super::{Activations, Data, kinematics};
 use nalgebra::Vector3;
 
 /// Total mechanical energy [J] of state `y` with no muscle activation.
 pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
+    mechanical_energy_at(model, data, y, &Activations::default())
+}
+
+/// Total mechanical energy [J] of state `y` with the muscles held at the activations `act`
+/// (their levels; the airway's pressure and occlusion are not counted): each muscle's elastic
+/// energy is the potential of its force at that activation, so that under a constant
+/// activation (the standing abdominal tone, a held input) motion only loses energy. Under
+/// the thesis's law an active element is its spring about the shortened rest length
+/// l0 (1 - beta a); under the passive-and-active law the integral of its tension
+/// ([`super::muscle::energy`]).
+pub fn mechanical_energy_at(model: &Model, data: &mut Data, y: &[f64], act: &Activations) -> f64 {
     let l = model.layout;
+    let level = act.table();
     kinematics::positions_and_velocities(model, data, &l, y);
     let mut e = 0.0;
     // Kinetic: the generalised velocities (rib rates, sternum velocity and angular
@@ -26,12 +38,24 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
     for i in 0..el.len() {
         let len = path_length(&data.pos, el.path_of(i));
         if el.max_force[i] > 0.0 {
-            // a muscle under the passive-and-active law: its passive curve's potential
+            // a muscle under the passive-and-active law: its tension's potential at its
+            // activation (as `forces` applies it: the slot's level times the element's drive)
             let (slack, f_max) = (el.slack_length[i], el.max_force[i]);
-            e += super::muscle::passive_energy(len, slack, f_max, toe);
+            let a = level[el.slot[i] as usize] * el.drive[i];
+            e += super::muscle::energy(
+                len,
+                el.optimal_length[i],
+                slack,
+                f_max,
+                a,
+                super::muscle::active_stiffness(),
+                toe,
+            );
             continue;
         }
-        let stretch = len - el.rest_length[i];
+        // the rest length under the activation, l0 (1 - a g) (`forces`; 0 for membranes)
+        let rest = el.rest_length[i] * (1.0 - level[el.slot[i] as usize] * el.gain[i]);
+        let stretch = len - rest;
         let k = el.stiffness[i];
         if el.slot[i] == super::structure::PASSIVE {
             // an abdominal membrane edge with linear edges (the thesis law's wall): a linear

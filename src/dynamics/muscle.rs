@@ -199,10 +199,19 @@ pub fn stiffness(l: f64, optimal: f64, slack: f64, max_force: f64, a: f64, k_a: 
 
 /// The elastic energy [J] of a relaxed Hill element of slack length `slack` and largest force
 /// `max_force` at length `l`: the integral from the slack length of its tension, the softplus
-/// of width `toe` of the passive force ([`super::forces::tension`]), by 8-point Gauss-Legendre
-/// quadrature on panels of at most 2 % of the slack length (exact to rounding for these
-/// smooth integrands).
+/// of width `toe` of the passive force ([`super::forces::tension`]); [`energy`] at zero
+/// activation.
 pub fn passive_energy(l: f64, slack: f64, max_force: f64, toe: f64) -> f64 {
+    energy(l, 1.0, slack, max_force, 0.0, 0.0, toe)
+}
+
+/// The energy [J] of a Hill element held at activation `a`, the potential of its tension at
+/// that activation: the integral from the slack length to `l` of the softplus of width `toe`
+/// of [`force`] ([`super::forces::tension`]; velocity terms aside), by 8-point Gauss-Legendre
+/// quadrature on panels of at most 2 % of the slack length (exact to rounding for these
+/// smooth integrands). At a constant activation (a postural tone, a held input) the element
+/// is then conservative; its damper only dissipates, since the softplus rises with the force.
+pub fn energy(l: f64, optimal: f64, slack: f64, max_force: f64, a: f64, k_a: f64, toe: f64) -> f64 {
     // nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
     const NODES: [f64; 4] = [
         0.183_434_642_495_649_8,
@@ -216,7 +225,7 @@ pub fn passive_energy(l: f64, slack: f64, max_force: f64, toe: f64) -> f64 {
         0.222_381_034_453_374_5,
         0.101_228_536_290_376_3,
     ];
-    let tension = |x: f64| super::forces::tension(max_force * passive(x / slack - 1.0).0, toe);
+    let tension = |x: f64| super::forces::tension(force(x, optimal, slack, max_force, a, k_a), toe);
     let panels = ((l - slack).abs() / (0.02 * slack)).ceil().max(1.0) as usize;
     let h = (l - slack) / panels as f64;
     let mut sum = 0.0;
@@ -357,6 +366,32 @@ mod tests {
                 "l {l}: dE/dl {de} against {t}"
             );
         }
+    }
+
+    /// At a held activation the energy is the potential of the tension, the active force
+    /// and its stretch stiffness included, on both sides of the optimal length and through
+    /// the stretch blend.
+    #[test]
+    fn the_held_energy_is_the_potential_of_the_tension() {
+        let (optimal, slack, f_max, toe, k_a) = (0.11, 0.12, 400.0, 0.1, active_stiffness());
+        for a in [0.05, 0.3, 1.0] {
+            for l in [0.08, 0.10, 0.11, 0.112, 0.13, 0.16] {
+                let h = 1e-6;
+                let e = |x: f64| energy(x, optimal, slack, f_max, a, k_a, toe);
+                let de = (e(l + h) - e(l - h)) / (2.0 * h);
+                let f = force(l, optimal, slack, f_max, a, k_a);
+                let t = crate::dynamics::forces::tension(f, toe);
+                assert!(
+                    (de - t).abs() < 1e-5 * (1.0 + t),
+                    "a {a}, l {l}: dE/dl {de} against {t}"
+                );
+            }
+        }
+        // at zero activation it is the passive energy
+        assert_eq!(
+            energy(0.15, optimal, slack, f_max, 0.0, k_a, toe),
+            passive_energy(0.15, slack, f_max, toe)
+        );
     }
 
     #[test]

@@ -1114,6 +1114,15 @@ impl Torso {
         dynamics::energy::mechanical_energy(&self.compiled.model, &mut self.data, &self.y)
     }
 
+    /// Mechanical energy of the current state [J] with the muscles held at the activations
+    /// applied now (the inputs, the drive's value at the current time and the posture's tone;
+    /// [`dynamics::energy::mechanical_energy_at`]). While those stay constant (the drive off,
+    /// a standing tone held) a motion only loses it.
+    pub fn mechanical_energy_held(&mut self) -> f64 {
+        let act = self.applied(self.time);
+        dynamics::energy::mechanical_energy_at(&self.compiled.model, &mut self.data, &self.y, &act)
+    }
+
     /// A snapshot of the mutable data.
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
