@@ -15,9 +15,10 @@
 //! in the rest length, so level 0's fibres contract somewhat more than their tissue), and one
 //! passive stiffness removed, halved or doubled at a time (dome membrane, central tendon, dome
 //! support, abdominal wall, abdominal membrane, bulk modulus). The second argument keeps only
-//! the variants whose name starts with it.
+//! the variants whose name starts with it (`all` keeps every one); the third, `hill`, takes the
+//! passive-and-active law's constants and its standing tone instead of the thesis law's.
 //!
-//! `cargo run --release --example lod_diaphragm [ACTIVATION [VARIANT]]`
+//! `cargo run --release --example lod_diaphragm [ACTIVATION [VARIANT|all [hill]]]`
 
 use breathing_torso::anatomy::{Anatomy, Anchor, Body, MuscleGroup, VertexRole};
 use breathing_torso::dynamics::kinematics::positions_and_velocities;
@@ -80,12 +81,31 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
         }
         let path = &el.path[el.start[e] as usize..el.start[e + 1] as usize];
         let len = path_length(&data.pos, path);
-        // the tissue's length l0 s and force F = k beta l0 s (s = gain / beta)
-        let tissue = el.rest_length[e] * el.gain[e] / beta;
-        let f = el.stiffness[e] * beta * tissue;
+        // the thesis law: the tissue's length l0 s and force F = k beta l0 s (s = gain /
+        // beta); the passive-and-active law: the chord and F_max, its tension
+        // `muscle::force` at the element's activation
+        let hill = el.max_force[e] > 0.0;
+        let (tissue, f) = if hill {
+            (el.rest_length[e], el.max_force[e])
+        } else {
+            let tissue = el.rest_length[e] * el.gain[e] / beta;
+            (tissue, el.stiffness[e] * beta * tissue)
+        };
         num += f * (len - el.rest_length[e]);
         den += f * tissue;
-        let tension = el.stiffness[e] * (len - el.rest_length[e] * (1.0 - a * el.gain[e])).max(0.0);
+        let tension = if hill {
+            dynamics::muscle::force(
+                len,
+                el.optimal_length[e],
+                el.slack_length[e],
+                f,
+                a * el.drive[e],
+                dynamics::muscle::active_stiffness(),
+            )
+            .max(0.0)
+        } else {
+            el.stiffness[e] * (len - el.rest_length[e] * (1.0 - a * el.gain[e])).max(0.0)
+        };
         for (end, next) in [
             (path[0], path[1]),
             (path[path.len() - 1], path[path.len() - 2]),
@@ -226,9 +246,15 @@ fn main() {
         .map(|s| s.parse().expect("activation"))
         .unwrap_or(0.24);
     let config = Config::default();
-    let base = Params::for_posture(config.subject.posture);
+    // the third argument `hill`: the passive-and-active law's constants (with its standing
+    // tone), otherwise the thesis law's
+    let law = match std::env::args().nth(3).as_deref() {
+        Some("hill") => dynamics::muscle::MuscleLaw::Hill,
+        _ => dynamics::muscle::MuscleLaw::Thesis,
+    };
+    let base = Params::for_posture_and_law(config.subject.posture, law);
     type Variant = (&'static str, fn(&mut Params));
-    let only = std::env::args().nth(2);
+    let only = std::env::args().nth(2).filter(|v| v != "all");
     let variants: [Variant; 12] = [
         ("as is", |_| {}),
         ("fibre chords", |_| {}),
