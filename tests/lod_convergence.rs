@@ -10,13 +10,20 @@
 //! lod_diaphragm`).
 
 use breathing_torso::Torso;
+use breathing_torso::dynamics::muscle::MuscleLaw;
 use breathing_torso::model::run::{BreathSummary, run, summarise};
 use breathing_torso::model::{Config, Drive};
 
 /// Quiet breathing at level of detail `lod`: two breaths after a settling one.
 fn quiet(lod: u32, drive: Drive) -> BreathSummary {
+    quiet_under(lod, drive, MuscleLaw::default())
+}
+
+/// Quiet breathing at level of detail `lod` under muscle law `law`.
+fn quiet_under(lod: u32, drive: Drive, law: MuscleLaw) -> BreathSummary {
     let mut config = Config {
         drive,
+        muscle_law: law,
         ..Config::default()
     };
     config.scene.level_of_detail = lod;
@@ -49,6 +56,47 @@ fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
     for lod in [0, 1] {
         println!(
             "level {lod} against level 2: {:+.1} %, diaphragm alone {:+.1} %",
+            100.0 * (vt[lod] / vt[2] - 1.0),
+            100.0 * (alone[lod] / alone[2] - 1.0)
+        );
+    }
+    let gap = (vt[1] / vt[2] - 1.0).abs();
+    assert!(gap < 0.05, "levels 1 and 2 differ by {:.1} %", 100.0 * gap);
+}
+
+/// The same target under the passive-and-active law, with its quiet drive at the cited
+/// fractions of maximum. Missed: its diaphragm is force-controlled (an activation sets a force,
+/// not a rest length), and the pressure the same force makes falls as the mesh is refined;
+/// the relaxed chest wall itself agrees across the levels within 2.5 % (`torso bench
+/// relaxation --muscle-law hill --lod L`: C_cw 0.2005 / 0.1977 / 0.2025 L/cmH2O), and the rib
+/// cage's part of the breath within 3 %.
+#[test]
+#[ignore = "issue 35: under the hill law levels 1 and 2 differ by 8.5 % (quiet VT 0.7107 / 0.6643 / 0.6121 L at levels 0 / 1 / 2; the diaphragm alone 0.1512 / 0.1354 / 0.1104 L, +22.6 % at level 1); cargo test --release --test lod_convergence -- --ignored --nocapture"]
+fn hill_quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
+    let law = MuscleLaw::Hill;
+    let drive = Drive::quiet_for(law);
+    let mut diaphragm_only = drive;
+    diaphragm_only.ribs.amplitude = 0.0;
+    let mut vt = Vec::new();
+    let mut alone = Vec::new();
+    for lod in 0..3 {
+        let s = quiet_under(lod, drive, law);
+        let d = quiet_under(lod, diaphragm_only, law);
+        println!(
+            "hill, level {lod}: quiet VT {:.4} L, rib cage {:.4} L ({:.1} %), excursion {:.2} cm; \
+             diaphragm alone VT {:.4} L",
+            s.tidal_volume,
+            s.tidal_volume * s.rib_cage_share,
+            100.0 * s.rib_cage_share,
+            100.0 * s.dome_excursion,
+            d.tidal_volume
+        );
+        vt.push(s.tidal_volume);
+        alone.push(d.tidal_volume);
+    }
+    for lod in [0, 1] {
+        println!(
+            "hill, level {lod} against level 2: {:+.1} %, diaphragm alone {:+.1} %",
             100.0 * (vt[lod] / vt[2] - 1.0),
             100.0 * (alone[lod] / alone[2] - 1.0)
         );
