@@ -8,7 +8,12 @@
 //! upper sternum); "near the umbilicus" is every marker within 5 cm of the omphalion on the
 //! midline. A marker's motion is its displacement from end-expiration (smallest lung volume
 //! of the second breath) to end-inspiration (largest), sampled at 56 Hz.
+//!
+//! The same checks run under the passive-and-active muscle law with its own drives
+//! (`Drive::quiet_for`, `Drive::scenario_for`); those it misses are ignored with their
+//! figures (issue 35).
 
+use breathing_torso::dynamics::muscle::MuscleLaw;
 use breathing_torso::model::Drive;
 use breathing_torso::{Config, Quantity, Torso};
 use nalgebra::{Point3, Vector3};
@@ -21,9 +26,10 @@ struct Breath {
     tidal: f64,
 }
 
-fn breath(drive: Drive) -> Breath {
+fn breath(drive: Drive, muscle_law: MuscleLaw) -> Breath {
     let config = Config {
         drive,
+        muscle_law,
         ..Config::default()
     };
     let mut torso = Torso::new(config).unwrap();
@@ -60,12 +66,23 @@ fn breath(drive: Drive) -> Breath {
 
 fn quiet() -> &'static Breath {
     static B: OnceLock<Breath> = OnceLock::new();
-    B.get_or_init(|| breath(Drive::quiet()))
+    B.get_or_init(|| breath(Drive::quiet(), MuscleLaw::Thesis))
 }
 
 fn forced() -> &'static Breath {
     static B: OnceLock<Breath> = OnceLock::new();
-    B.get_or_init(|| breath(Drive::forced()))
+    B.get_or_init(|| breath(Drive::forced(), MuscleLaw::Thesis))
+}
+
+fn hill_quiet() -> &'static Breath {
+    static B: OnceLock<Breath> = OnceLock::new();
+    B.get_or_init(|| breath(Drive::quiet_for(MuscleLaw::Hill), MuscleLaw::Hill))
+}
+
+fn hill_forced() -> &'static Breath {
+    static B: OnceLock<Breath> = OnceLock::new();
+    let forced = Drive::scenario_for("forced", MuscleLaw::Hill).unwrap();
+    B.get_or_init(|| breath(forced, MuscleLaw::Hill))
 }
 
 const COLS: usize = 6;
@@ -103,9 +120,8 @@ fn report(name: &str, b: &Breath, group: &[usize]) -> f64 {
     mean
 }
 
-#[test]
-fn quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
-    let b = quiet();
+/// Upper-chest markers move 1-6 mm, mostly cranially and ventrally.
+fn upper_chest_moves_1_to_6_mm_cranially_and_ventrally(b: &Breath) {
     let group = upper_chest();
     report("quiet, upper chest", b, &group);
     for &i in &group {
@@ -125,8 +141,18 @@ fn quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
 }
 
 #[test]
-fn quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
-    let b = quiet();
+fn quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
+    upper_chest_moves_1_to_6_mm_cranially_and_ventrally(quiet());
+}
+
+#[test]
+#[ignore = "issue 35: under the hill law the upper chest moves 6.17 mm on average, its largest marker (13) 8.72 mm, against 1-6 mm; cargo test --release --test markers_physiology -- --ignored --nocapture"]
+fn hill_quiet_upper_chest_moves_1_to_6_mm_cranially_and_ventrally() {
+    upper_chest_moves_1_to_6_mm_cranially_and_ventrally(hill_quiet());
+}
+
+/// Markers within 5 cm of the umbilicus move 2-10 mm, mostly ventrally.
+fn umbilical_markers_move_2_to_10_mm_ventrally(b: &Breath) {
     let group = near_umbilicus(b);
     assert!(!group.is_empty());
     report("quiet, near the umbilicus", b, &group);
@@ -146,13 +172,22 @@ fn quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
     }
 }
 
+#[test]
+fn quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
+    umbilical_markers_move_2_to_10_mm_ventrally(quiet());
+}
+
+#[test]
+#[ignore = "issue 35: under the hill law the markers near the umbilicus move 0.57-1.01 mm (mean 0.78), against 2-10 mm: its quiet breath's abdominal share is 25 %; cargo test --release --test markers_physiology -- --ignored --nocapture"]
+fn hill_quiet_umbilical_markers_move_2_to_10_mm_ventrally() {
+    umbilical_markers_move_2_to_10_mm_ventrally(hill_quiet());
+}
+
 /// The top row lies on the clavicle line (thesis 3.2), whose skin is held by the clavicles;
 /// the shoulder girdle does not take part in quiet breathing, so that row moves less than
 /// the rows over the ribs below it: every top-row marker under 4 mm, and the row's mean under
 /// half the upper chest's.
-#[test]
-fn the_clavicle_line_moves_less_than_the_chest_below() {
-    let b = quiet();
+fn clavicle_line_moves_less_than_the_chest_below(b: &Breath) {
     let top: Vec<usize> = (0..COLS).collect();
     let mean_top = report("quiet, clavicle line", b, &top);
     let mean_chest = report("quiet, upper chest", b, &upper_chest());
@@ -167,8 +202,18 @@ fn the_clavicle_line_moves_less_than_the_chest_below() {
 }
 
 #[test]
-fn forced_breathing_moves_markers_about_three_times_more() {
-    let (q, f) = (quiet(), forced());
+fn the_clavicle_line_moves_less_than_the_chest_below() {
+    clavicle_line_moves_less_than_the_chest_below(quiet());
+}
+
+#[test]
+fn hill_the_clavicle_line_moves_less_than_the_chest_below() {
+    clavicle_line_moves_less_than_the_chest_below(hill_quiet());
+}
+
+/// Forced breathing moves the upper chest's and the umbilical markers 2-4 times as far as
+/// quiet breathing (about 3x, Kaneko & Horie 2012).
+fn forced_moves_markers_2_to_4_times_as_far(q: &Breath, f: &Breath) {
     for (name, group) in [
         ("upper chest", upper_chest()),
         ("near the umbilicus", near_umbilicus(q)),
@@ -182,4 +227,15 @@ fn forced_breathing_moves_markers_about_three_times_more() {
             "{name}: forced / quiet mean displacement {ratio:.2}"
         );
     }
+}
+
+#[test]
+fn forced_breathing_moves_markers_about_three_times_more() {
+    forced_moves_markers_2_to_4_times_as_far(quiet(), forced());
+}
+
+#[test]
+#[ignore = "issue 35: under the hill law the forced breath (1.793 L) moves the upper chest 0.61 times as far as the quiet one (0.664 L), against 2-4 times: its drive, the thesis law's forced amplitudes x HILL_DRIVE_SCALE (no EMG source), has the abdominals at 0.125 in expiration, which end it at 2.147 L with a 34.3 % rib-cage share (torso simulate --muscle-law hill --scenario forced --duration 20; without them 1.062 L, 65.5 %); cargo test --release --test markers_physiology -- --ignored --nocapture"]
+fn hill_forced_breathing_moves_markers_about_three_times_more() {
+    forced_moves_markers_2_to_4_times_as_far(hill_quiet(), hill_forced());
 }
