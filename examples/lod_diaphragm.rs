@@ -15,8 +15,11 @@
 //! in the rest length, so level 0's fibres contract somewhat more than their tissue), and one
 //! passive stiffness removed, halved or doubled at a time (dome membrane, central tendon, dome
 //! support, abdominal wall, abdominal membrane, bulk modulus). The second argument keeps only
-//! the variants whose name starts with it (`all` keeps every one); the third, `hill`, takes the
-//! passive-and-active law's constants and its standing tone instead of the thesis law's.
+//! the variants whose name starts with it (`all` keeps every one). For each, also the change
+//! of the vertical force on the dome's free vertices from the fibres, from the dome membrane
+//! and from the rest (the pressures above all), and the transdiaphragmatic pressure. The
+//! third argument, `hill`, takes the passive-and-active law's constants instead of the thesis
+//! law's (without its standing tone, which the facade applies, not these equilibria).
 //!
 //! `cargo run --release --example lod_diaphragm [ACTIVATION [VARIANT|all [hill]]]`
 
@@ -38,6 +41,57 @@ struct Figures {
     rib_cage: f64,
     dome: f64,
     insertion_pull: (f64, f64),
+    /// Change from rest of the vertical force [N] on the dome's free vertices from the
+    /// diaphragm's elements, from the dome membrane's, and from everything else (the
+    /// pressures above all); the constant preloads balance none of the change.
+    dome_load: [f64; 3],
+    /// Change of the transdiaphragmatic pressure [Pa].
+    transdiaphragmatic: f64,
+}
+
+/// The vertical force [N] on the dome's free vertices at positions `data.pos` under `act`:
+/// in all, from the diaphragm's elements, and from the dome membrane's (passive elements
+/// between dome and insertion vertices).
+fn dome_forces(model: &Model, anatomy: &Anatomy, data: &mut Data, act: &Activations) -> [f64; 3] {
+    let ab = &anatomy.abdomen;
+    let role = |a: u32| {
+        (0..ab.len())
+            .find(|&v| ab.anchor[v] == a)
+            .map(|v| ab.roles[v])
+    };
+    let dome: Vec<usize> = (0..ab.len())
+        .filter(|&v| ab.roles[v] == VertexRole::Dome)
+        .map(|v| ab.anchor[v] as usize)
+        .collect();
+    let sum = |s: &Structure, data: &mut Data| {
+        dynamics::forces::accumulate(s, data, act);
+        dome.iter().map(|&i| data.force[i].y).sum::<f64>()
+    };
+    let all = sum(model, data);
+    let el = &model.elements;
+    let diaphragm = |e: usize| el.group[e] == MuscleGroup::Diaphragm.index() as u8;
+    let membrane = |e: usize| {
+        el.group[e] == dynamics::PASSIVE
+            && el.path[el.start[e] as usize..el.start[e + 1] as usize]
+                .iter()
+                .all(|&a| matches!(role(a), Some(VertexRole::Dome | VertexRole::Insertion)))
+    };
+    let without = |keep_out: &dyn Fn(usize) -> bool, data: &mut Data| {
+        let mut s: Structure = (**model).clone();
+        for e in 0..s.elements.len() {
+            if keep_out(e) {
+                s.elements.stiffness[e] = 0.0;
+                s.elements.damping[e] = 0.0;
+                s.elements.max_force[e] = 0.0;
+            }
+        }
+        sum(&s, data)
+    };
+    [
+        all,
+        all - without(&diaphragm, data),
+        all - without(&membrane, data),
+    ]
 }
 
 fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
@@ -69,6 +123,15 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
     let rest = observe(&model, &compartments, &data.pos, &data.vel, 0.0, None);
     positions_and_velocities(&model, &mut data, &l, &eq.state);
     let o = observe(&model, &compartments, &data.pos, &data.vel, 0.0, None);
+    let after = dome_forces(&model, anatomy, &mut data, &act);
+    positions_and_velocities(&model, &mut data, &l, &start);
+    let before = dome_forces(&model, anatomy, &mut data, &Activations::default());
+    positions_and_velocities(&model, &mut data, &l, &eq.state);
+    let dome_load = [
+        after[1] - before[1],
+        after[2] - before[2],
+        (after[0] - before[0]) - (after[1] - before[1]) - (after[2] - before[2]),
+    ];
     // force-weighted mean strain of the diaphragm's elements, and the pull of the fibres on
     // the insertions: outward (from the cavity's axis) and cranial components [N]
     let el = &model.elements;
@@ -131,6 +194,9 @@ fn solve(anatomy: &Anatomy, params: Params, a: f64, chords: bool) -> Figures {
         rib_cage: o.rib_cage_displaced - rest.rib_cage_displaced,
         dome: o.thorax - rest.thorax - (o.rib_cage_displaced - rest.rib_cage_displaced),
         insertion_pull: (outward, cranial),
+        dome_load,
+        transdiaphragmatic: (o.abdominal_pressure - o.pleural_pressure)
+            - (rest.abdominal_pressure - rest.pleural_pressure),
     }
 }
 
@@ -383,6 +449,32 @@ fn main() {
             f[0].insertion_pull.1,
             f[1].insertion_pull.1,
             f[2].insertion_pull.1,
+        );
+        let area = |g: &Figures| g.dome_load[2] / g.transdiaphragmatic;
+        println!(
+            "{:>24}  on the dome's free vertices, vertical, change from rest: diaphragm {:.2} / \
+             {:.2} / {:.2} N, dome membrane {:.2} / {:.2} / {:.2} N, the rest {:.2} / {:.2} / \
+             {:.2} N; Pdi {:.0} / {:.0} / {:.0} Pa, the rest over Pdi {:.4} / {:.4} / {:.4} m^2, \
+             volume over Pdi {:.3} / {:.3} / {:.3} mL/Pa",
+            "",
+            f[0].dome_load[0],
+            f[1].dome_load[0],
+            f[2].dome_load[0],
+            f[0].dome_load[1],
+            f[1].dome_load[1],
+            f[2].dome_load[1],
+            f[0].dome_load[2],
+            f[1].dome_load[2],
+            f[2].dome_load[2],
+            f[0].transdiaphragmatic,
+            f[1].transdiaphragmatic,
+            f[2].transdiaphragmatic,
+            area(&f[0]),
+            area(&f[1]),
+            area(&f[2]),
+            1e6 * f[0].volume / f[0].transdiaphragmatic,
+            1e6 * f[1].volume / f[1].transdiaphragmatic,
+            1e6 * f[2].volume / f[2].transdiaphragmatic,
         );
     }
 }
