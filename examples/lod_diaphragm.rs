@@ -312,8 +312,8 @@ fn main() {
         .map(|s| s.parse().expect("activation"))
         .unwrap_or(0.24);
     let config = Config::default();
-    // the third argument `hill`: the passive-and-active law's constants (with its standing
-    // tone), otherwise the thesis law's
+    // the third argument `hill`: the passive-and-active law's constants (without its
+    // standing tone, which these equilibria do not apply), otherwise the thesis law's
     let law = match std::env::args().nth(3).as_deref() {
         Some("hill") => dynamics::muscle::MuscleLaw::Hill,
         _ => dynamics::muscle::MuscleLaw::Thesis,
@@ -395,6 +395,10 @@ fn main() {
         .collect();
     for (name, change) in variants {
         if only.as_deref().is_some_and(|o| !name.starts_with(o)) {
+            continue;
+        }
+        // the hill law's fibres take their chords' lengths already (their gain is 0)
+        if name == "fibre chords" && law == dynamics::muscle::MuscleLaw::Hill {
             continue;
         }
         let anatomies = if name == "insertions fixed" {

@@ -19,9 +19,11 @@ pub fn mechanical_energy(model: &Model, data: &mut Data, y: &[f64]) -> f64 {
 /// Total mechanical energy [J] of state `y` with the muscles held at the activations `act`
 /// (their levels; the airway's pressure and occlusion are not counted): each muscle's elastic
 /// energy is the potential of its force at that activation, so that under a constant
-/// activation (the standing abdominal tone, a held input) motion only loses energy. Under
+/// activation (the standing abdominal tone, a held input), with the airway open at zero
+/// pressure, motion only loses energy. Under
 /// the thesis's law an active element is its spring about the shortened rest length
-/// l0 (1 - beta a); under the passive-and-active law the integral of its tension
+/// l0 (1 - a g), g its contraction per unit activation ([`super::Elements::gain`]); under the
+/// passive-and-active law the integral of its tension
 /// ([`super::muscle::energy`]).
 pub fn mechanical_energy_at(model: &Model, data: &mut Data, y: &[f64], act: &Activations) -> f64 {
     let l = model.layout;
@@ -53,7 +55,7 @@ pub fn mechanical_energy_at(model: &Model, data: &mut Data, y: &[f64], act: &Act
             );
             continue;
         }
-        // the rest length under the activation, l0 (1 - a g) (`forces`; 0 for membranes)
+        // the rest length under the activation, l0 (1 - a g) (`forces`; a membrane's gain is 0)
         let rest = el.rest_length[i] * (1.0 - level[el.slot[i] as usize] * el.gain[i]);
         let stretch = len - rest;
         let k = el.stiffness[i];
@@ -187,7 +189,85 @@ const GAUSS_LEGENDRE_16: [(f64, f64); 8] = [
 
 #[cfg(test)]
 mod tests {
-    use super::softplus_integral;
+    use super::super::muscle::MuscleLaw;
+    use super::super::{Activations, Data, Model, Params, forces, kinematics, rest_state};
+    use super::{mechanical_energy, mechanical_energy_at, softplus_integral};
+    use crate::anatomy::{Anatomy, MuscleGroup, Subject};
+
+    /// What the activations add to the energy is the potential of what they add to the forces
+    /// (`forces::accumulate`), under both laws: minus its derivative in a coordinate (central
+    /// differences) is the generalised force the added anchor forces make along it,
+    /// sum_a dF_a . dx_a/dq (the anchors' motion also by central differences), for every rib's
+    /// angle and for every free vertex a muscle reaches, in a deformed state at rest
+    /// (velocities zero).
+    #[test]
+    fn held_energy_is_the_potential_of_the_activations_forces() {
+        let anatomy = Anatomy::build(&Subject::default(), 0).unwrap();
+        for law in [MuscleLaw::Thesis, MuscleLaw::Hill] {
+            let params = Params::for_posture_and_law(anatomy.subject.posture, law);
+            let model = Model::compile(&anatomy, params);
+            let l = model.layout;
+            let mut y = rest_state(&model);
+            for r in 0..super::RIBS {
+                y[l.theta + r] = 0.02 * ((r as f64) * 0.7).sin();
+                y[l.theta_dot + r] = 0.0;
+            }
+            for i in 0..3 * l.vertices {
+                y[l.vertex_x + i] += 0.003 * ((i as f64) * 0.37).sin();
+                y[l.vertex_v + i] = 0.0;
+            }
+            let act = Activations::new(&[0.3; MuscleGroup::COUNT], 1.0, 0.8);
+            let mut data = Data::new(&model);
+            kinematics::positions_and_velocities(&model, &mut data, &l, &y);
+            forces::accumulate(&model, &mut data, &act);
+            let with = data.force.clone();
+            forces::accumulate(&model, &mut data, &Activations::default());
+            let added_force: Vec<_> = with.iter().zip(&data.force).map(|(a, b)| a - b).collect();
+            // the rib angles and the free vertices the muscles reach
+            let el = &model.elements;
+            let reached: std::collections::BTreeSet<u32> = (0..model.muscle_count)
+                .flat_map(|e| el.path[el.start[e] as usize..el.start[e + 1] as usize].to_vec())
+                .collect();
+            let mut coordinates: Vec<usize> = (0..super::RIBS).map(|r| l.theta + r).collect();
+            for j in (0..l.vertices).filter(|&j| reached.contains(&model.vertex_anchor[j])) {
+                coordinates.extend((0..3).map(|k| l.vertex_x + 3 * j + k));
+            }
+            assert!(
+                coordinates.len() > 60,
+                "{law:?}: {} coordinates",
+                coordinates.len()
+            );
+            let added = |y: &[f64], data: &mut Data| {
+                mechanical_energy_at(&model, data, y, &act) - mechanical_energy(&model, data, y)
+            };
+            let (mut worst, mut largest) = (0.0f64, 0.0f64);
+            for &i in &coordinates {
+                let h = 1e-6;
+                let (mut yp, mut ym) = (y.clone(), y.clone());
+                yp[i] += h;
+                ym[i] -= h;
+                let de = (added(&yp, &mut data) - added(&ym, &mut data)) / (2.0 * h);
+                kinematics::positions_and_velocities(&model, &mut data, &l, &yp);
+                let plus = data.pos.clone();
+                kinematics::positions_and_velocities(&model, &mut data, &l, &ym);
+                let q: f64 = added_force
+                    .iter()
+                    .zip(plus.iter().zip(&data.pos))
+                    .map(|(f, (p, m))| f.dot(&((p - m) / (2.0 * h))))
+                    .sum();
+                worst = worst.max((de + q).abs());
+                largest = largest.max(q.abs());
+            }
+            assert!(
+                largest > 1.0,
+                "{law:?}: the activations add {largest} at most"
+            );
+            assert!(
+                worst < 1e-4 * largest,
+                "{law:?}: -dE/dq and the generalised force differ by {worst} (largest {largest})"
+            );
+        }
+    }
 
     /// The integral's derivative is the softplus, across the cuts and the panel changes.
     #[test]

@@ -208,9 +208,11 @@ pub fn passive_energy(l: f64, slack: f64, max_force: f64, toe: f64) -> f64 {
 /// The energy [J] of a Hill element held at activation `a`, the potential of its tension at
 /// that activation: the integral from the slack length to `l` of the softplus of width `toe`
 /// of [`force`] ([`super::forces::tension`]; velocity terms aside), by 8-point Gauss-Legendre
-/// quadrature on panels of at most 2 % of the slack length (exact to rounding for these
-/// smooth integrands). At a constant activation (a postural tone, a held input) the element
-/// is then conservative; its damper only dissipates, since the softplus rises with the force.
+/// quadrature on panels of at most 2 % of the slack length, with panel edges at the optimal
+/// length and at the end of the stretch blend ([`STRETCH_BLEND`]), where the active force's
+/// curvature jumps, so that every panel's integrand is smooth (exact to rounding then). At a
+/// constant activation (a postural tone, a held input) the element is then conservative; its
+/// damper only dissipates, since the softplus rises with the force.
 pub fn energy(l: f64, optimal: f64, slack: f64, max_force: f64, a: f64, k_a: f64, toe: f64) -> f64 {
     // nodes and weights on [-1, 1] (Abramowitz & Stegun 1964, Table 25.4)
     const NODES: [f64; 4] = [
@@ -226,16 +228,36 @@ pub fn energy(l: f64, optimal: f64, slack: f64, max_force: f64, a: f64, k_a: f64
         0.101_228_536_290_376_3,
     ];
     let tension = |x: f64| super::forces::tension(force(x, optimal, slack, max_force, a, k_a), toe);
-    let panels = ((l - slack).abs() / (0.02 * slack)).ceil().max(1.0) as usize;
-    let h = (l - slack) / panels as f64;
-    let mut sum = 0.0;
-    for p in 0..panels {
-        let mid = slack + (p as f64 + 0.5) * h;
-        for (x, w) in NODES.iter().zip(WEIGHTS) {
-            sum += w * (tension(mid - 0.5 * h * x) + tension(mid + 0.5 * h * x));
+    // the integral over [from, to] on panels of at most 2 % of the slack length
+    let integral = |from: f64, to: f64| {
+        let panels = ((to - from).abs() / (0.02 * slack)).ceil().max(1.0) as usize;
+        let h = (to - from) / panels as f64;
+        let mut sum = 0.0;
+        for p in 0..panels {
+            let mid = from + (p as f64 + 0.5) * h;
+            for (x, w) in NODES.iter().zip(WEIGHTS) {
+                sum += w * (tension(mid - 0.5 * h * x) + tension(mid + 0.5 * h * x));
+            }
         }
+        0.5 * h * sum
+    };
+    // the kinks of the active curve between the slack length and `l`, in order from the slack
+    let (lo, hi) = (slack.min(l), slack.max(l));
+    let mut edges = vec![slack];
+    let mut kinks: Vec<f64> = if a > 0.0 {
+        [optimal, (1.0 + STRETCH_BLEND) * optimal]
+            .into_iter()
+            .filter(|&k| k > lo && k < hi)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    if l < slack {
+        kinks.reverse();
     }
-    0.5 * h * sum
+    edges.extend(kinks);
+    edges.push(l);
+    edges.windows(2).map(|w| integral(w[0], w[1])).sum()
 }
 
 /// An element's optimal and slack lengths [m] from its rest length at FRC in its posture.

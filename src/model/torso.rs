@@ -1117,7 +1117,8 @@ impl Torso {
     /// Mechanical energy of the current state [J] with the muscles held at the activations
     /// applied now (the inputs, the drive's value at the current time and the posture's tone;
     /// [`dynamics::energy::mechanical_energy_at`]). While those stay constant (the drive off,
-    /// a standing tone held) a motion only loses it.
+    /// a standing tone held) and the airway is open at zero pressure, a motion only loses it
+    /// (the airway's work is not counted).
     pub fn mechanical_energy_held(&mut self) -> f64 {
         let act = self.applied(self.time);
         dynamics::energy::mechanical_energy_at(&self.compiled.model, &mut self.data, &self.y, &act)
