@@ -3,9 +3,10 @@
 //! within 10 %; a fit can only meet that if the two levels breathe alike, so the target is
 //! that the levels' quiet tidal volumes agree within 5 %.
 //!
-//! Asserted: levels 1 and 2 (the default and full detail). Printed, not asserted: level 0,
-//! which falls short of that target (its quiet tidal volume is 5.1 % below level 2's, its
-//! diaphragm alone 10.2 %: its dome has 28 muscular vertices and 52 fibre elements, whose
+//! Asserted: levels 1 and 2 (the default and full detail), under the default law and, in a
+//! test ignored while it misses, under the passive-and-active law. Printed, not asserted:
+//! level 0, whose quiet tidal volume is 2.7 % below level 2's under the default law, its
+//! diaphragm alone 6.7 % (its dome has 28 muscular vertices and 52 fibre elements, whose
 //! chords from the insertions pull the lower ribs inward, `cargo run --release --example
 //! lod_diaphragm`).
 
@@ -14,13 +15,9 @@ use breathing_torso::dynamics::muscle::MuscleLaw;
 use breathing_torso::model::run::{BreathSummary, run, summarise};
 use breathing_torso::model::{Config, Drive};
 
-/// Quiet breathing at level of detail `lod`: two breaths after a settling one.
-fn quiet(lod: u32, drive: Drive) -> BreathSummary {
-    quiet_under(lod, drive, MuscleLaw::default())
-}
-
-/// Quiet breathing at level of detail `lod` under muscle law `law`.
-fn quiet_under(lod: u32, drive: Drive, law: MuscleLaw) -> BreathSummary {
+/// Quiet breathing at level of detail `lod` under muscle law `law`: two breaths after a
+/// settling one.
+fn quiet(lod: u32, drive: Drive, law: MuscleLaw) -> BreathSummary {
     let mut config = Config {
         drive,
         muscle_law: law,
@@ -33,19 +30,23 @@ fn quiet_under(lod: u32, drive: Drive, law: MuscleLaw) -> BreathSummary {
     summarise(&frames, period)
 }
 
-#[test]
-fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
-    let mut diaphragm_only = Drive::quiet();
+/// The quiet breath under `law` with its quiet drive at levels 0, 1 and 2, and the same with
+/// the diaphragm alone (the rib family silent), printed with the levels' gaps to level 2;
+/// returns how far level 1 is from level 2 (a fraction).
+fn level_gap(law: MuscleLaw) -> f64 {
+    let drive = Drive::quiet_for(law);
+    let mut diaphragm_only = drive;
     diaphragm_only.ribs.amplitude = 0.0;
     let mut vt = Vec::new();
     let mut alone = Vec::new();
     for lod in 0..3 {
-        let s = quiet(lod, Drive::quiet());
-        let d = quiet(lod, diaphragm_only);
+        let s = quiet(lod, drive, law);
+        let d = quiet(lod, diaphragm_only, law);
         println!(
-            "level {lod}: quiet VT {:.4} L, rib-cage share {:.1} %, excursion {:.2} cm; \
-             diaphragm alone VT {:.4} L",
+            "{law:?}, level {lod}: quiet VT {:.4} L, rib cage {:.4} L ({:.1} %), excursion \
+             {:.2} cm; diaphragm alone VT {:.4} L",
             s.tidal_volume,
+            s.tidal_volume * s.rib_cage_share,
             100.0 * s.rib_cage_share,
             100.0 * s.dome_excursion,
             d.tidal_volume
@@ -55,12 +56,17 @@ fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
     }
     for lod in [0, 1] {
         println!(
-            "level {lod} against level 2: {:+.1} %, diaphragm alone {:+.1} %",
+            "{law:?}, level {lod} against level 2: {:+.1} %, diaphragm alone {:+.1} %",
             100.0 * (vt[lod] / vt[2] - 1.0),
             100.0 * (alone[lod] / alone[2] - 1.0)
         );
     }
-    let gap = (vt[1] / vt[2] - 1.0).abs();
+    (vt[1] / vt[2] - 1.0).abs()
+}
+
+#[test]
+fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
+    let gap = level_gap(MuscleLaw::default());
     assert!(gap < 0.05, "levels 1 and 2 differ by {:.1} %", 100.0 * gap);
 }
 
@@ -73,34 +79,6 @@ fn quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
 #[test]
 #[ignore = "issue 35: under the hill law levels 1 and 2 differ by 8.5 % (quiet VT 0.7107 / 0.6643 / 0.6121 L at levels 0 / 1 / 2; the diaphragm alone 0.1512 / 0.1354 / 0.1104 L, +22.6 % at level 1); cargo test --release --test lod_convergence -- --ignored --nocapture"]
 fn hill_quiet_tidal_volume_agrees_between_levels_1_and_2_within_5_percent() {
-    let law = MuscleLaw::Hill;
-    let drive = Drive::quiet_for(law);
-    let mut diaphragm_only = drive;
-    diaphragm_only.ribs.amplitude = 0.0;
-    let mut vt = Vec::new();
-    let mut alone = Vec::new();
-    for lod in 0..3 {
-        let s = quiet_under(lod, drive, law);
-        let d = quiet_under(lod, diaphragm_only, law);
-        println!(
-            "hill, level {lod}: quiet VT {:.4} L, rib cage {:.4} L ({:.1} %), excursion {:.2} cm; \
-             diaphragm alone VT {:.4} L",
-            s.tidal_volume,
-            s.tidal_volume * s.rib_cage_share,
-            100.0 * s.rib_cage_share,
-            100.0 * s.dome_excursion,
-            d.tidal_volume
-        );
-        vt.push(s.tidal_volume);
-        alone.push(d.tidal_volume);
-    }
-    for lod in [0, 1] {
-        println!(
-            "hill, level {lod} against level 2: {:+.1} %, diaphragm alone {:+.1} %",
-            100.0 * (vt[lod] / vt[2] - 1.0),
-            100.0 * (alone[lod] / alone[2] - 1.0)
-        );
-    }
-    let gap = (vt[1] / vt[2] - 1.0).abs();
+    let gap = level_gap(MuscleLaw::Hill);
     assert!(gap < 0.05, "levels 1 and 2 differ by {:.1} %", 100.0 * gap);
 }
