@@ -268,6 +268,23 @@ fn the_chest_wall_relaxes_near_55_to_60_percent_of_vital_capacity() {
     }
 }
 
+/// The relaxed chest wall's compliance [L/cmH2O] between the first and the last of the
+/// curve's points whose lung volume lies in [lo, hi] [L] (their secant); at least two must.
+fn secant_between(r: &Relaxation, lo: f64, hi: f64) -> f64 {
+    let inside: Vec<_> = r
+        .points
+        .iter()
+        .filter(|p| p.lung >= lo - 1e-9 && p.lung <= hi + 1e-9)
+        .collect();
+    assert!(
+        inside.len() >= 2,
+        "{} points between {lo:.3} and {hi:.3} L",
+        inside.len()
+    );
+    let (a, b) = (inside[0], inside[inside.len() - 1]);
+    (b.lung - a.lung) / ((b.chest_wall - a.chest_wall) / 98.0665)
+}
+
 /// The relaxed chest wall stiffens towards RV too (Rahn et al. 1946; Agostoni & Mead 1964;
 /// issue 35, deliverable 3): its compliance over the lowest tenth of the volumes solved (the
 /// secant of the curve's points there) is below its compliance over the tidal range, as the
@@ -280,18 +297,7 @@ fn the_relaxed_chest_wall_stiffens_towards_rv() {
         let r = curves(posture);
         let vc = r.tlc - r.rv;
         let first = r.points[0].lung;
-        let bottom: Vec<_> = r
-            .points
-            .iter()
-            .filter(|p| p.lung <= first + 0.1 * vc + 1e-9)
-            .collect();
-        assert!(
-            bottom.len() >= 2,
-            "{posture:?}: {} points in the lowest tenth",
-            bottom.len()
-        );
-        let (a, b) = (bottom[0], bottom[bottom.len() - 1]);
-        let low = (b.lung - a.lung) / ((b.chest_wall - a.chest_wall) / 98.0665);
+        let low = secant_between(&r, first, first + 0.1 * vc);
         println!(
             "{posture:?}: C_cw over the lowest tenth of VC from {first:.3} L (RV {:.3}) {low:.4}, \
              over the tidal range {:.4} L/cmH2O",
@@ -317,18 +323,7 @@ fn the_relaxed_chest_wall_stiffens_towards_tlc() {
     for posture in [Posture::Standing, Posture::Supine] {
         let r = curves(posture);
         let vc = r.tlc - r.rv;
-        let top: Vec<_> = r
-            .points
-            .iter()
-            .filter(|p| p.lung >= r.rv + 0.9 * vc - 1e-9)
-            .collect();
-        assert!(
-            top.len() >= 2,
-            "{posture:?}: {} points in the top tenth",
-            top.len()
-        );
-        let (a, b) = (top[0], top[top.len() - 1]);
-        let high = (b.lung - a.lung) / ((b.chest_wall - a.chest_wall) / 98.0665);
+        let high = secant_between(&r, r.rv + 0.9 * vc, f64::INFINITY);
         assert!(high.is_finite(), "{posture:?}: {high}");
         println!(
             "{posture:?}: C_cw over the highest tenth of VC {high:.4}, over the tidal range {:.4} L/cmH2O",
