@@ -14,7 +14,8 @@
 //! vertex (the smooth dome's vertical tangent at the margin; its rigid horizontal leg counts
 //! in the rest length, so level 0's fibres contract somewhat more than their tissue), and one
 //! passive stiffness removed, halved or doubled at a time (dome membrane, central tendon, dome
-//! support, abdominal wall, abdominal membrane, bulk modulus). The second argument keeps only
+//! support, abdominal wall, abdominal membrane, bulk modulus), and the tension-only law's toe
+//! at a tenth. The second argument keeps only
 //! the variants whose name starts with it (`all` keeps every one). For each, also the change
 //! of the vertical force on the dome's free vertices from the fibres, from the dome membrane
 //! and from the rest (the pressures above all), and the transdiaphragmatic pressure. The
@@ -80,9 +81,12 @@ fn dome_forces(model: &Model, anatomy: &Anatomy, data: &mut Data, act: &Activati
         let mut s: Structure = (**model).clone();
         for e in 0..s.elements.len() {
             if keep_out(e) {
+                // passive as well: a muscle's tension keeps the tension-only law's smooth
+                // floor (toe ln 2 per element) even at zero stiffness and force
                 s.elements.stiffness[e] = 0.0;
                 s.elements.damping[e] = 0.0;
                 s.elements.max_force[e] = 0.0;
+                s.elements.slot[e] = dynamics::PASSIVE;
             }
         }
         sum(&s, data)
@@ -321,7 +325,7 @@ fn main() {
     let base = Params::for_posture_and_law(config.subject.posture, law);
     type Variant = (&'static str, fn(&mut Params));
     let only = std::env::args().nth(2).filter(|v| v != "all");
-    let variants: [Variant; 12] = [
+    let variants: [Variant; 13] = [
         ("as is", |_| {}),
         ("fibre chords", |_| {}),
         ("insertions fixed", |_| {}),
@@ -334,6 +338,7 @@ fn main() {
         ("wall compliance x2", |p| p.abdominal_wall_compliance *= 2.0),
         ("abdominal membrane / 2", |p| p.membrane_stiffness *= 0.5),
         ("bulk modulus x10", |p| p.bulk_modulus *= 10.0),
+        ("tension toe / 10", |p| p.tension_toe *= 0.1),
     ];
     let anatomies: Vec<Anatomy> = (0..3)
         .map(|lod| Anatomy::build(&config.subject, lod).unwrap())
