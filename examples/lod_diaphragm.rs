@@ -15,12 +15,12 @@
 //! in the rest length, so level 0's fibres contract somewhat more than their tissue), and one
 //! passive stiffness removed, halved or doubled at a time (dome membrane, central tendon, dome
 //! support, abdominal wall, abdominal membrane, bulk modulus), and the tension-only law's toe
-//! at a tenth. The second argument keeps only
-//! the variants whose name starts with it (`all` keeps every one). For each, also the change
-//! of the vertical force on the dome's free vertices from the fibres, from the dome membrane
-//! and from the rest (the pressures above all), and the transdiaphragmatic pressure. The
-//! third argument, `hill`, takes the passive-and-active law's constants instead of the thesis
-//! law's (without its standing tone, which the facade applies, not these equilibria).
+//! at a tenth. The second argument keeps only the variants whose name starts with it (`all`
+//! keeps every one). For each, also the change of the vertical force on the dome's free
+//! vertices from the fibres, from the dome membrane and from the rest (the pressures above
+//! all), and the transdiaphragmatic pressure. The third argument, `hill`, takes the
+//! passive-and-active law's constants instead of the thesis law's (without its standing tone,
+//! which the facade applies, not these equilibria).
 //!
 //! `cargo run --release --example lod_diaphragm [ACTIVATION [VARIANT|all [hill]]]`
 
